@@ -1,0 +1,40 @@
+//! One module per subcommand; each exposes `Args` (clap) and `run(Args) -> anyhow::Result<()>`.
+pub mod convert;
+pub mod info;
+pub mod score;
+
+/// An error caused by what the user gave us (bad file, bad shape, bad flag): exit code 2.
+#[derive(Debug)]
+pub struct UsageError(pub String);
+
+impl std::fmt::Display for UsageError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for UsageError {}
+
+/// The error and its causes on one line, each cause once.
+pub fn error_chain(err: &anyhow::Error) -> String {
+    let mut parts: Vec<String> = Vec::new();
+    for cause in err.chain() {
+        let text = cause.to_string();
+        // thiserror messages often embed their source; do not print the same text twice.
+        if !parts.iter().any(|p| p.contains(&text)) {
+            parts.push(text);
+        }
+    }
+    parts.join(": ")
+}
+
+/// Bad input (typed library errors about files, shapes and values, or [`UsageError`]) exits
+/// with 2; anything else with 1.
+pub fn exit_code(err: &anyhow::Error) -> u8 {
+    let is_input = err.chain().any(|c| {
+        c.is::<UsageError>()
+            || c.is::<motion_core::FormatError>()
+            || c.is::<std::io::Error>()
+    });
+    if is_input { 2 } else { 1 }
+}

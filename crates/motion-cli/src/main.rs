@@ -1,0 +1,42 @@
+//! `motion-cli`: a thin command-line front end over `motion-core` and `motion-metrics`.
+//!
+//! Exit codes: 0 success, 2 bad input or usage (the error chain is printed once to stderr),
+//! 1 any other failure.
+mod commands;
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+/// Real-time human motion synthesis and its evaluation.
+#[derive(Parser, Debug)]
+#[command(name = "motion-cli", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Convert between H3.6M exp-map text (.txt/.txt.gz), BVH and .npy.
+    Convert(commands::convert::Args),
+    /// Describe a weights file: architecture, sizes, parameters, fps, actions, provenance.
+    Info(commands::info::Args),
+    /// Score predictions against ground truth: NPSS, Euler error, NDMS, APD.
+    Score(commands::score::Args),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Convert(args) => commands::convert::run(args),
+        Command::Info(args) => commands::info::run(args),
+        Command::Score(args) => commands::score::run(args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(err) => {
+            eprintln!("error: {}", commands::error_chain(&err));
+            ExitCode::from(commands::exit_code(&err))
+        }
+    }
+}

@@ -1,0 +1,1 @@
+//! TODO: h36m_text.

@@ -1,0 +1,29 @@
+//! # motion-core
+//!
+//! The data model and inference engine of the `motion` project: skeletons, rotations and forward
+//! kinematics; H3.6M exp-map text, BVH and `.npy` in and out; motion-derivative features; GRU and
+//! LSTM cells; the VTLN-RNN (VGRU-d) and GRU-d predictors of paper 000; closed-loop generation
+//! from self-describing safetensors weights.
+//!
+//! ## Conventions (stated once)
+//! - Lengths are millimetres, angles radians, the vertical axis is **+y**.
+//! - Rotations act on **row vectors** as in the H3.6M data: a child's world rotation is
+//!   `W_j = R_j · W_parent` and a child's position `x_j = offset_j · W_parent + x_parent`.
+//! - H3.6M exp-map text is 50 Hz with 99 columns; the evaluation protocol downsamples to 25 Hz by
+//!   keeping the even frames. Dims 0..2 / 3..5 of an H3.6M frame are per-frame root translation /
+//!   rotation **deltas**.
+//! - Frames are stored row-major, `frames x channels`, in `f64` unless a model computes in `f32`.
+#![warn(missing_docs)]
+
+pub mod error;
+pub mod rotation;
+pub mod skeleton;
+pub mod motion;
+pub mod kinematics;
+pub mod root;
+pub mod derivatives;
+pub mod formats;
+pub mod nn;
+pub mod model;
+
+pub use error::FormatError;

@@ -1,0 +1,1 @@
+//! Motion predictors (VGRU-d, GRU-d), self-describing weights and closed-loop generation.

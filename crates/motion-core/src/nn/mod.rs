@@ -1,0 +1,1 @@
+//! Neural-network layers (Linear, GRU cells in both conventions, body GRU, LSTM, MLP).

@@ -1,0 +1,1 @@
+//! TODO(owner: foundations helper): skeleton.

@@ -1,0 +1,8 @@
+//! `motion`: facade over [`motion_core`] (skeletons, formats, kinematics, neural predictors)
+//! and [`motion_metrics`] (NPSS, Euler error, NDMS, APD).
+//!
+//! The command-line tool lives in the `motion-cli` crate.
+#![warn(missing_docs)]
+
+pub use motion_core as core;
+pub use motion_metrics as metrics;
