@@ -1,7 +1,9 @@
-//! Criterion benchmarks of the per-frame and per-metric hot paths.
-use criterion::{criterion_group, criterion_main, Criterion};
+//! The project's one criterion benchmark entry: neural inference steps and metrics.
+//! Sub-modules live in `benches/motion/`.
+use criterion::{criterion_group, criterion_main};
 
-fn placeholder(_c: &mut Criterion) {}
+mod metrics;
+mod nn;
 
-criterion_group!(benches, placeholder);
+criterion_group!(benches, nn::benches, metrics::benches);
 criterion_main!(benches);

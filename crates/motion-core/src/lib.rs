@@ -25,5 +25,6 @@ pub mod derivatives;
 pub mod formats;
 pub mod nn;
 pub mod model;
+pub mod protocol;
 
 pub use error::FormatError;
