@@ -1,0 +1,338 @@
+"""Motion models: VGRU-d (VTLN-RNN) and GRU-d.
+
+Gopalakrishnan, Mali, Kifer, Giles, Ororbia. A Neural Temporal Model for Human Motion Prediction
+(CVPR 2019), sections 3.2 (VTLN-RNN: plan GRU running backwards in time + body GRU, eqs. 1-4),
+3.3 (derivative features) and 3.4 (open-loop and closed-loop passes of the training loss).
+
+State-dict names are the tensor names of the weights schema (weights/README.md), which the Rust
+engine reads. Models work on normalized used dims ``[B, T, O]``; ``predict`` wraps that with
+normalization so callers see full frames, exactly as the Rust Generator does.
+
+Time indexing: the body output after reading frame t is the prediction of frame t + 1.
+"""
+
+from __future__ import annotations
+
+import copy
+
+import torch
+from torch import nn
+from torch.nn import functional as F
+
+from .features import DERIVATIVE_PADDING, DerivativeHistory, derivative_features, normalize, unnormalize
+from .layers import BIAS_INIT, BodyGRUCell, GRUCell, orthogonal_blocks_
+
+H36M_ACTIONS = [
+    "directions",
+    "discussion",
+    "eating",
+    "greeting",
+    "phoning",
+    "posing",
+    "purchases",
+    "sitting",
+    "sittingdown",
+    "smoking",
+    "takingphoto",
+    "waiting",
+    "walking",
+    "walkingdog",
+    "walkingtogether",
+]
+
+ARCHITECTURES = ("vgru-d", "gru-d")
+
+
+def make_config(architecture: str, dims_used: list[int], **overrides) -> dict:
+    """A complete weights-schema config with the paper's defaults (H3.6M, 512 units), overridable."""
+    if architecture not in ARCHITECTURES:
+        raise ValueError(f"unknown architecture {architecture!r}; expected one of {ARCHITECTURES}")
+    config = {
+        "architecture": architecture,
+        "frame_dims": 99,
+        "dims_used": [int(d) for d in dims_used],
+        "hidden": 512,
+        "layers": 1 if architecture == "vgru-d" else 2,
+        "gru_convention": "paper" if architecture == "vgru-d" else "pytorch",
+        "residual": False,
+        "derivative_order": 3,
+        "derivative_padding": DERIVATIVE_PADDING,
+        "fps": 25,
+        "skeleton": "h36m-32",
+        "actions": list(H36M_ACTIONS) if architecture == "vgru-d" else [],
+        "seed_frames": 50,
+        "horizon": 100,
+    }
+    if architecture == "vgru-d":
+        config["plan_hidden"] = 512
+    unknown = set(overrides) - set(config) - {"plan_hidden"}
+    if unknown:
+        raise ValueError(f"unknown config fields {sorted(unknown)}")
+    config.update(overrides)
+    return config
+
+
+class Norm(nn.Module):
+    """Normalization statistics over full frames: buffers ``mean``, ``std`` ``[frame_dims]``."""
+
+    def __init__(self, frame_dims: int, dims_used: list[int]):
+        super().__init__()
+        self.register_buffer("mean", torch.zeros(frame_dims))
+        self.register_buffer("std", torch.ones(frame_dims))
+        self.register_buffer("dims_used", torch.tensor(dims_used, dtype=torch.long), persistent=False)
+
+    def normalize(self, full: torch.Tensor) -> torch.Tensor:
+        """Full frames ``[..., F]`` -> normalized used dims ``[..., O]``."""
+        return normalize(full, self.mean, self.std, self.dims_used)
+
+    def unnormalize(self, normalized: torch.Tensor) -> torch.Tensor:
+        """Normalized used dims ``[..., O]`` -> full frames, dropped dims = mean."""
+        return unnormalize(normalized, self.mean, self.std, self.dims_used)
+
+    def set_stats(self, mean: torch.Tensor, std: torch.Tensor) -> None:
+        """Copy training-set statistics in (full-frame vectors)."""
+        with torch.no_grad():
+            self.mean.copy_(torch.as_tensor(mean))
+            self.std.copy_(torch.as_tensor(std))
+
+
+class MotionModel(nn.Module):
+    """What VGRU-d and GRU-d share: config, norm, decoder, residual output, derivative inputs,
+    and the open-loop / closed-loop passes. Subclasses provide ``_begin`` and ``_run``."""
+
+    def __init__(self, config: dict, dropout: float = 0.3):
+        super().__init__()
+        self.config = copy.deepcopy(config)
+        self.frame_dims = int(config["frame_dims"])
+        self.dims_used = [int(d) for d in config["dims_used"]]
+        self.output_size = len(self.dims_used)
+        self.derivative_order = int(config["derivative_order"])
+        if config.get("derivative_padding", DERIVATIVE_PADDING) != DERIVATIVE_PADDING:
+            raise ValueError(f"unsupported derivative_padding {config['derivative_padding']!r}")
+        self.input_size = self.output_size * (1 + self.derivative_order)
+        self.hidden_size = int(config["hidden"])
+        self.residual = bool(config["residual"])
+        self.convention = config["gru_convention"]
+        self.actions = list(config.get("actions", []))
+        self.norm = Norm(self.frame_dims, self.dims_used)
+        self.decoder = nn.Linear(self.hidden_size, self.output_size)
+        orthogonal_blocks_(self.decoder.weight, 1)
+        nn.init.constant_(self.decoder.bias, BIAS_INIT)
+        # Dropout on the recurrent net's input features and on its output (before the decoder),
+        # training only; the recurrent state itself is never dropped.
+        self.input_dropout = nn.Dropout(dropout)
+        self.output_dropout = nn.Dropout(dropout)
+
+    # ---- subclass interface -------------------------------------------------------------------
+    def _begin(self, batch: int, steps: int, action, eps, like: torch.Tensor) -> dict:
+        """Per-sequence context (hidden state, guides) for a run of ``steps`` body steps."""
+        raise NotImplementedError
+
+    def _run(self, ctx: dict, features: torch.Tensor, t0: int) -> torch.Tensor:
+        """Feed ``features [B, T, I]`` as body steps ``t0 .. t0+T``; returns top hidden ``[B, T, H]``."""
+        raise NotImplementedError
+
+    # ---- shared ---------------------------------------------------------------------------------
+    def action_indices(self, action, batch: int, device) -> torch.Tensor | None:
+        """Action given as label, index, list of those, or LongTensor ``[B]`` -> LongTensor ``[B]``."""
+        if not self.actions:
+            return None
+        if action is None:
+            raise ValueError(f"this model is action-conditioned; pass one of {self.actions}")
+        if isinstance(action, torch.Tensor):
+            idx = action.to(device=device, dtype=torch.long).reshape(-1)
+        else:
+            items = action if isinstance(action, (list, tuple)) else [action]
+            idx = torch.tensor([self._action_index(a) for a in items], dtype=torch.long, device=device)
+        if idx.numel() == 1:
+            idx = idx.expand(batch)
+        if idx.numel() != batch:
+            raise ValueError(f"{idx.numel()} actions for a batch of {batch}")
+        return idx
+
+    def _action_index(self, action) -> int:
+        if isinstance(action, str):
+            if action not in self.actions:
+                raise ValueError(f"unknown action {action!r}; valid: {self.actions}")
+            return self.actions.index(action)
+        index = int(action)
+        if not 0 <= index < len(self.actions):
+            raise ValueError(f"action index {index} out of range 0..{len(self.actions)}")
+        return index
+
+    def _decode(self, hidden: torch.Tensor, inputs: torch.Tensor) -> torch.Tensor:
+        out = self.decoder(self.output_dropout(hidden))
+        return inputs + out if self.residual else out
+
+    def open_loop(self, x: torch.Tensor, action=None, eps=None, plan_steps: int | None = None) -> torch.Tensor:
+        """Ground truth fed at every step. ``x [B, T, O]`` normalized -> predictions ``[B, T, O]``
+        where output t predicts frame t + 1. The VGRU plan covers ``plan_steps`` (default T) steps."""
+        batch, steps, _ = x.shape
+        ctx = self._begin(batch, plan_steps or steps, action, eps, x)
+        features = self.input_dropout(derivative_features(x, self.derivative_order))
+        return self._decode(self._run(ctx, features, 0), x)
+
+    def closed_loop(
+        self,
+        seed: torch.Tensor,
+        horizon: int,
+        action=None,
+        eps=None,
+        return_seed_outputs: bool = False,
+    ):
+        """Teacher-force ``seed [B, S, O]``, then feed own outputs back for ``horizon`` predictions.
+
+        Returns ``[B, horizon, O]`` (frames S .. S+horizon-1); with ``return_seed_outputs`` also the
+        seed-phase outputs ``[B, S, O]`` first. The last seed output is the first prediction. The
+        VGRU plan covers ``S + horizon`` steps. Derivative features of fed-back frames come from
+        the history including the seed frames.
+        """
+        batch, seed_len, _ = seed.shape
+        if seed_len < 1 or horizon < 1:
+            raise ValueError(f"need at least 1 seed frame and horizon >= 1, got {seed_len}, {horizon}")
+        ctx = self._begin(batch, seed_len + horizon, action, eps, seed)
+        history = DerivativeHistory(self.derivative_order)
+        seed_features = torch.stack([history.push(seed[:, t]) for t in range(seed_len)], dim=1)
+        seed_out = self._decode(self._run(ctx, self.input_dropout(seed_features), 0), seed)
+        frame = seed_out[:, -1:]
+        outputs = [frame]
+        for k in range(1, horizon):
+            features = history.push(frame[:, 0]).unsqueeze(1)
+            hidden = self._run(ctx, self.input_dropout(features), seed_len + k - 1)
+            frame = self._decode(hidden, frame)
+            outputs.append(frame)
+        generated = torch.cat(outputs, dim=1)
+        return (seed_out, generated) if return_seed_outputs else generated
+
+    @torch.no_grad()
+    def predict(self, seed_full: torch.Tensor, action=None, horizon: int = 100, eps=None, with_seed_outputs=False):
+        """Full frames in, full frames out (what the Rust Generator does), in eval mode semantics.
+
+        ``seed_full [S, F]`` or ``[B, S, F]`` -> ``[horizon, F]`` (or batched); with
+        ``with_seed_outputs`` returns ``(teacher_forced, generated)``, ``teacher_forced[t]`` being
+        the prediction of frame t + 1 after reading seed frame t.
+        """
+        unbatched = seed_full.dim() == 2
+        if unbatched:
+            seed_full = seed_full.unsqueeze(0)
+        seed = self.norm.normalize(seed_full.to(self.decoder.weight.dtype))
+        seed_out, generated = self.closed_loop(seed, horizon, action, eps, return_seed_outputs=True)
+        seed_out, generated = self.norm.unnormalize(seed_out), self.norm.unnormalize(generated)
+        if unbatched:
+            seed_out, generated = seed_out[0], generated[0]
+        return (seed_out, generated) if with_seed_outputs else generated
+
+
+class PlanRNN(nn.Module):
+    """Top-level noise process of the VTLN-RNN: a GRU fed the action one-hot at every step from the
+    initial state ``mu + sqrt(softplus(sigma)) * eps``; its outputs, reversed in time, are the guides."""
+
+    def __init__(self, num_actions: int, plan_size: int, convention: str):
+        super().__init__()
+        self.num_actions = num_actions
+        self.plan_size = plan_size
+        self.cell = GRUCell(num_actions, plan_size, convention)
+        self.mu = nn.Parameter(torch.zeros(plan_size))
+        self.sigma = nn.Parameter(torch.zeros(plan_size))
+
+    def initial_state(self, batch: int, eps: torch.Tensor | None, like: torch.Tensor) -> torch.Tensor:
+        """``mu + sqrt(softplus(sigma)) * eps``; eps ``[P]`` or ``[B, P]``, sampled N(0, I) if None."""
+        if eps is None:
+            eps = torch.randn(batch, self.plan_size, dtype=like.dtype, device=like.device)
+        eps = torch.as_tensor(eps, dtype=self.mu.dtype, device=self.mu.device)
+        return (self.mu + torch.sqrt(F.softplus(self.sigma)) * eps).expand(batch, -1)
+
+    def guides(self, action: torch.Tensor, steps: int, eps, like: torch.Tensor) -> torch.Tensor:
+        """Guide vectors ``[steps, B, P]``: guide t = plan output ``steps - 1 - t``."""
+        batch = action.shape[0]
+        onehot = F.one_hot(action, self.num_actions).to(self.mu.dtype)
+        gi = self.cell.input_gates(onehot)  # constant input, projected once
+        h = self.initial_state(batch, eps, like)
+        outputs = []
+        for _ in range(steps):
+            h = self.cell.step(gi, h)
+            outputs.append(h)
+        return torch.stack(outputs[::-1], dim=0)
+
+
+class VGRUD(MotionModel):
+    """VGRU-d (VTLN-RNN with derivative inputs): plan GRU + body GRU (paper 000 eqs. 1-4) + decoder."""
+
+    def __init__(self, config: dict, dropout: float = 0.3):
+        super().__init__(config, dropout)
+        if config["architecture"] != "vgru-d":
+            raise ValueError(f"VGRUD needs architecture 'vgru-d', got {config['architecture']!r}")
+        if not self.actions:
+            raise ValueError("vgru-d needs at least one action label")
+        self.plan_size = int(config["plan_hidden"])
+        self.plan = PlanRNN(len(self.actions), self.plan_size, self.convention)
+        self.body = BodyGRUCell(self.input_size, self.hidden_size, self.plan_size, self.convention)
+
+    def _begin(self, batch, steps, action, eps, like):
+        action = self.action_indices(action, batch, like.device)
+        guides = self.plan.guides(action, steps, eps, like)
+        h = torch.zeros(batch, self.hidden_size, dtype=like.dtype, device=like.device)
+        # V p_t for every step at once: one matrix product instead of one per step.
+        return {"h": h, "guide_gates": F.linear(guides, self.body.weight_ph), "steps": steps}
+
+    def _run(self, ctx, features, t0):
+        steps = features.shape[1]
+        if t0 + steps > ctx["steps"]:
+            raise ValueError(f"body step {t0 + steps - 1} beyond the plan's {ctx['steps']} steps")
+        gi = F.linear(features, self.body.weight_ih, self.body.bias_ih)
+        h = ctx["h"]
+        outputs = []
+        for t in range(steps):
+            h = self.body.step(gi[:, t] + ctx["guide_gates"][t0 + t], h)
+            outputs.append(h)
+        ctx["h"] = h
+        return torch.stack(outputs, dim=1)
+
+
+class GRUD(MotionModel):
+    """GRU-d: stacked GRU cells (``rnn.{k}``) over derivative features + decoder; unconditioned."""
+
+    def __init__(self, config: dict, dropout: float = 0.3):
+        super().__init__(config, dropout)
+        if config["architecture"] != "gru-d":
+            raise ValueError(f"GRUD needs architecture 'gru-d', got {config['architecture']!r}")
+        layers = int(config["layers"])
+        sizes = [self.input_size] + [self.hidden_size] * layers
+        self.rnn = nn.ModuleList(GRUCell(a, self.hidden_size, self.convention) for a in sizes[:-1])
+
+    def action_indices(self, action, batch, device):
+        return None  # unconditioned: any action argument is ignored
+
+    def _begin(self, batch, steps, action, eps, like):
+        h = [torch.zeros(batch, self.hidden_size, dtype=like.dtype, device=like.device) for _ in self.rnn]
+        return {"h": h}
+
+    def _run(self, ctx, features, t0):
+        steps = features.shape[1]
+        gi0 = self.rnn[0].input_gates(features)
+        hs = list(ctx["h"])
+        outputs = []
+        for t in range(steps):
+            x = None
+            for k, cell in enumerate(self.rnn):
+                gi = gi0[:, t] if k == 0 else cell.input_gates(x)
+                hs[k] = cell.step(gi, hs[k])
+                x = hs[k]
+            outputs.append(x)
+        ctx["h"] = hs
+        return torch.stack(outputs, dim=1)
+
+
+def build_model(config: dict, dropout: float = 0.3) -> MotionModel:
+    """The model class named by ``config['architecture']``."""
+    architecture = config.get("architecture")
+    if architecture == "vgru-d":
+        return VGRUD(config, dropout)
+    if architecture == "gru-d":
+        return GRUD(config, dropout)
+    raise ValueError(f"unknown architecture {architecture!r}; expected one of {ARCHITECTURES}")
+
+
+def parameter_count(model: nn.Module) -> int:
+    """Trainable parameters (the norm buffers are not parameters)."""
+    return sum(p.numel() for p in model.parameters())
