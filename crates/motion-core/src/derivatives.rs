@@ -1,1 +1,184 @@
-//! TODO(owner: foundations helper): derivatives.
+//! Motion-derivative features (paper 000, section 3.3, equation 5): backward differences with
+//! `h = 1`, `∇ⁿ x_t = Σ_{i=0..n} (-1)^i C(n, i) x_{t-i}`, appended to the frame:
+//! `[x, ∇¹x, ..., ∇^order x]` (width `D * (order + 1)`).
+//!
+//! ## Padding: `repeat-first`
+//! Frames before the first are copies of the first, so the first frame's derivatives are 0. This
+//! is fixed by `weights/README.md` and the PyTorch training code (`training/features.py`).
+//!
+//! ## Bit-exact agreement
+//! Both the batch [`derivative_features`] and the incremental [`DerivativeBuffer`] sum
+//! `acc = x_t; acc = acc + c_i * x_{t-i}` for `i = 1..=n`, left to right, like the PyTorch code,
+//! so they give identical bits (and match PyTorch up to its own vectorisation).
+use std::ops::{Add, Mul};
+
+use ndarray::{Array2, ArrayView2};
+
+/// A float type the derivative features can be computed in (`f32` or `f64`).
+pub trait DerivativeScalar: Copy + Add<Output = Self> + Mul<Output = Self> + 'static {
+    /// Zero.
+    const ZERO: Self;
+    /// A small integer coefficient, exactly.
+    fn from_coefficient(c: i64) -> Self;
+}
+
+impl DerivativeScalar for f32 {
+    const ZERO: Self = 0.0;
+    fn from_coefficient(c: i64) -> Self {
+        c as f32
+    }
+}
+
+impl DerivativeScalar for f64 {
+    const ZERO: Self = 0.0;
+    fn from_coefficient(c: i64) -> Self {
+        c as f64
+    }
+}
+
+/// The signed binomial coefficients `(-1)^i C(n, i)` for `i = 0..=n`, written into `out[..=n]`.
+fn signed_binomials(n: usize, out: &mut [i64]) {
+    let mut c: i64 = 1;
+    for (i, slot) in out.iter_mut().enumerate().take(n + 1) {
+        *slot = if i % 2 == 0 { c } else { -c };
+        c = c * (n - i) as i64 / (i + 1) as i64;
+    }
+}
+
+/// Highest supported derivative order (coefficients stay exact in f32 far beyond this).
+pub const MAX_DERIVATIVE_ORDER: usize = 8;
+
+/// Writes `[x_t, ∇¹, ..., ∇^order]` for `history = [x_t, x_{t-1}, ..., x_{t-order}]` (each given
+/// by an accessor) into `out` (width `D * (order + 1)`).
+#[inline]
+fn write_features<'a, T: DerivativeScalar>(
+    order: usize,
+    width: usize,
+    frame_at: impl Fn(usize) -> &'a [T],
+    out: &mut [T],
+) {
+    let mut coef = [0i64; MAX_DERIVATIVE_ORDER + 1];
+    let x0 = frame_at(0);
+    out[..width].copy_from_slice(x0);
+    for n in 1..=order {
+        signed_binomials(n, &mut coef);
+        let dst = &mut out[n * width..(n + 1) * width];
+        dst.copy_from_slice(x0);
+        for (i, &c) in coef.iter().enumerate().take(n + 1).skip(1) {
+            let ci = T::from_coefficient(c);
+            let xi = frame_at(i);
+            for (d, &x) in dst.iter_mut().zip(xi) {
+                *d = *d + ci * x;
+            }
+        }
+    }
+}
+
+/// Batch derivative features: `frames` (`T x D`) -> `T x D * (order + 1)` with repeat-first
+/// padding. `order` 0 returns a copy of the frames.
+///
+/// # Panics
+/// If `order > MAX_DERIVATIVE_ORDER`.
+pub fn derivative_features<T: DerivativeScalar>(frames: ArrayView2<T>, order: usize) -> Array2<T> {
+    assert!(
+        order <= MAX_DERIVATIVE_ORDER,
+        "derivative order {order} too high"
+    );
+    let (steps, width) = frames.dim();
+    let contiguous = frames.as_standard_layout();
+    let data = contiguous
+        .as_slice()
+        .expect("standard layout is contiguous");
+    let mut out = Array2::from_elem((steps, width * (order + 1)), T::ZERO);
+    for (t, mut row) in out.rows_mut().into_iter().enumerate() {
+        let row = row.as_slice_mut().expect("fresh array is contiguous");
+        let frame_at = |i: usize| {
+            let src = t.saturating_sub(i); // repeat-first padding
+            &data[src * width..(src + 1) * width]
+        };
+        write_features(order, width, frame_at, row);
+    }
+    out
+}
+
+/// Incremental derivative features: a ring buffer of the last `order` frames; `push` writes the
+/// features of the new frame with no allocation. The first push after `new`/`reset` fills the
+/// history with copies of that frame (repeat-first).
+#[derive(Debug, Clone)]
+pub struct DerivativeBuffer<T> {
+    order: usize,
+    width: usize,
+    /// `order + 1` frames; slot `(head + i) % (order + 1)` holds `x_{t-i}` after a push.
+    ring: Vec<T>,
+    head: usize,
+    started: bool,
+}
+
+impl<T: DerivativeScalar> DerivativeBuffer<T> {
+    /// A buffer for frames of `width` values and derivatives up to `order`.
+    ///
+    /// # Panics
+    /// If `order > MAX_DERIVATIVE_ORDER`.
+    pub fn new(width: usize, order: usize) -> DerivativeBuffer<T> {
+        assert!(
+            order <= MAX_DERIVATIVE_ORDER,
+            "derivative order {order} too high"
+        );
+        DerivativeBuffer {
+            order,
+            width,
+            ring: vec![T::ZERO; width * (order + 1)],
+            head: 0,
+            started: false,
+        }
+    }
+
+    /// Frame width `D`.
+    pub fn width(&self) -> usize {
+        self.width
+    }
+
+    /// Derivative order.
+    pub fn order(&self) -> usize {
+        self.order
+    }
+
+    /// Output width `D * (order + 1)`.
+    pub fn output_width(&self) -> usize {
+        self.width * (self.order + 1)
+    }
+
+    /// Forgets the history: the next push is a first frame.
+    pub fn reset(&mut self) {
+        self.started = false;
+        self.head = 0;
+    }
+
+    /// Appends `frame` (`D` values) and writes its features (`D * (order + 1)` values) to `out`.
+    ///
+    /// # Panics
+    /// If `frame.len() != width()` or `out.len() != output_width()`.
+    pub fn push(&mut self, frame: &[T], out: &mut [T]) {
+        assert_eq!(frame.len(), self.width, "frame width");
+        assert_eq!(out.len(), self.output_width(), "output width");
+        let slots = self.order + 1;
+        let w = self.width;
+        if self.started {
+            self.head = (self.head + slots - 1) % slots;
+            self.ring[self.head * w..(self.head + 1) * w].copy_from_slice(frame);
+        } else {
+            for s in 0..slots {
+                self.ring[s * w..(s + 1) * w].copy_from_slice(frame);
+            }
+            self.head = 0;
+            self.started = true;
+        }
+        let ring = &self.ring;
+        let head = self.head;
+        let frame_at = |i: usize| {
+            let s = (head + i) % slots;
+            &ring[s * w..(s + 1) * w]
+        };
+        write_features(self.order, w, frame_at, out);
+    }
+}

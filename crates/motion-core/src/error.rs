@@ -40,3 +40,102 @@ pub enum FormatError {
         path: PathBuf,
     },
 }
+
+/// An invalid skeleton description (from code or from a BVH hierarchy).
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum SkeletonError {
+    /// The skeleton has no joints.
+    #[error("skeleton has no joints")]
+    Empty,
+    /// Joint 0 must be the only root (a joint without parent).
+    #[error("joint {index} ({name:?}) has no parent but only joint 0 may be the root")]
+    MultipleRoots {
+        /// Index of the offending joint.
+        index: usize,
+        /// Its name.
+        name: String,
+    },
+    /// Joint 0 has a parent.
+    #[error("joint 0 ({name:?}) must be the root but has a parent")]
+    RootHasParent {
+        /// Its name.
+        name: String,
+    },
+    /// A joint's parent does not come before it.
+    #[error("joint {index} ({name:?}) has parent {parent}, which does not come before it")]
+    ParentNotBefore {
+        /// Index of the offending joint.
+        index: usize,
+        /// Its name.
+        name: String,
+        /// The parent index given.
+        parent: usize,
+    },
+    /// Two joints share a name.
+    #[error("joint name {name:?} is used by joints {first} and {second}")]
+    DuplicateName {
+        /// The shared name.
+        name: String,
+        /// First joint with it.
+        first: usize,
+        /// Second joint with it.
+        second: usize,
+    },
+    /// An End Site has channels or children.
+    #[error("end site {index} ({name:?}) {problem}")]
+    BadEndSite {
+        /// Index of the end site.
+        index: usize,
+        /// Its name.
+        name: String,
+        /// What is wrong (has channels / has children).
+        problem: &'static str,
+    },
+    /// A joint lists the same channel twice.
+    #[error("joint {index} ({name:?}) lists channel {channel} twice")]
+    DuplicateChannel {
+        /// Index of the joint.
+        index: usize,
+        /// Its name.
+        name: String,
+        /// The repeated channel's BVH name.
+        channel: &'static str,
+    },
+    /// An offset is not finite.
+    #[error("joint {index} ({name:?}) has a non-finite offset")]
+    NonFiniteOffset {
+        /// Index of the joint.
+        index: usize,
+        /// Its name.
+        name: String,
+    },
+}
+
+/// A motion whose data does not fit its layout, or a window out of range.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum MotionError {
+    /// The number of channels does not match the layout.
+    #[error("motion has {found} channels but its layout needs {expected}")]
+    ChannelCount {
+        /// Channels the layout needs.
+        expected: usize,
+        /// Channels the data has.
+        found: usize,
+    },
+    /// The frame rate is not finite and positive.
+    #[error("frame rate must be finite and positive, got {fps}")]
+    BadFps {
+        /// The rejected frame rate, formatted.
+        fps: String,
+    },
+    /// A window reaches past the last frame.
+    #[error("window of {len} frames starting at {start} is out of range for {frames} frames")]
+    WindowOutOfRange {
+        /// First frame of the window.
+        start: usize,
+        /// Window length.
+        len: usize,
+        /// Frames in the motion.
+        frames: usize,
+    },
+}

@@ -27,4 +27,6 @@ pub mod nn;
 pub mod model;
 pub mod protocol;
 
-pub use error::FormatError;
+pub use error::{FormatError, MotionError, SkeletonError};
+pub use motion::{Motion, MotionLayout, RootEncoding};
+pub use skeleton::{Channel, Joint, Skeleton};

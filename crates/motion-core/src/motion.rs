@@ -1,1 +1,173 @@
-//! TODO(owner: foundations helper): motion.
+//! A motion clip: frames x channels, a frame rate, the skeleton and how to read the channels.
+use std::sync::Arc;
+
+use ndarray::{s, Array2, Array3, ArrayView2};
+
+use crate::error::MotionError;
+use crate::kinematics;
+use crate::skeleton::{Skeleton, H36M_SOURCE_FPS};
+
+/// How the root's dims 0..5 of an exp-map frame are stored.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum RootEncoding {
+    /// Per-source-frame deltas in the previous root frame (H3.6M); integrate them for positions.
+    Deltas,
+    /// Absolute root translation (dims 0..2) and exp-map rotation (dims 3..5) (CMU).
+    Absolute,
+}
+
+/// How the channels of a frame are laid out.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum MotionLayout {
+    /// Exp-map frames: dims 0..2 root translation, then one exp-map triple per joint
+    /// (`3 + 3 * joints` dims), row-vector FK (h36m.md).
+    ExpMap {
+        /// How the root is stored.
+        root: RootEncoding,
+    },
+    /// BVH channels: each joint's channels in skeleton order (`Skeleton::channel_count()` dims),
+    /// values as in the BVH file (rotations in **degrees**), column-vector FK.
+    Channels,
+}
+
+impl MotionLayout {
+    /// The number of channels a frame of this layout has on `skeleton`.
+    pub fn width(&self, skeleton: &Skeleton) -> usize {
+        match self {
+            MotionLayout::ExpMap { .. } => skeleton.expmap_width(),
+            MotionLayout::Channels => skeleton.channel_count(),
+        }
+    }
+}
+
+/// A motion clip: `frames x channels` values, a frame rate, a shared skeleton and a layout.
+#[derive(Debug, Clone)]
+pub struct Motion {
+    frames: Array2<f64>,
+    fps: f64,
+    skeleton: Arc<Skeleton>,
+    layout: MotionLayout,
+}
+
+impl Motion {
+    /// A motion; checks that the frame width fits the layout and that `fps` is finite and > 0.
+    pub fn new(
+        skeleton: Arc<Skeleton>,
+        layout: MotionLayout,
+        frames: Array2<f64>,
+        fps: f64,
+    ) -> Result<Motion, MotionError> {
+        let expected = layout.width(&skeleton);
+        if frames.ncols() != expected {
+            return Err(MotionError::ChannelCount {
+                expected,
+                found: frames.ncols(),
+            });
+        }
+        if !(fps.is_finite() && fps > 0.0) {
+            return Err(MotionError::BadFps {
+                fps: fps.to_string(),
+            });
+        }
+        Ok(Motion {
+            frames,
+            fps,
+            skeleton,
+            layout,
+        })
+    }
+
+    /// An H3.6M exp-map motion (root deltas) on the built-in 32-joint skeleton.
+    pub fn h36m(frames: Array2<f64>, fps: f64) -> Result<Motion, MotionError> {
+        Motion::new(
+            Arc::new(Skeleton::h36m()),
+            MotionLayout::ExpMap {
+                root: RootEncoding::Deltas,
+            },
+            frames,
+            fps,
+        )
+    }
+
+    /// All frames, `frames x channels`.
+    pub fn frames(&self) -> ArrayView2<'_, f64> {
+        self.frames.view()
+    }
+
+    /// Mutable access to the values (the shape cannot change).
+    pub fn frames_mut(&mut self) -> ndarray::ArrayViewMut2<'_, f64> {
+        self.frames.view_mut()
+    }
+
+    /// The frames, consuming the motion.
+    pub fn into_frames(self) -> Array2<f64> {
+        self.frames
+    }
+
+    /// Number of frames.
+    pub fn len(&self) -> usize {
+        self.frames.nrows()
+    }
+
+    /// True if there are no frames.
+    pub fn is_empty(&self) -> bool {
+        self.frames.nrows() == 0
+    }
+
+    /// Channels per frame.
+    pub fn channels(&self) -> usize {
+        self.frames.ncols()
+    }
+
+    /// Frames per second.
+    pub fn fps(&self) -> f64 {
+        self.fps
+    }
+
+    /// Seconds per frame.
+    pub fn frame_time(&self) -> f64 {
+        1.0 / self.fps
+    }
+
+    /// The skeleton.
+    pub fn skeleton(&self) -> &Arc<Skeleton> {
+        &self.skeleton
+    }
+
+    /// The channel layout.
+    pub fn layout(&self) -> MotionLayout {
+        self.layout
+    }
+
+    /// Source frames per frame for H3.6M root deltas, which are per 50 Hz source frame:
+    /// `round(50 / fps)`, at least 1 (1 at 50 Hz, 2 at 25 Hz).
+    pub fn root_step(&self) -> usize {
+        ((H36M_SOURCE_FPS / self.fps).round() as usize).max(1)
+    }
+
+    /// A view of `len` frames from `start` (no copy).
+    pub fn window(&self, start: usize, len: usize) -> Result<ArrayView2<'_, f64>, MotionError> {
+        let frames = self.frames.nrows();
+        match start.checked_add(len) {
+            Some(end) if end <= frames => Ok(self.frames.slice(s![start..end, ..])),
+            _ => Err(MotionError::WindowOutOfRange { start, len, frames }),
+        }
+    }
+
+    /// World joint positions, `frames x joints x 3` (mm), with the FK of the layout
+    /// (exp-map row-vector FK with the root integrated, or BVH channel FK).
+    pub fn positions(&self) -> Array3<f64> {
+        let result = match self.layout {
+            MotionLayout::ExpMap { root } => kinematics::expmap_positions(
+                &self.skeleton,
+                self.frames.view(),
+                root,
+                self.root_step(),
+            ),
+            MotionLayout::Channels => {
+                kinematics::channel_positions(&self.skeleton, self.frames.view())
+            }
+        };
+        result.expect("Motion::new checked the width")
+    }
+}

@@ -1,1 +1,276 @@
-//! TODO(owner: foundations helper): root.
+//! H3.6M root deltas <-> absolute root trajectory.
+//!
+//! H3.6M frames store, in dims 0..2, the root translation **delta** of the frame (mm, expressed in
+//! the root's frame of the previous frame) and, in dims 3..5, the root rotation **delta** as an
+//! exponential map. With row vectors (h36m.md), starting from `R = I`, `T = 0`:
+//!
+//! ```text
+//! R_abs(t) = Rd(t) · R_abs(t-1)
+//! T_abs(t) = T_abs(t-1) + d(t) · R_abs(t-1)
+//! ```
+//!
+//! ## Steps spanning several source frames (25 Hz)
+//! The deltas are per **50 Hz source frame**. After the protocol's downsampling (keep frames
+//! 0, 2, 4, ...) one 25 Hz step spans two source frames but only one delta (that of the kept
+//! frame) survives. With `step = 2` we apply each kept delta `step` times, i.e. as if the dropped
+//! source frame had the same delta as the kept one:
+//!
+//! ```text
+//! R_abs(t) = Rd^s · R_abs(t-1)
+//! T_abs(t) = T_abs(t-1) + d · (I + Rd + ... + Rd^(s-1)) · R_abs(t-1)
+//! ```
+//!
+//! The **first** frame is applied once (it is source frame 0, which has no dropped predecessor),
+//! so 25 Hz frame `k` approximates 50 Hz frame `2k`. [`root_deltas`] inverts this exactly (to
+//! ~1e-12), including the float32-epsilon quirk of [`expmap2rotmat`].
+use ndarray::{Array2, ArrayView2};
+
+use crate::rotation::{expmap2rotmat, mat3_mul, vec_mul_mat3, Mat3, MAT3_IDENTITY};
+
+/// Absolute root pose of one frame in the H3.6M row-vector convention: a root-local point `p`
+/// is at `p · rotation + translation` in the world (mm).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RootPose {
+    /// World rotation of the root (row-vector convention).
+    pub rotation: Mat3,
+    /// World position of the root (mm).
+    pub translation: [f64; 3],
+}
+
+impl RootPose {
+    /// The pose before the first frame: `R = I`, `T = 0`.
+    pub const IDENTITY: RootPose = RootPose {
+        rotation: MAT3_IDENTITY,
+        translation: [0.0; 3],
+    };
+
+    /// The pose stored **absolutely** in a frame (CMU layout): translation = dims 0..2, rotation =
+    /// `expmap2rotmat(dims 3..5)`.
+    ///
+    /// # Panics
+    /// If `frame.len() < 6`.
+    pub fn from_absolute_frame(frame: &[f64]) -> RootPose {
+        RootPose {
+            rotation: expmap2rotmat([frame[3], frame[4], frame[5]]),
+            translation: [frame[0], frame[1], frame[2]],
+        }
+    }
+
+    /// This pose advanced by one delta applied `times` times (see the module docs).
+    pub fn advanced(&self, d: [f64; 3], rd: [f64; 3], times: usize) -> RootPose {
+        let step_rot = expmap2rotmat(rd);
+        let mut pose = *self;
+        for _ in 0..times {
+            let moved = vec_mul_mat3(d, &pose.rotation);
+            pose.translation = [
+                pose.translation[0] + moved[0],
+                pose.translation[1] + moved[1],
+                pose.translation[2] + moved[2],
+            ];
+            pose.rotation = mat3_mul(&step_rot, &pose.rotation);
+        }
+        pose
+    }
+}
+
+/// Streaming root integration: one [`RootPose`] per pushed frame, no allocation.
+#[derive(Debug, Clone)]
+pub struct RootIntegrator {
+    pose: RootPose,
+    step: usize,
+    started: bool,
+}
+
+impl RootIntegrator {
+    /// An integrator for frames that each span `step` source frames (1 at 50 Hz, 2 at 25 Hz).
+    /// A `step` of 0 is treated as 1.
+    pub fn new(step: usize) -> RootIntegrator {
+        RootIntegrator {
+            pose: RootPose::IDENTITY,
+            step: step.max(1),
+            started: false,
+        }
+    }
+
+    /// Integrates one frame (dims 0..5 are read) and returns its absolute pose.
+    ///
+    /// # Panics
+    /// If `frame.len() < 6`.
+    pub fn push(&mut self, frame: &[f64]) -> RootPose {
+        let times = if self.started { self.step } else { 1 };
+        self.started = true;
+        self.pose = self.pose.advanced(
+            [frame[0], frame[1], frame[2]],
+            [frame[3], frame[4], frame[5]],
+            times,
+        );
+        self.pose
+    }
+
+    /// The pose of the last pushed frame ([`RootPose::IDENTITY`] before the first).
+    pub fn pose(&self) -> RootPose {
+        self.pose
+    }
+
+    /// Forgets the history: the next push is a first frame again.
+    pub fn reset(&mut self) {
+        self.pose = RootPose::IDENTITY;
+        self.started = false;
+    }
+}
+
+/// Integrates the root deltas (dims 0..5 of every frame) into absolute poses.
+/// `step` = source frames per frame (1 for 50 Hz H3.6M, 2 for the protocol's 25 Hz).
+///
+/// # Panics
+/// If the frames have fewer than 6 columns.
+pub fn integrate_root(frames: ArrayView2<f64>, step: usize) -> Vec<RootPose> {
+    assert!(frames.ncols() >= 6, "root deltas need 6 columns");
+    let mut integrator = RootIntegrator::new(step);
+    let mut row = [0.0; 6];
+    frames
+        .rows()
+        .into_iter()
+        .map(|f| {
+            for (k, r) in row.iter_mut().enumerate() {
+                *r = f[k];
+            }
+            integrator.push(&row)
+        })
+        .collect()
+}
+
+/// Writes the absolute root poses into dims 0..5 of every frame: translation in 0..2 and the
+/// exp-map of the rotation in 3..5, in the form [`RootPose::from_absolute_frame`] reads back.
+pub fn write_absolute_root(poses: &[RootPose], frames: &mut Array2<f64>) {
+    for (pose, mut row) in poses.iter().zip(frames.rows_mut()) {
+        let r = rotmat_to_expmap_pow(&pose.rotation, 1);
+        for k in 0..3 {
+            row[k] = pose.translation[k];
+            row[3 + k] = r[k];
+        }
+    }
+}
+
+/// The per-frame deltas (T x 6: translation delta, rotation delta exp-map) whose integration with
+/// the same `step` gives `poses` back: the exact inverse of [`integrate_root`].
+///
+/// Poses that no delta can produce (e.g. a rotation step of π or more per frame at 25 Hz) are
+/// approximated.
+pub fn root_deltas(poses: &[RootPose], step: usize) -> Array2<f64> {
+    let step = step.max(1);
+    let mut out = Array2::zeros((poses.len(), 6));
+    let mut prev = RootPose::IDENTITY;
+    for (t, pose) in poses.iter().enumerate() {
+        let times = if t == 0 { 1 } else { step };
+        let (d, rd) = delta_between(&prev, pose, times);
+        for k in 0..3 {
+            out[[t, k]] = d[k];
+            out[[t, 3 + k]] = rd[k];
+        }
+        prev = *pose;
+    }
+    out
+}
+
+/// The delta `(d, rd)` that, applied `times` times to `prev`, gives `cur`.
+pub fn delta_between(prev: &RootPose, cur: &RootPose, times: usize) -> ([f64; 3], [f64; 3]) {
+    let times = times.max(1);
+    let prev_inv = mat3_inverse(&prev.rotation).unwrap_or(MAT3_IDENTITY);
+    // Rd^times = R(t) · R(t-1)^-1
+    let m = mat3_mul(&cur.rotation, &prev_inv);
+    let rd = rotmat_to_expmap_pow(&m, times);
+    // T(t) - T(t-1) = d · S · R(t-1) with S = I + Rd + ... + Rd^(times-1)
+    let step_rot = expmap2rotmat(rd);
+    let mut s = MAT3_IDENTITY;
+    let mut power = MAT3_IDENTITY;
+    for _ in 1..times {
+        power = mat3_mul(&power, &step_rot);
+        for i in 0..3 {
+            for j in 0..3 {
+                s[i][j] += power[i][j];
+            }
+        }
+    }
+    let sr = mat3_mul(&s, &prev.rotation);
+    let dt = [
+        cur.translation[0] - prev.translation[0],
+        cur.translation[1] - prev.translation[1],
+        cur.translation[2] - prev.translation[2],
+    ];
+    let d = match mat3_inverse(&sr) {
+        Some(inv) => vec_mul_mat3(dt, &inv),
+        None => [0.0; 3],
+    };
+    (d, rd)
+}
+
+/// The exp-map `r` with `expmap2rotmat(r)^times == m`, solving the float32-epsilon formula
+/// exactly (fixed-point iteration on top of the exact logarithm), so that integrating and
+/// differentiating root deltas round-trips to ~1e-12.
+pub fn rotmat_to_expmap_pow(m: &Mat3, times: usize) -> [f64; 3] {
+    let times = times.max(1);
+    let target = log_rotation(m);
+    let inv_times = 1.0 / times as f64;
+    let mut r = [
+        target[0] * inv_times,
+        target[1] * inv_times,
+        target[2] * inv_times,
+    ];
+    for _ in 0..20 {
+        let e = expmap2rotmat(r);
+        let mut p = e;
+        for _ in 1..times {
+            p = mat3_mul(&p, &e);
+        }
+        let got = log_rotation(&p);
+        let mut change = 0.0f64;
+        for k in 0..3 {
+            let c = (target[k] - got[k]) * inv_times;
+            r[k] += c;
+            change = change.max(c.abs());
+        }
+        if change < 1e-16 {
+            break;
+        }
+    }
+    r
+}
+
+/// Logarithm of a (near-)rotation matrix in the convention of [`expmap2rotmat`] without its ε:
+/// the `r` with exact Rodrigues `I + sin θ K + (1 - cos θ) K² = m`, angle in `[0, π]`.
+fn log_rotation(m: &Mat3) -> [f64; 3] {
+    // expmap2rotmat read as a column-vector matrix is the rotation about r: use glam's robust
+    // matrix -> quaternion conversion on the element-wise copy (no transpose).
+    let q = glam::DQuat::from_mat3(&crate::rotation::mat3_to_dmat3(m)).normalize();
+    crate::rotation::quat_to_expmap(q)
+}
+
+/// Inverse of a 3x3 matrix (adjugate / determinant); `None` if singular.
+pub fn mat3_inverse(m: &Mat3) -> Option<Mat3> {
+    let c00 = m[1][1] * m[2][2] - m[1][2] * m[2][1];
+    let c01 = m[1][2] * m[2][0] - m[1][0] * m[2][2];
+    let c02 = m[1][0] * m[2][1] - m[1][1] * m[2][0];
+    let det = m[0][0] * c00 + m[0][1] * c01 + m[0][2] * c02;
+    if det.abs() < 1e-300 || !det.is_finite() {
+        return None;
+    }
+    let inv_det = 1.0 / det;
+    Some([
+        [
+            c00 * inv_det,
+            (m[0][2] * m[2][1] - m[0][1] * m[2][2]) * inv_det,
+            (m[0][1] * m[1][2] - m[0][2] * m[1][1]) * inv_det,
+        ],
+        [
+            c01 * inv_det,
+            (m[0][0] * m[2][2] - m[0][2] * m[2][0]) * inv_det,
+            (m[0][2] * m[1][0] - m[0][0] * m[1][2]) * inv_det,
+        ],
+        [
+            c02 * inv_det,
+            (m[0][1] * m[2][0] - m[0][0] * m[2][1]) * inv_det,
+            (m[0][0] * m[1][1] - m[0][1] * m[1][0]) * inv_det,
+        ],
+    ])
+}

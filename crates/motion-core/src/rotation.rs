@@ -1,1 +1,338 @@
-//! TODO(owner: foundations helper): rotation.
+//! Rotations: the H3.6M evaluation conversions (bit-exact to the reference code) and general
+//! conversions between exponential maps, quaternions, matrices and Euler angles in any of the 12
+//! orders.
+//!
+//! ## Two conventions, one transpose apart
+//! - **H3.6M row vectors** ([`Mat3`], `[[f64; 3]; 3]`, row-major, `m[i][j]` = row `i` column `j`,
+//!   exactly like numpy indexing in the reference code): a point `x` (row vector) is rotated as
+//!   `x · R`. [`expmap2rotmat`] and [`rotmat2euler`] live in this convention.
+//! - **Column vectors** (glam's [`DMat3`] / [`DQuat`], BVH): a point is rotated as `M · x`.
+//!
+//! The same physical rotation has `M = Rᵀ`. [`mat3_to_dmat3`] / [`dmat3_to_mat3`] copy elements
+//! *position for position* (no transpose: `dmat3.col(j)[i] == m[i][j]`), so the column-vector matrix
+//! of an H3.6M rotation `R` is `mat3_to_dmat3(&R).transpose()`; [`row_mat3_to_quat`] and
+//! [`quat_to_row_mat3`] do that transpose for you.
+//!
+//! Note that the Rodrigues formula of [`expmap2rotmat`] gives, read as a column-vector matrix, the
+//! rotation about `r` by `|r|` (what [`expmap_to_quat`] returns). Read as a row-vector matrix (as
+//! the H3.6M FK does) it is the *inverse* rotation. Hence the column-vector (BVH) local rotation
+//! of an H3.6M joint with exp-map `r` is `expmap_to_quat(r).inverse()` = `expmap_to_quat(-r)`.
+//!
+//! ## Euler angles
+//! [`EulerOrder`] names the axis sequence as BVH lists its rotation channels. Angles `[a, b, c]`
+//! are **intrinsic**, applied in the listed order, to **column vectors**:
+//! `M = R_first(a) · R_second(b) · R_third(c)` (e.g. `ZXY`: `M = Rz(a) · Rx(b) · Ry(c)`), which is
+//! what a BVH file with `CHANNELS 3 Zrotation Xrotation Yrotation` means and what glam's intrinsic
+//! `EulerRot` variants compute.
+use glam::{DMat3, DQuat, DVec3, EulerRot};
+
+/// A 3x3 rotation matrix in the H3.6M **row-vector** convention, row-major (`m[i][j]` = row i,
+/// column j, as numpy indexes it).
+pub type Mat3 = [[f64; 3]; 3];
+
+/// The identity [`Mat3`].
+pub const MAT3_IDENTITY: Mat3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+
+/// float32 machine epsilon as used by the reference `expmap2rotmat` (`np.finfo(np.float32).eps`).
+pub const EXPMAP_EPS: f64 = 1.1920929e-07;
+
+/// Exponential map to rotation matrix exactly as the H3.6M evaluation code does it:
+/// `θ = |r|`, `k = r / (θ + ε)` with ε = float32 epsilon, `R = I + sin θ K + (1 - cos θ) K²`.
+///
+/// Because of ε the result is not exactly orthonormal (errors ~1e-7 relative); that is deliberate,
+/// the published numbers were computed with it.
+pub fn expmap2rotmat(r: [f64; 3]) -> Mat3 {
+    let theta = (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt();
+    let d = theta + EXPMAP_EPS;
+    let (kx, ky, kz) = (r[0] / d, r[1] / d, r[2] / d);
+    // K = [[0,-kz,ky],[kz,0,-kx],[-ky,kx,0]]
+    let k = [[0.0, -kz, ky], [kz, 0.0, -kx], [-ky, kx, 0.0]];
+    let k2 = mat3_mul(&k, &k);
+    let s = theta.sin();
+    let c1 = 1.0 - theta.cos();
+    let mut out = [[0.0; 3]; 3];
+    for i in 0..3 {
+        for j in 0..3 {
+            let eye = if i == j { 1.0 } else { 0.0 };
+            // Same association as numpy: (I + sin*K) + (1-cos)*K².
+            out[i][j] = (eye + s * k[i][j]) + c1 * k2[i][j];
+        }
+    }
+    out
+}
+
+/// Rotation matrix to Euler angles `[E1, E2, E3]` exactly as the H3.6M evaluation code does it
+/// (including its exact `R[0][2] == ±1` test for gimbal lock).
+///
+/// For a non-degenerate `R`, the column-vector rotation `Rᵀ` equals
+/// `DMat3::from_euler(EulerRot::ZYX, E3, E2, E1)` (equivalently `R = Rx(-E1)·Ry(-E2)·Rz(-E3)`).
+pub fn rotmat2euler(r: &Mat3) -> [f64; 3] {
+    let r02 = r[0][2];
+    if r02 == 1.0 || r02 == -1.0 {
+        let e3 = 0.0;
+        let dlta = r[0][1].atan2(r[0][2]);
+        if r02 == -1.0 {
+            let e2 = std::f64::consts::PI / 2.0;
+            let e1 = e3 + dlta;
+            [e1, e2, e3]
+        } else {
+            let e2 = -std::f64::consts::PI / 2.0;
+            let e1 = -e3 + dlta;
+            [e1, e2, e3]
+        }
+    } else {
+        let e2 = -r02.asin();
+        let c2 = e2.cos();
+        let e1 = (r[1][2] / c2).atan2(r[2][2] / c2);
+        let e3 = (r[0][1] / c2).atan2(r[0][0] / c2);
+        [e1, e2, e3]
+    }
+}
+
+/// The protocol's per-frame Euler conversion: every exp-map triple at dims `3, 6, ..` is replaced
+/// by `rotmat2euler(expmap2rotmat(triple))`, then dims 0..5 are set to 0.
+///
+/// Works for any width `3 + 3k` (99 for H3.6M, 117 for CMU). `out` must have the same length as
+/// `frame`.
+///
+/// # Panics
+/// If `frame.len() != out.len()` or the width is not `3 + 3k` with `k >= 1` (a programming error,
+/// not bad input: callers validate widths when they read files).
+pub fn expmap_frame_to_euler_protocol(frame: &[f64], out: &mut [f64]) {
+    assert_eq!(frame.len(), out.len(), "frame and output widths differ");
+    assert!(
+        frame.len() >= 6 && frame.len().is_multiple_of(3),
+        "frame width {} is not 3 + 3k",
+        frame.len()
+    );
+    for k in (3..frame.len()).step_by(3) {
+        let e = rotmat2euler(&expmap2rotmat([frame[k], frame[k + 1], frame[k + 2]]));
+        out[k..k + 3].copy_from_slice(&e);
+    }
+    out[..6].fill(0.0);
+}
+
+/// Product `a · b` of two [`Mat3`].
+pub fn mat3_mul(a: &Mat3, b: &Mat3) -> Mat3 {
+    let mut out = [[0.0; 3]; 3];
+    for i in 0..3 {
+        for j in 0..3 {
+            out[i][j] = a[i][0] * b[0][j] + a[i][1] * b[1][j] + a[i][2] * b[2][j];
+        }
+    }
+    out
+}
+
+/// Transpose of a [`Mat3`].
+pub fn mat3_transpose(m: &Mat3) -> Mat3 {
+    let mut out = [[0.0; 3]; 3];
+    for i in 0..3 {
+        for j in 0..3 {
+            out[i][j] = m[j][i];
+        }
+    }
+    out
+}
+
+/// Row vector times matrix: `v · m` (the H3.6M way of rotating a point).
+#[inline]
+pub fn vec_mul_mat3(v: [f64; 3], m: &Mat3) -> [f64; 3] {
+    [
+        v[0] * m[0][0] + v[1] * m[1][0] + v[2] * m[2][0],
+        v[0] * m[0][1] + v[1] * m[1][1] + v[2] * m[2][1],
+        v[0] * m[0][2] + v[1] * m[1][2] + v[2] * m[2][2],
+    ]
+}
+
+/// Copies a [`Mat3`] into a glam [`DMat3`] element for element (`out.col(j)[i] == m[i][j]`),
+/// **without** transposing. The column-vector matrix of the H3.6M row-vector rotation `m` is
+/// `mat3_to_dmat3(m).transpose()`.
+pub fn mat3_to_dmat3(m: &Mat3) -> DMat3 {
+    DMat3::from_cols(
+        DVec3::new(m[0][0], m[1][0], m[2][0]),
+        DVec3::new(m[0][1], m[1][1], m[2][1]),
+        DVec3::new(m[0][2], m[1][2], m[2][2]),
+    )
+}
+
+/// Copies a glam [`DMat3`] into a [`Mat3`] element for element (`out[i][j] == m.col(j)[i]`),
+/// **without** transposing (inverse of [`mat3_to_dmat3`]).
+pub fn dmat3_to_mat3(m: &DMat3) -> Mat3 {
+    let mut out = [[0.0; 3]; 3];
+    for (j, col) in [m.x_axis, m.y_axis, m.z_axis].iter().enumerate() {
+        out[0][j] = col.x;
+        out[1][j] = col.y;
+        out[2][j] = col.z;
+    }
+    out
+}
+
+/// The column-vector quaternion of an H3.6M **row-vector** rotation matrix (`Mᵀ` as a quaternion).
+/// The matrix is re-orthonormalised by glam's conversion; it should be (close to) a rotation.
+pub fn row_mat3_to_quat(m: &Mat3) -> DQuat {
+    DQuat::from_mat3(&mat3_to_dmat3(m).transpose()).normalize()
+}
+
+/// The H3.6M **row-vector** matrix of a column-vector quaternion (inverse of [`row_mat3_to_quat`]).
+pub fn quat_to_row_mat3(q: DQuat) -> Mat3 {
+    dmat3_to_mat3(&DMat3::from_quat(q).transpose())
+}
+
+/// Exponential map (axis times angle, radians) to the unit quaternion of the rotation about `r` by
+/// `|r|` (column-vector convention; exact, no ε).
+pub fn expmap_to_quat(r: [f64; 3]) -> DQuat {
+    DQuat::from_scaled_axis(DVec3::from_array(r))
+}
+
+/// Unit quaternion to exponential map with angle in `[0, π]` (the quaternion is taken with
+/// `w >= 0`). Inverse of [`expmap_to_quat`] for `|r| < π`.
+pub fn quat_to_expmap(q: DQuat) -> [f64; 3] {
+    let q = if q.w < 0.0 { -q } else { q };
+    let v = DVec3::new(q.x, q.y, q.z);
+    let s = v.length();
+    if s < 1e-300 {
+        // Identity (or numerically so): the small-angle limit of 2·v/s·atan2(s, w) is 2·v/w.
+        return (v * (2.0 / q.w.max(1e-300))).to_array();
+    }
+    let angle = 2.0 * s.atan2(q.w);
+    (v * (angle / s)).to_array()
+}
+
+/// An Euler angle axis sequence, named as BVH lists its rotation channels.
+///
+/// Convention: angles `[a, b, c]` are intrinsic, applied in the listed order, column vectors:
+/// `M = R_first(a) · R_second(b) · R_third(c)`. The 6 Tait-Bryan orders (three distinct axes) are
+/// the ones BVH uses; the 6 proper Euler orders (first axis repeated) are here for completeness.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum EulerOrder {
+    /// `Rx · Ry · Rz`
+    XYZ,
+    /// `Rx · Rz · Ry`
+    XZY,
+    /// `Ry · Rx · Rz`
+    YXZ,
+    /// `Ry · Rz · Rx`
+    YZX,
+    /// `Rz · Rx · Ry`
+    ZXY,
+    /// `Rz · Ry · Rx`
+    ZYX,
+    /// `Rx · Ry · Rx`
+    XYX,
+    /// `Rx · Rz · Rx`
+    XZX,
+    /// `Ry · Rx · Ry`
+    YXY,
+    /// `Ry · Rz · Ry`
+    YZY,
+    /// `Rz · Rx · Rz`
+    ZXZ,
+    /// `Rz · Ry · Rz`
+    ZYZ,
+}
+
+impl EulerOrder {
+    /// All 12 orders.
+    pub const ALL: [EulerOrder; 12] = [
+        EulerOrder::XYZ,
+        EulerOrder::XZY,
+        EulerOrder::YXZ,
+        EulerOrder::YZX,
+        EulerOrder::ZXY,
+        EulerOrder::ZYX,
+        EulerOrder::XYX,
+        EulerOrder::XZX,
+        EulerOrder::YXY,
+        EulerOrder::YZY,
+        EulerOrder::ZXZ,
+        EulerOrder::ZYZ,
+    ];
+
+    /// The 6 Tait-Bryan orders (three distinct axes), the ones BVH files use.
+    pub const TAIT_BRYAN: [EulerOrder; 6] = [
+        EulerOrder::XYZ,
+        EulerOrder::XZY,
+        EulerOrder::YXZ,
+        EulerOrder::YZX,
+        EulerOrder::ZXY,
+        EulerOrder::ZYX,
+    ];
+
+    /// The axes in application order, 0 = x, 1 = y, 2 = z.
+    pub fn axes(self) -> [usize; 3] {
+        match self {
+            EulerOrder::XYZ => [0, 1, 2],
+            EulerOrder::XZY => [0, 2, 1],
+            EulerOrder::YXZ => [1, 0, 2],
+            EulerOrder::YZX => [1, 2, 0],
+            EulerOrder::ZXY => [2, 0, 1],
+            EulerOrder::ZYX => [2, 1, 0],
+            EulerOrder::XYX => [0, 1, 0],
+            EulerOrder::XZX => [0, 2, 0],
+            EulerOrder::YXY => [1, 0, 1],
+            EulerOrder::YZY => [1, 2, 1],
+            EulerOrder::ZXZ => [2, 0, 2],
+            EulerOrder::ZYZ => [2, 1, 2],
+        }
+    }
+
+    /// The Tait-Bryan order with these three distinct axes (0 = x, 1 = y, 2 = z), if any.
+    /// (A BVH joint with rotation channels `Z X Y` has order `from_axes([2, 0, 1])`.)
+    pub fn from_axes(axes: [usize; 3]) -> Option<EulerOrder> {
+        EulerOrder::ALL.into_iter().find(|o| o.axes() == axes)
+    }
+
+    /// The equivalent intrinsic glam [`EulerRot`].
+    pub fn to_glam(self) -> EulerRot {
+        match self {
+            EulerOrder::XYZ => EulerRot::XYZ,
+            EulerOrder::XZY => EulerRot::XZY,
+            EulerOrder::YXZ => EulerRot::YXZ,
+            EulerOrder::YZX => EulerRot::YZX,
+            EulerOrder::ZXY => EulerRot::ZXY,
+            EulerOrder::ZYX => EulerRot::ZYX,
+            EulerOrder::XYX => EulerRot::XYX,
+            EulerOrder::XZX => EulerRot::XZX,
+            EulerOrder::YXY => EulerRot::YXY,
+            EulerOrder::YZY => EulerRot::YZY,
+            EulerOrder::ZXZ => EulerRot::ZXZ,
+            EulerOrder::ZYZ => EulerRot::ZYZ,
+        }
+    }
+}
+
+/// Unit quaternion of the elementary rotation by `angle` about axis `axis` (0 = x, 1 = y, 2 = z).
+///
+/// # Panics
+/// If `axis > 2`.
+pub fn axis_quat(axis: usize, angle: f64) -> DQuat {
+    match axis {
+        0 => DQuat::from_rotation_x(angle),
+        1 => DQuat::from_rotation_y(angle),
+        2 => DQuat::from_rotation_z(angle),
+        _ => panic!("axis index {axis} is not 0, 1 or 2"),
+    }
+}
+
+/// Euler angles (radians, see [`EulerOrder`] for the convention) to a unit quaternion.
+pub fn euler_to_quat(order: EulerOrder, angles: [f64; 3]) -> DQuat {
+    DQuat::from_euler(order.to_glam(), angles[0], angles[1], angles[2])
+}
+
+/// Unit quaternion to Euler angles (radians) in `order`; inverse of [`euler_to_quat`] away from
+/// gimbal lock (middle angle in `(-π/2, π/2)` for Tait-Bryan, in `(0, π)` for proper orders).
+pub fn quat_to_euler(order: EulerOrder, q: DQuat) -> [f64; 3] {
+    let (a, b, c) = q.to_euler(order.to_glam());
+    [a, b, c]
+}
+
+/// Euler angles (radians) to a column-vector rotation matrix.
+pub fn euler_to_dmat3(order: EulerOrder, angles: [f64; 3]) -> DMat3 {
+    DMat3::from_euler(order.to_glam(), angles[0], angles[1], angles[2])
+}
+
+/// Column-vector rotation matrix to Euler angles (radians) in `order`.
+pub fn dmat3_to_euler(order: EulerOrder, m: &DMat3) -> [f64; 3] {
+    let (a, b, c) = m.to_euler(order.to_glam());
+    [a, b, c]
+}

@@ -1,1 +1,181 @@
-//! TODO: h36m_text.
+//! H3.6M / CMU exp-map text: one frame per line, comma-separated floats, any column count
+//! (99 for H3.6M, 117 for CMU), plain (`.txt`) or gzip (`.txt.gz`); plus the protocol's 25 Hz
+//! downsampling.
+use std::fs::File;
+use std::io::{BufRead, BufReader, BufWriter, Read, Write};
+use std::path::{Path, PathBuf};
+
+use ndarray::{Array2, ArrayView2, Axis};
+
+use crate::error::FormatError;
+
+/// True if the path ends in `.gz` (case-insensitive).
+fn is_gzip(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("gz"))
+}
+
+fn io_error(path: &Path, source: std::io::Error) -> FormatError {
+    FormatError::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+/// Reads an exp-map text file (`.txt` or `.txt.gz`) into `frames x columns`.
+///
+/// Errors: missing/unreadable file ([`FormatError::Io`]); a non-number, NaN/infinite value or a
+/// row whose column count differs from the first row ([`FormatError::Parse`] with the 1-based
+/// line); no frames at all ([`FormatError::Invalid`]). Blank lines (e.g. a trailing newline) and
+/// surrounding whitespace are ignored.
+pub fn read_expmap_text(path: impl AsRef<Path>) -> Result<Array2<f64>, FormatError> {
+    let path = path.as_ref();
+    let file = File::open(path).map_err(|e| io_error(path, e))?;
+    let reader: Box<dyn Read> = if is_gzip(path) {
+        Box::new(flate2::read::MultiGzDecoder::new(file))
+    } else {
+        Box::new(file)
+    };
+    parse_expmap_text(BufReader::new(reader), path)
+}
+
+/// Parses exp-map text from any reader; `path` only names the source in errors.
+pub fn parse_expmap_text(reader: impl BufRead, path: &Path) -> Result<Array2<f64>, FormatError> {
+    let mut values: Vec<f64> = Vec::new();
+    let mut columns: Option<(usize, usize)> = None; // (count, line where it was set)
+    let mut rows = 0usize;
+    let parse_err = |line: usize, problem: String| FormatError::Parse {
+        path: path.to_path_buf(),
+        line,
+        problem,
+    };
+    for (index, line) in reader.lines().enumerate() {
+        let line_no = index + 1;
+        let line = line.map_err(|e| match e.kind() {
+            std::io::ErrorKind::InvalidData => parse_err(
+                line_no,
+                format!("not UTF-8 text or not a valid gzip stream ({e})"),
+            ),
+            _ => io_error(path, e),
+        })?;
+        let trimmed = line.trim();
+        if trimmed.is_empty() {
+            continue;
+        }
+        let mut count = 0usize;
+        for (col, field) in trimmed.split(',').enumerate() {
+            let field = field.trim();
+            let v: f64 = field.parse().map_err(|_| {
+                parse_err(
+                    line_no,
+                    format!("column {}: expected a number, found {:?}", col + 1, field),
+                )
+            })?;
+            if !v.is_finite() {
+                return Err(parse_err(
+                    line_no,
+                    format!(
+                        "column {}: expected a finite number, found {field}",
+                        col + 1
+                    ),
+                ));
+            }
+            values.push(v);
+            count += 1;
+        }
+        match columns {
+            None => columns = Some((count, line_no)),
+            Some((expected, first_line)) if expected != count => {
+                return Err(parse_err(
+                    line_no,
+                    format!(
+                        "expected {expected} comma-separated values (as on line {first_line}), found {count}"
+                    ),
+                ))
+            }
+            Some(_) => {}
+        }
+        rows += 1;
+    }
+    let Some((cols, _)) = columns else {
+        return Err(FormatError::Invalid {
+            path: path.to_path_buf(),
+            problem: "no frames (the file is empty)".to_string(),
+        });
+    };
+    Array2::from_shape_vec((rows, cols), values).map_err(|e| FormatError::Invalid {
+        path: path.to_path_buf(),
+        problem: format!("inconsistent shape: {e}"),
+    })
+}
+
+/// Writes frames as exp-map text (`.txt`, or gzip if the path ends in `.gz`), one frame per line,
+/// comma-separated, with Rust's shortest round-trip representation of every `f64`.
+///
+/// The file is written to a temporary file in the same directory and renamed into place, so a
+/// failure never leaves a half-written output.
+pub fn write_expmap_text(
+    path: impl AsRef<Path>,
+    frames: ArrayView2<f64>,
+) -> Result<(), FormatError> {
+    let path = path.as_ref();
+    write_atomically(path, |w| {
+        if is_gzip(path) {
+            let mut gz = flate2::write::GzEncoder::new(w, flate2::Compression::default());
+            format_expmap_text(&mut gz, frames)?;
+            gz.finish()?.flush()
+        } else {
+            format_expmap_text(&mut *w, frames)?;
+            w.flush()
+        }
+    })
+}
+
+/// Formats frames as exp-map text into any writer (shortest round-trip `f64` representation).
+pub fn format_expmap_text(mut w: impl Write, frames: ArrayView2<f64>) -> std::io::Result<()> {
+    for row in frames.axis_iter(Axis(0)) {
+        for (k, v) in row.iter().enumerate() {
+            if k > 0 {
+                w.write_all(b",")?;
+            }
+            write!(w, "{v:?}")?;
+        }
+        w.write_all(b"\n")?;
+    }
+    Ok(())
+}
+
+/// Writes through `body` into a temporary file next to `path`, then renames it onto `path`.
+/// The temporary file is removed if anything fails.
+pub(crate) fn write_atomically(
+    path: &Path,
+    body: impl FnOnce(&mut BufWriter<File>) -> std::io::Result<()>,
+) -> Result<(), FormatError> {
+    let tmp = temp_path(path);
+    let result = (|| {
+        let file = File::create(&tmp)?;
+        let mut w = BufWriter::new(file);
+        body(&mut w)?;
+        let file = w.into_inner().map_err(|e| e.into_error())?;
+        file.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    result.map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        io_error(path, e)
+    })
+}
+
+fn temp_path(path: &Path) -> PathBuf {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    path.with_file_name(format!(".{name}.tmp{}", std::process::id()))
+}
+
+/// The protocol's downsampling of 50 Hz frames to 25 Hz: keeps frames 0, 2, 4, ...
+pub fn downsample_protocol(frames: ArrayView2<f64>) -> Array2<f64> {
+    frames.slice(ndarray::s![..;2, ..]).to_owned()
+}
