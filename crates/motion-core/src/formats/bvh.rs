@@ -1,1 +1,99 @@
-//! TODO: bvh.
+//! BVH (Biovision Hierarchy) files: a reader and a writer of our own.
+//!
+//! The reader accepts any hierarchy (one `ROOT`, nested `JOINT`s, `End Site`s), `OFFSET`,
+//! `CHANNELS` with 0 to 6 channels in any order on any joint, `MOTION`, `Frames:` and
+//! `Frame Time:`. It tolerates tabs, CRLF line ends, odd spacing, trailing whitespace, blank
+//! lines, a byte order mark, keywords in any case and a `{` on the keyword's line. Every malformed
+//! input is a [`FormatError::Parse`] naming the file, the 1-based line and what was expected; it
+//! never panics and never allocates more than the size of the file allows, whatever `Frames:` says.
+//! A `Frames:` count that disagrees with the number of frame lines is an error giving both.
+//!
+//! In memory ([`Bvh`]) the channel values are exactly those of the file: rotations in **degrees**,
+//! positions in the file's units (the channel FK of [`crate::kinematics`] reads them so). An `End Site` becomes a joint without channels
+//! ([`Joint::is_end_site`](crate::skeleton::Joint::is_end_site)) named `<parent>_End`. A `JOINT`
+//! without children is accepted (and written) as is: the H3.6M skeleton's "Site" leaves are such
+//! joints, because the data has an exp-map triple for each of them.
+//!
+//! The writer uses the standard layout (tabs, one frame per line) and Rust's shortest
+//! round-trip representation of each number, so a written file reads back to the same values.
+use std::io::Write as _;
+use std::path::Path;
+
+use ndarray::Array2;
+
+use crate::error::FormatError;
+use crate::skeleton::Skeleton;
+
+mod parse;
+mod write;
+
+pub use write::write_to;
+
+/// A BVH file in memory: the hierarchy, the frames and the frame time.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Bvh {
+    /// The hierarchy, with each joint's channels in file order.
+    pub skeleton: Skeleton,
+    /// Frames x channels, in the skeleton's channel order; rotations in degrees.
+    pub frames: Array2<f64>,
+    /// Seconds per frame (`Frame Time:`).
+    pub frame_time: f64,
+}
+
+impl Bvh {
+    /// Frames per second (`1 / frame_time`).
+    pub fn fps(&self) -> f64 {
+        1.0 / self.frame_time
+    }
+}
+
+/// Reads a `.bvh` file.
+pub fn read_bvh(path: impl AsRef<Path>) -> Result<Bvh, FormatError> {
+    let path = path.as_ref();
+    let bytes = std::fs::read(path).map_err(|source| FormatError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let text = std::str::from_utf8(&bytes).map_err(|e| {
+        let line = bytes[..e.valid_up_to()]
+            .iter()
+            .filter(|&&b| b == b'\n')
+            .count()
+            + 1;
+        FormatError::Parse {
+            path: path.to_path_buf(),
+            line,
+            problem: "expected UTF-8 text".to_string(),
+        }
+    })?;
+    parse_bvh(text, path)
+}
+
+/// Parses BVH text; `path` only names the source in errors.
+pub fn parse_bvh(text: &str, path: impl AsRef<Path>) -> Result<Bvh, FormatError> {
+    parse::parse(text, path.as_ref())
+}
+
+/// The BVH text of `bvh`.
+///
+/// # Errors
+/// As [`write_to`]: frames that do not fit the skeleton, non-finite values, a bad frame time.
+pub fn to_bvh_string(bvh: &Bvh) -> std::io::Result<String> {
+    let mut out = Vec::new();
+    write_to(&mut out, bvh)?;
+    // The writer only emits UTF-8 (joint names are Rust strings).
+    String::from_utf8(out).map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidData, e))
+}
+
+/// Writes `bvh` to `path` (created or truncated).
+pub fn write_bvh(path: impl AsRef<Path>, bvh: &Bvh) -> Result<(), FormatError> {
+    let path = path.as_ref();
+    let io_error = |source| FormatError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let file = std::fs::File::create(path).map_err(io_error)?;
+    let mut file = std::io::BufWriter::new(file);
+    write_to(&mut file, bvh).map_err(io_error)?;
+    file.flush().map_err(io_error)
+}
