@@ -3,7 +3,8 @@
 //! `[x, ∇¹x, ..., ∇^order x]` (width `D * (order + 1)`).
 //!
 //! ## Padding: `repeat-first`
-//! Frames before the first are copies of the first, so the first frame's derivatives are 0. This
+//! Frames before the first are copies of the first, so the first frame's derivatives are 0 (∇³
+//! up to the rounding of `3 · x`, exactly as in PyTorch with the same summation order). This
 //! is fixed by `weights/README.md` and the PyTorch training code (`training/features.py`).
 //!
 //! ## Bit-exact agreement
@@ -180,5 +181,112 @@ impl<T: DerivativeScalar> DerivativeBuffer<T> {
             &ring[s * w..(s + 1) * w]
         };
         write_features(self.order, w, frame_at, out);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ndarray::Array2;
+
+    fn frames<T: DerivativeScalar>(steps: usize, width: usize, f: impl Fn(f64) -> T) -> Array2<T> {
+        Array2::from_shape_fn((steps, width), |(t, k)| {
+            f((t as f64 * 0.3 + k as f64).sin() * 10.0 + t as f64)
+        })
+    }
+
+    fn incremental<T: DerivativeScalar + std::fmt::Debug>(
+        x: &Array2<T>,
+        order: usize,
+    ) -> Array2<T> {
+        let (steps, width) = x.dim();
+        let mut buf = DerivativeBuffer::new(width, order);
+        let mut out = Array2::from_elem((steps, width * (order + 1)), T::ZERO);
+        for t in 0..steps {
+            let frame = x.row(t).to_vec();
+            buf.push(&frame, out.row_mut(t).as_slice_mut().unwrap());
+        }
+        out
+    }
+
+    #[test]
+    fn batch_and_incremental_are_bit_identical_f32_and_f64() {
+        for order in 0..=4 {
+            let x64 = frames(37, 5, |v| v);
+            let a = derivative_features(x64.view(), order);
+            let b = incremental(&x64, order);
+            assert!(a
+                .iter()
+                .zip(b.iter())
+                .all(|(p, q)| p.to_bits() == q.to_bits()));
+            let x32 = frames(37, 5, |v| v as f32);
+            let a = derivative_features(x32.view(), order);
+            let b = incremental(&x32, order);
+            assert!(a
+                .iter()
+                .zip(b.iter())
+                .all(|(p, q)| p.to_bits() == q.to_bits()));
+        }
+    }
+
+    #[test]
+    fn layout_padding_and_values() {
+        // x_t = t³ in one channel: ∇¹ = t³ - (t-1)³, ∇² ..., ∇³ = 6 once past the padding.
+        let x = Array2::from_shape_fn((8, 1), |(t, _)| (t as f64).powi(3));
+        let f = derivative_features(x.view(), 3);
+        assert_eq!(f.dim(), (8, 4));
+        assert_eq!(f.row(0).to_vec(), vec![0.0, 0.0, 0.0, 0.0]);
+        // t = 1: history [1, 0, 0, 0] -> ∇¹ = 1, ∇² = 1, ∇³ = 1.
+        assert_eq!(f.row(1).to_vec(), vec![1.0, 1.0, 1.0, 1.0]);
+        for t in 3..8 {
+            let tf = t as f64;
+            assert_eq!(f[[t, 0]], tf.powi(3));
+            assert_eq!(f[[t, 1]], tf.powi(3) - (tf - 1.0).powi(3));
+            assert_eq!(f[[t, 3]], 6.0);
+        }
+        // First frame's derivatives are zero for any data (repeat-first), up to the rounding
+        // of `3 · x` in ∇³ (the same bits PyTorch computes).
+        let y = frames(3, 4, |v| v);
+        let g = derivative_features(y.view(), 3);
+        assert!(g.row(0).iter().skip(4).all(|&v| v.abs() < 1e-13));
+        assert!(g.row(0).iter().skip(4).take(8).all(|&v| v == 0.0));
+        assert_eq!(
+            g.row(0).iter().take(4).copied().collect::<Vec<_>>(),
+            y.row(0).to_vec()
+        );
+    }
+
+    #[test]
+    fn reset_starts_over() {
+        let x = frames(6, 3, |v| v);
+        let mut buf = DerivativeBuffer::<f64>::new(3, 3);
+        let mut out = vec![0.0; 12];
+        for t in 0..6 {
+            buf.push(x.row(t).as_slice().unwrap(), &mut out);
+        }
+        buf.reset();
+        buf.push(x.row(4).as_slice().unwrap(), &mut out);
+        assert_eq!(&out[..3], x.row(4).as_slice().unwrap());
+        assert!(out[3..9].iter().all(|&v| v == 0.0));
+        assert!(out[9..].iter().all(|&v| v.abs() < 1e-13));
+        assert_eq!(buf.output_width(), 12);
+    }
+
+    #[test]
+    fn signed_binomials_are_right() {
+        let mut c = [0i64; MAX_DERIVATIVE_ORDER + 1];
+        signed_binomials(3, &mut c);
+        assert_eq!(&c[..4], &[1, -3, 3, -1]);
+        signed_binomials(8, &mut c);
+        assert_eq!(c, [1, -8, 28, -56, 70, -56, 28, -8, 1]);
+    }
+
+    #[test]
+    fn non_contiguous_views_work() {
+        let x = frames(10, 6, |v| v);
+        let strided = x.slice(ndarray::s![..;2, 1..4]);
+        let a = derivative_features(strided, 2);
+        let b = derivative_features(strided.to_owned().view(), 2);
+        assert_eq!(a, b);
     }
 }

@@ -219,3 +219,170 @@ pub fn channel_positions(
 fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
 }
+
+#[cfg(test)]
+#[allow(clippy::needless_range_loop)]
+mod tests {
+    use super::*;
+    use crate::root::integrate_root;
+    use crate::rotation::{dmat3_to_euler, mat3_to_dmat3, EulerOrder};
+    use ndarray::Array2;
+
+    fn wavy_frames(frames: usize, width: usize, amplitude: f64) -> Array2<f64> {
+        Array2::from_shape_fn((frames, width), |(t, k)| {
+            let x = (t as f64 * 0.21 + k as f64 * 0.77).sin();
+            match k {
+                0..=2 => 12.0 * x,
+                3..=5 => 0.03 * x,
+                _ => amplitude * x,
+            }
+        })
+    }
+
+    fn dist(a: &[f64], b: &[f64]) -> f64 {
+        ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+    }
+
+    #[test]
+    fn rest_pose_is_the_sum_of_offsets() {
+        let s = Skeleton::h36m();
+        let frames = Array2::zeros((1, 99));
+        let p = expmap_positions(&s, frames.view(), RootEncoding::Deltas, 1).unwrap();
+        // HeadSite = Spine + Spine1 + Neck + Head + HeadSite offsets (all along y).
+        let want = 0.1 + 233.383263 + 257.077681 + 121.134938 + 115.002227;
+        assert!((p[[0, 15, 1]] - want).abs() < 1e-9);
+        assert!((p[[0, 3, 1]] - (-442.894612 - 454.206447)).abs() < 1e-9);
+        assert!((p[[0, 1, 0]] + 132.948591).abs() < 1e-12);
+    }
+
+    #[test]
+    fn bone_lengths_are_preserved_and_root_translation_is_used() {
+        let s = Skeleton::h36m();
+        let frames = wavy_frames(60, 99, 0.8);
+        let p = expmap_positions(&s, frames.view(), RootEncoding::Deltas, 1).unwrap();
+        let mut worst: f64 = 0.0;
+        for t in 0..60 {
+            for j in 1..s.len() {
+                let parent = s.parent(j).unwrap();
+                let a = [p[[t, j, 0]], p[[t, j, 1]], p[[t, j, 2]]];
+                let b = [p[[t, parent, 0]], p[[t, parent, 1]], p[[t, parent, 2]]];
+                worst = worst.max((dist(&a, &b) - s.bone_length(j)).abs());
+            }
+        }
+        assert!(worst < 1e-3, "bone length error {worst} mm");
+        // The root follows the integrated deltas (unlike the Python `fkl` quirk).
+        let poses = integrate_root(frames.view(), 1);
+        for k in 0..3 {
+            assert_eq!(p[[59, 0, k]], poses[59].translation[k]);
+        }
+        assert!(poses[59].translation.iter().any(|v| v.abs() > 1.0));
+    }
+
+    #[test]
+    fn absolute_root_reads_dims_0_to_5_directly() {
+        let s = Skeleton::cmu();
+        let frames = wavy_frames(5, 117, 0.5);
+        let p = expmap_positions(&s, frames.view(), RootEncoding::Absolute, 7).unwrap();
+        for t in 0..5 {
+            for k in 0..3 {
+                assert_eq!(p[[t, 0, k]], frames[[t, k]]);
+            }
+        }
+    }
+
+    #[test]
+    fn wrong_widths_are_errors() {
+        let s = Skeleton::h36m();
+        let frames = Array2::zeros((2, 98));
+        assert_eq!(
+            expmap_positions(&s, frames.view(), RootEncoding::Deltas, 1).unwrap_err(),
+            MotionError::ChannelCount {
+                expected: 99,
+                found: 98
+            }
+        );
+        assert!(channel_positions(&s, frames.view()).is_err());
+    }
+
+    /// Converts exp-map frames to BVH channels of `Skeleton::h36m()` (root position + ZXY degrees)
+    /// the way the H3.6M -> BVH conversion must: column-vector local rotation = `R_jᵀ`.
+    fn to_channels(frames: &Array2<f64>) -> Array2<f64> {
+        let s = Skeleton::h36m();
+        let poses = integrate_root(frames.view(), 1);
+        let mut out = Array2::zeros((frames.nrows(), s.channel_count()));
+        for t in 0..frames.nrows() {
+            for k in 0..3 {
+                out[[t, k]] = poses[t].translation[k];
+            }
+            for j in 0..s.len() {
+                let row = if j == 0 {
+                    poses[t].rotation
+                } else {
+                    let k = 3 + 3 * j;
+                    expmap2rotmat([frames[[t, k]], frames[[t, k + 1]], frames[[t, k + 2]]])
+                };
+                let col = mat3_to_dmat3(&row).transpose();
+                let e = dmat3_to_euler(EulerOrder::ZXY, &col);
+                let start = s.channel_start(j) + if j == 0 { 3 } else { 0 };
+                for k in 0..3 {
+                    out[[t, start + k]] = e[k].to_degrees();
+                }
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn channel_fk_agrees_with_expmap_fk_on_the_h36m_skeleton() {
+        let s = Skeleton::h36m();
+        let frames = wavy_frames(40, 99, 1.0);
+        let want = expmap_positions(&s, frames.view(), RootEncoding::Deltas, 1).unwrap();
+        let got = channel_positions(&s, to_channels(&frames).view()).unwrap();
+        let worst = want
+            .iter()
+            .zip(got.iter())
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        assert!(worst < 1e-3, "FK disagreement {worst} mm");
+    }
+
+    #[test]
+    fn channel_fk_composes_rotations_in_listed_order_and_adds_positions() {
+        let s = Skeleton::new(vec![
+            crate::skeleton::Joint::new(
+                "root",
+                None,
+                [1.0, 0.0, 0.0],
+                vec![Channel::Xposition, Channel::Zrotation, Channel::Xrotation],
+            ),
+            crate::skeleton::Joint::end_site("tip", 0, [0.0, 1.0, 0.0]),
+        ])
+        .unwrap();
+        let frame = [2.0, 90.0, 90.0];
+        let mut out = [[0.0; 3]; 2];
+        ChannelFk::new(&s).frame(&s, &frame, &mut out);
+        assert_eq!(out[0], [3.0, 0.0, 0.0]);
+        // Rz(90) · Rx(90) · (0, 1, 0) = Rz(90) · (0, 0, 1) = (0, 0, 1).
+        assert!(dist(&out[1], &[3.0, 0.0, 1.0]) < 1e-12, "{:?}", out[1]);
+    }
+
+    #[test]
+    fn per_frame_fk_matches_batch() {
+        let s = Skeleton::h36m();
+        let frames = wavy_frames(10, 99, 0.6);
+        let batch = expmap_positions(&s, frames.view(), RootEncoding::Deltas, 2).unwrap();
+        let mut fk = ExpMapFk::new(&s);
+        let mut it = crate::root::RootIntegrator::new(2);
+        let mut out = vec![[0.0; 3]; s.len()];
+        for t in 0..10 {
+            let f = frames.row(t).to_vec();
+            let pose = it.push(&f);
+            fk.frame(&s, &f, &pose, &mut out);
+            for j in 0..s.len() {
+                for k in 0..3 {
+                    assert_eq!(out[j][k], batch[[t, j, k]]);
+                }
+            }
+        }
+    }
+}

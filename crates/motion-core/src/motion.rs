@@ -171,3 +171,69 @@ impl Motion {
         result.expect("Motion::new checked the width")
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn construction_checks_width_and_fps() {
+        let err = Motion::h36m(Array2::zeros((3, 98)), 50.0).unwrap_err();
+        assert_eq!(
+            err,
+            MotionError::ChannelCount {
+                expected: 99,
+                found: 98
+            }
+        );
+        assert!(matches!(
+            Motion::h36m(Array2::zeros((3, 99)), 0.0),
+            Err(MotionError::BadFps { .. })
+        ));
+        assert!(Motion::h36m(Array2::zeros((3, 99)), f64::NAN).is_err());
+        let bvh = Motion::new(
+            Arc::new(Skeleton::h36m()),
+            MotionLayout::Channels,
+            Array2::zeros((2, 99)),
+            120.0,
+        )
+        .unwrap();
+        assert_eq!(bvh.channels(), 99);
+        assert!((bvh.frame_time() - 1.0 / 120.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn windows_are_views_and_checked() {
+        let frames = Array2::from_shape_fn((10, 99), |(t, k)| (t * 100 + k) as f64);
+        let m = Motion::h36m(frames, 25.0).unwrap();
+        assert_eq!(m.root_step(), 2);
+        let w = m.window(3, 4).unwrap();
+        assert_eq!(w.dim(), (4, 99));
+        assert_eq!(w[[0, 5]], 305.0);
+        assert!(m.window(7, 3).is_ok());
+        assert_eq!(
+            m.window(8, 3).unwrap_err(),
+            MotionError::WindowOutOfRange {
+                start: 8,
+                len: 3,
+                frames: 10
+            }
+        );
+        assert!(m.window(usize::MAX, 2).is_err());
+    }
+
+    #[test]
+    fn positions_dispatch_on_layout() {
+        let m = Motion::h36m(Array2::zeros((2, 99)), 50.0).unwrap();
+        let p = m.positions();
+        assert_eq!(p.dim(), (2, 32, 3));
+        let c = Motion::new(
+            Arc::new(Skeleton::h36m()),
+            MotionLayout::Channels,
+            Array2::zeros((2, 99)),
+            50.0,
+        )
+        .unwrap();
+        assert_eq!(c.positions(), p);
+    }
+}

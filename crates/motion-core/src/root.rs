@@ -141,7 +141,9 @@ pub fn integrate_root(frames: ArrayView2<f64>, step: usize) -> Vec<RootPose> {
 }
 
 /// Writes the absolute root poses into dims 0..5 of every frame: translation in 0..2 and the
-/// exp-map of the rotation in 3..5, in the form [`RootPose::from_absolute_frame`] reads back.
+/// exp-map of the rotation in 3..5, in the form [`RootPose::from_absolute_frame`] reads back
+/// (exactly for a rotation made by one `expmap2rotmat`; to ~1e-7 for integrated rotations, which
+/// are products of its slightly non-orthonormal matrices).
 pub fn write_absolute_root(poses: &[RootPose], frames: &mut Array2<f64>) {
     for (pose, mut row) in poses.iter().zip(frames.rows_mut()) {
         let r = rotmat_to_expmap_pow(&pose.rotation, 1);
@@ -273,4 +275,144 @@ pub fn mat3_inverse(m: &Mat3) -> Option<Mat3> {
             (m[0][0] * m[1][1] - m[0][1] * m[1][0]) * inv_det,
         ],
     ])
+}
+
+#[cfg(test)]
+#[allow(clippy::needless_range_loop)]
+mod tests {
+    use super::*;
+    use ndarray::Array2;
+
+    /// Deterministic pseudo-random root deltas resembling walking (mm per 50 Hz frame, small turns).
+    fn deltas(frames: usize) -> Array2<f64> {
+        Array2::from_shape_fn((frames, 6), |(t, k)| {
+            let x = (t as f64 * 0.37 + k as f64 * 1.3).sin();
+            match k {
+                0..=2 => 14.0 * x + if k == 2 { 10.0 } else { 0.0 },
+                _ => 0.02 * x,
+            }
+        })
+    }
+
+    fn max_abs_diff(a: &Array2<f64>, b: &Array2<f64>) -> f64 {
+        a.iter()
+            .zip(b.iter())
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f64::max)
+    }
+
+    #[test]
+    fn integration_follows_the_h36m_formulas() {
+        let d = deltas(3);
+        let poses = integrate_root(d.view(), 1);
+        let r0 = expmap2rotmat([d[[0, 3]], d[[0, 4]], d[[0, 5]]]);
+        assert_eq!(poses[0].rotation, r0);
+        assert_eq!(poses[0].translation, [d[[0, 0]], d[[0, 1]], d[[0, 2]]]);
+        let r1 = expmap2rotmat([d[[1, 3]], d[[1, 4]], d[[1, 5]]]);
+        assert_eq!(poses[1].rotation, mat3_mul(&r1, &r0));
+        let moved = vec_mul_mat3([d[[1, 0]], d[[1, 1]], d[[1, 2]]], &r0);
+        for k in 0..3 {
+            assert_eq!(poses[1].translation[k], poses[0].translation[k] + moved[k]);
+        }
+    }
+
+    #[test]
+    fn deltas_round_trip_at_50_hz() {
+        let d = deltas(500);
+        let back = root_deltas(&integrate_root(d.view(), 1), 1);
+        let err = max_abs_diff(&d, &back);
+        assert!(err < 1e-9, "round trip error {err}");
+    }
+
+    #[test]
+    fn deltas_round_trip_at_25_hz() {
+        let d = deltas(300);
+        let back = root_deltas(&integrate_root(d.view(), 2), 2);
+        let err = max_abs_diff(&d, &back);
+        assert!(err < 1e-9, "round trip error {err}");
+    }
+
+    #[test]
+    fn tiny_and_zero_rotations_round_trip() {
+        let mut d = deltas(50);
+        for t in 0..50 {
+            for k in 3..6 {
+                d[[t, k]] = if t % 3 == 0 { 0.0 } else { 1e-8 * d[[t, k]] };
+            }
+        }
+        for step in [1, 2, 3] {
+            let back = root_deltas(&integrate_root(d.view(), step), step);
+            let err = max_abs_diff(&d, &back);
+            assert!(err < 1e-9, "step {step}: round trip error {err}");
+        }
+    }
+
+    #[test]
+    fn step_two_equals_repeating_each_delta_at_50_hz() {
+        let d = deltas(40);
+        let poses25 = integrate_root(d.view(), 2);
+        // Same motion at 50 Hz: frame 0 once, then every later delta twice.
+        let mut rows = vec![d.row(0).to_vec()];
+        for t in 1..40 {
+            rows.push(d.row(t).to_vec());
+            rows.push(d.row(t).to_vec());
+        }
+        let flat: Vec<f64> = rows.concat();
+        let d50 = Array2::from_shape_vec((rows.len(), 6), flat).unwrap();
+        let poses50 = integrate_root(d50.view(), 1);
+        for t in 0..40 {
+            let p = &poses50[if t == 0 { 0 } else { 2 * t }];
+            assert_eq!(p.translation, poses25[t].translation);
+            assert_eq!(p.rotation, poses25[t].rotation);
+        }
+    }
+
+    #[test]
+    fn streaming_integrator_matches_batch_and_resets() {
+        let d = deltas(20);
+        let batch = integrate_root(d.view(), 2);
+        let mut it = RootIntegrator::new(2);
+        for (t, row) in d.rows().into_iter().enumerate() {
+            assert_eq!(it.push(row.as_slice().unwrap()), batch[t]);
+        }
+        it.reset();
+        assert_eq!(it.pose(), RootPose::IDENTITY);
+        assert_eq!(it.push(d.row(0).as_slice().unwrap()), batch[0]);
+    }
+
+    #[test]
+    fn absolute_root_round_trips_through_frames() {
+        let d = deltas(30);
+        let poses = integrate_root(d.view(), 1);
+        let mut frames = Array2::zeros((30, 6));
+        write_absolute_root(&poses, &mut frames);
+        for (t, row) in frames.rows().into_iter().enumerate() {
+            let p = RootPose::from_absolute_frame(row.as_slice().unwrap());
+            for i in 0..3 {
+                assert!((p.translation[i] - poses[t].translation[i]).abs() < 1e-12);
+                for j in 0..3 {
+                    // Integrated rotations are products of expmap2rotmat's slightly
+                    // non-orthonormal matrices: one exp-map reproduces them to ~1e-7 only.
+                    assert!((p.rotation[i][j] - poses[t].rotation[i][j]).abs() < 1e-6);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn mat3_inverse_inverts() {
+        let m = mat3_mul(
+            &expmap2rotmat([0.3, -1.0, 0.2]),
+            &[[2.0, 0.1, 0.0], [0.0, 1.0, 0.3], [0.2, 0.0, 0.5]],
+        );
+        let inv = mat3_inverse(&m).unwrap();
+        let id = mat3_mul(&m, &inv);
+        for i in 0..3 {
+            for j in 0..3 {
+                let want = if i == j { 1.0 } else { 0.0 };
+                assert!((id[i][j] - want).abs() < 1e-14);
+            }
+        }
+        assert!(mat3_inverse(&[[0.0; 3]; 3]).is_none());
+    }
 }

@@ -33,8 +33,10 @@ pub type Mat3 = [[f64; 3]; 3];
 /// The identity [`Mat3`].
 pub const MAT3_IDENTITY: Mat3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
 
-/// float32 machine epsilon as used by the reference `expmap2rotmat` (`np.finfo(np.float32).eps`).
-pub const EXPMAP_EPS: f64 = 1.1920929e-07;
+/// float32 machine epsilon as used by the reference `expmap2rotmat` (`np.finfo(np.float32).eps`,
+/// printed `1.1920929e-07`). numpy widens the float32 value exactly when adding it to the float64
+/// angle, so this is `2^-23` = `1.1920928955078125e-07`, not the rounded decimal literal.
+pub const EXPMAP_EPS: f64 = f32::EPSILON as f64;
 
 /// Exponential map to rotation matrix exactly as the H3.6M evaluation code does it:
 /// `θ = |r|`, `k = r / (θ + ε)` with ε = float32 epsilon, `R = I + sin θ K + (1 - cos θ) K²`.
@@ -323,7 +325,25 @@ pub fn euler_to_quat(order: EulerOrder, angles: [f64; 3]) -> DQuat {
 /// gimbal lock (middle angle in `(-π/2, π/2)` for Tait-Bryan, in `(0, π)` for proper orders).
 pub fn quat_to_euler(order: EulerOrder, q: DQuat) -> [f64; 3] {
     let (a, b, c) = q.to_euler(order.to_glam());
-    [a, b, c]
+    canonical_proper(order, [a, b, c])
+}
+
+/// For proper orders (first axis repeated), the equivalent angles with the middle one in
+/// `[0, π]`: `R_i(a) R_j(b) R_i(c) = R_i(a + π) R_j(-b) R_i(c + π)`. Tait-Bryan angles pass.
+fn canonical_proper(order: EulerOrder, [a, b, c]: [f64; 3]) -> [f64; 3] {
+    let [first, _, last] = order.axes();
+    if first != last || b >= 0.0 {
+        return [a, b, c];
+    }
+    let wrap = |x: f64| {
+        let y = x + std::f64::consts::PI;
+        if y > std::f64::consts::PI {
+            y - 2.0 * std::f64::consts::PI
+        } else {
+            y
+        }
+    };
+    [wrap(a), -b, wrap(c)]
 }
 
 /// Euler angles (radians) to a column-vector rotation matrix.
@@ -334,5 +354,293 @@ pub fn euler_to_dmat3(order: EulerOrder, angles: [f64; 3]) -> DMat3 {
 /// Column-vector rotation matrix to Euler angles (radians) in `order`.
 pub fn dmat3_to_euler(order: EulerOrder, m: &DMat3) -> [f64; 3] {
     let (a, b, c) = m.to_euler(order.to_glam());
-    [a, b, c]
+    canonical_proper(order, [a, b, c])
+}
+
+#[cfg(test)]
+#[allow(clippy::needless_range_loop)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+    use std::f64::consts::{FRAC_PI_2, PI};
+
+    /// `(exp-map, expmap2rotmat, rotmat2euler)` computed by the reference numpy code.
+    #[allow(clippy::type_complexity)]
+    const GOLDEN: [([f64; 3], Mat3, [f64; 3]); 7] = [
+        (
+            [0.0, 0.0, 0.0],
+            [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            [0.0, -0.0, 0.0],
+        ),
+        (
+            [1e-09, -2e-09, 3e-09],
+            [
+                [1.0, -9.129634573715653e-11, -6.086423049143769e-11],
+                [9.129634573715653e-11, 1.0, -3.0432115245718846e-11],
+                [6.086423049143769e-11, 3.0432115245718846e-11, 1.0],
+            ],
+            [
+                -3.0432115245718846e-11,
+                6.086423049143769e-11,
+                -9.129634573715653e-11,
+            ],
+        ),
+        (
+            [0.1, -0.2, 0.3],
+            [
+                [
+                    0.9357548442149679,
+                    -0.30293261373923314,
+                    -0.1805400238978114,
+                ],
+                [
+                    0.28316487349768477,
+                    0.9505806493961292,
+                    -0.12733452490180883,
+                ],
+                [0.2101916342601339, 0.06803130417716383, 0.9752903246980645],
+            ],
+            [
+                -0.12982628301821764,
+                0.18153546963067724,
+                -0.3130834742286407,
+            ],
+        ),
+        (
+            [-1.2, 0.4, 2.0],
+            [
+                [
+                    -0.2734862247738108,
+                    -0.7384057533655652,
+                    -0.6164105841911734,
+                ],
+                [0.44452431687930116, -0.6653281400888293, 0.5997802181453467],
+                [
+                    -0.8529965982401467,
+                    -0.10997782400157324,
+                    0.5101976058562266,
+                ],
+            ],
+            [0.8659302841397992, 0.6641761019840882, -1.9255050899475423],
+        ),
+        (
+            [3.0, 0.1, -0.5],
+            [
+                [
+                    0.9439807828216752,
+                    0.08080704661757745,
+                    -0.31995389374643346,
+                ],
+                [
+                    0.048468069947787525,
+                    -0.99299138038271,
+                    -0.10778985638981683,
+                ],
+                [-0.3264216890803915, 0.08624400362892268, -0.941281333756564],
+            ],
+            [-3.0275753457175925, 0.32568082250578, 0.08539425032871426],
+        ),
+        (
+            [0.0, 0.0, FRAC_PI_2],
+            [
+                [1.517819644414331e-07, -0.999999924109015, 0.0],
+                [0.999999924109015, 1.517819644414331e-07, 0.0],
+                [0.0, 0.0, 1.0],
+            ],
+            [0.0, -0.0, -1.5707961750129207],
+        ),
+        (
+            [-0.31415, 2.5, -1.1],
+            [
+                [
+                    -0.898916341688853,
+                    -0.046955379978372846,
+                    0.4355964716323828,
+                ],
+                [-0.35287341944626066, 0.6668775804673363, -0.656318967375106],
+                [-0.259671799885544, -0.7436863783740486, -0.6160364090918888],
+            ],
+            [-2.32454522921576, -0.45070081228000336, -3.0894045456893227],
+        ),
+    ];
+
+    fn close3(a: [f64; 3], b: [f64; 3], tol: f64) -> bool {
+        a.iter().zip(b).all(|(x, y)| (x - y).abs() <= tol)
+    }
+
+    fn dmat_close(a: &DMat3, b: &DMat3, tol: f64) -> bool {
+        a.abs_diff_eq(*b, tol)
+    }
+
+    #[test]
+    fn expmap2rotmat_and_rotmat2euler_match_the_reference_code() {
+        for (r, want_r, want_e) in GOLDEN {
+            let got = expmap2rotmat(r);
+            for i in 0..3 {
+                assert!(
+                    close3(got[i], want_r[i], 1e-15),
+                    "{r:?}: {got:?} vs {want_r:?}"
+                );
+            }
+            let e = rotmat2euler(&want_r);
+            assert!(close3(e, want_e, 1e-15), "{r:?}: {e:?} vs {want_e:?}");
+        }
+    }
+
+    #[test]
+    fn epsilon_is_float32_epsilon() {
+        assert_eq!(EXPMAP_EPS, 2f64.powi(-23));
+    }
+
+    #[test]
+    fn rotmat2euler_exact_gimbal_lock_branches() {
+        // R[0][2] == -1 exactly: E2 = π/2, E3 = 0, E1 = atan2(R01, R02).
+        let m = [[0.0, 0.0, -1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]];
+        let e = rotmat2euler(&m);
+        assert_eq!(e, [0.0f64.atan2(-1.0), FRAC_PI_2, 0.0]);
+        let m = [[0.0, 0.5, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]];
+        let e = rotmat2euler(&m);
+        assert_eq!(e, [0.5f64.atan2(1.0), -FRAC_PI_2, 0.0]);
+        // One ulp away from -1 takes the general branch (no tolerance in the reference code).
+        let m = [
+            [0.0, 0.0, -1.0 + f64::EPSILON],
+            [0.0, 1.0, 0.0],
+            [1.0, 0.0, 0.0],
+        ];
+        let e = rotmat2euler(&m);
+        assert!(e[1] < FRAC_PI_2 && e[1] > 1.5);
+    }
+
+    #[test]
+    fn protocol_frame_conversion_zeroes_root_and_converts_every_triple() {
+        let frame: Vec<f64> = (0..99).map(|i| (i as f64 * 0.37).sin()).collect();
+        let mut out = vec![f64::NAN; 99];
+        expmap_frame_to_euler_protocol(&frame, &mut out);
+        assert!(out[..6].iter().all(|&v| v == 0.0));
+        for k in (6..99).step_by(3) {
+            let e = rotmat2euler(&expmap2rotmat([frame[k], frame[k + 1], frame[k + 2]]));
+            assert_eq!(&out[k..k + 3], &e);
+        }
+        // Other widths (CMU 117) work too.
+        let frame = vec![0.1; 117];
+        let mut out = vec![0.0; 117];
+        expmap_frame_to_euler_protocol(&frame, &mut out);
+        assert!(out[6..].iter().all(|v| v.is_finite() && *v != 0.0));
+    }
+
+    #[test]
+    fn euler_order_convention_is_intrinsic_column_vector_in_listed_order() {
+        let (a, b, c) = (0.3, -0.7, 1.1);
+        let rx = DMat3::from_rotation_x;
+        let ry = DMat3::from_rotation_y;
+        let rz = DMat3::from_rotation_z;
+        let elementary = [rx, ry, rz];
+        for order in EulerOrder::ALL {
+            let [i, j, k] = order.axes();
+            let want = elementary[i](a) * elementary[j](b) * elementary[k](c);
+            assert!(
+                dmat_close(&euler_to_dmat3(order, [a, b, c]), &want, 1e-14),
+                "{order:?}"
+            );
+            let q = axis_quat(i, a) * axis_quat(j, b) * axis_quat(k, c);
+            assert!(
+                euler_to_quat(order, [a, b, c]).abs_diff_eq(q, 1e-14),
+                "{order:?}"
+            );
+            assert_eq!(EulerOrder::from_axes(order.axes()), Some(order));
+        }
+    }
+
+    #[test]
+    fn row_and_column_conventions_are_transposes() {
+        let r = [0.4, -0.9, 0.2];
+        let row = expmap2rotmat(r);
+        // Element-wise copy round trips.
+        assert_eq!(dmat3_to_mat3(&mat3_to_dmat3(&row)), row);
+        // Read as a column-vector matrix, Rodrigues is the rotation about r ...
+        let col = DMat3::from_quat(expmap_to_quat(r));
+        assert!(dmat_close(&mat3_to_dmat3(&row), &col, 1e-6));
+        // ... so the row-vector rotation is its inverse.
+        assert!(row_mat3_to_quat(&row).abs_diff_eq(expmap_to_quat([-0.4, 0.9, -0.2]), 1e-6));
+        // And a row vector times R equals Rᵀ times the column vector.
+        let v = [1.0, 2.0, 3.0];
+        let a = vec_mul_mat3(v, &row);
+        let b = mat3_to_dmat3(&row).transpose() * DVec3::from_array(v);
+        assert!(close3(a, b.to_array(), 1e-12));
+        let back = quat_to_row_mat3(row_mat3_to_quat(&row));
+        for i in 0..3 {
+            assert!(close3(back[i], row[i], 1e-6));
+        }
+    }
+
+    #[test]
+    fn quat_to_expmap_handles_identity_and_sign() {
+        assert_eq!(quat_to_expmap(DQuat::IDENTITY), [0.0, 0.0, 0.0]);
+        let q = expmap_to_quat([0.0, 1.0, 0.0]);
+        assert!(close3(quat_to_expmap(-q), [0.0, 1.0, 0.0], 1e-15));
+        let q = expmap_to_quat([0.0, 0.0, PI]);
+        let r = quat_to_expmap(q);
+        assert!((r[2].abs() - PI).abs() < 1e-12);
+    }
+
+    fn angle() -> impl Strategy<Value = f64> {
+        -PI..PI
+    }
+
+    fn expmap_in_ball(max: f64) -> impl Strategy<Value = [f64; 3]> {
+        (-1.0f64..1.0, -1.0f64..1.0, -1.0f64..1.0, 0.0..max).prop_filter_map(
+            "non-zero axis",
+            |(x, y, z, a)| {
+                let n = (x * x + y * y + z * z).sqrt();
+                (n > 1e-3).then(|| [x / n * a, y / n * a, z / n * a])
+            },
+        )
+    }
+
+    proptest! {
+        #[test]
+        fn euler_quat_round_trip_all_orders(a in angle(), b in -1.5f64..1.5, c in angle(), proper_b in 0.05f64..3.09) {
+            for order in EulerOrder::ALL {
+                let mid = if order.axes()[0] == order.axes()[2] { proper_b } else { b };
+                let q = euler_to_quat(order, [a, mid, c]);
+                let back = quat_to_euler(order, q);
+                prop_assert!(close3(back, [a, mid, c], 1e-9), "{:?}: {:?} vs {:?}", order, back, [a, mid, c]);
+                let m = euler_to_dmat3(order, [a, mid, c]);
+                prop_assert!(close3(dmat3_to_euler(order, &m), [a, mid, c], 1e-8));
+            }
+        }
+
+        #[test]
+        fn expmap_quat_round_trip(r in expmap_in_ball(PI - 1e-6)) {
+            let back = quat_to_expmap(expmap_to_quat(r));
+            prop_assert!(close3(back, r, 1e-12), "{:?} vs {:?}", back, r);
+        }
+
+        #[test]
+        fn expmap2rotmat_is_orthonormal(r in expmap_in_ball(2.0 * PI)) {
+            let m = mat3_to_dmat3(&expmap2rotmat(r));
+            let mtm = m.transpose() * m;
+            prop_assert!(dmat_close(&mtm, &DMat3::IDENTITY, 1e-6));
+            prop_assert!((m.determinant() - 1.0).abs() < 1e-6);
+        }
+
+        #[test]
+        fn expmap2rotmat_matches_glam_rotation(r in expmap_in_ball(2.0 * PI)) {
+            let m = mat3_to_dmat3(&expmap2rotmat(r));
+            prop_assert!(dmat_close(&m, &DMat3::from_quat(expmap_to_quat(r)), 1e-6));
+        }
+
+        #[test]
+        fn rotmat2euler_is_glam_zyx_of_the_transpose(r in expmap_in_ball(PI)) {
+            let row = expmap2rotmat(r);
+            let [e1, e2, e3] = rotmat2euler(&row);
+            // Near gimbal lock the ~1e-7 non-orthonormality of expmap2rotmat is amplified.
+            prop_assume!(e2.cos() > 0.1);
+            let col = DMat3::from_euler(EulerRot::ZYX, e3, e2, e1);
+            prop_assert!(dmat_close(&col, &mat3_to_dmat3(&row).transpose(), 1e-5));
+            // Equivalently R = Rx(-E1) Ry(-E2) Rz(-E3) read element-wise.
+            let alt = euler_to_dmat3(EulerOrder::XYZ, [-e1, -e2, -e3]);
+            prop_assert!(dmat_close(&alt, &mat3_to_dmat3(&row), 1e-5));
+        }
+    }
 }

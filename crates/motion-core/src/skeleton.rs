@@ -439,3 +439,143 @@ const CMU_JOINTS: [(i32, [f64; 3]); 38] = [
     (32, [0.0, 0.0, 0.0]),
     (36, [-0.59786, 0.0, 0.59786]),
 ];
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn h36m_skeleton_matches_the_reference_json_facts() {
+        let s = Skeleton::h36m();
+        assert_eq!(s.len(), H36M_JOINT_COUNT);
+        assert_eq!(s.expmap_width(), H36M_FRAME_DIMS);
+        assert_eq!(s.joint(0).name, "Hips");
+        assert_eq!(s.joint_index("RightWristSite"), Some(31));
+        assert_eq!(s.parent(13), Some(12));
+        assert_eq!(s.children(0), &[1, 6, 11]);
+        assert_eq!(s.children(12), &[13, 16, 24]);
+        assert_eq!(s.joint(26).offset, [0.0, 278.892924, 0.0]);
+        assert_eq!(s.channel_count(), 6 + 31 * 3);
+        assert_eq!(s.channel_start(1), 6);
+        assert_eq!(s.joint(H36M_LEFT_HIP).name, "LeftUpLeg");
+        assert_eq!(s.joint(H36M_RIGHT_HIP).name, "RightUpLeg");
+        let names: Vec<&str> = H36M_NDMS_JOINTS
+            .iter()
+            .map(|&j| s.joint(j).name.as_str())
+            .collect();
+        assert_eq!(
+            names,
+            [
+                "LeftHand",
+                "RightHand",
+                "LeftForeArm",
+                "RightForeArm",
+                "LeftArm",
+                "RightArm",
+                "LeftUpLeg",
+                "RightUpLeg",
+                "LeftLeg",
+                "RightLeg",
+                "LeftFoot",
+                "RightFoot"
+            ]
+        );
+        assert!(H36M_DIMS_USED.windows(2).all(|w| w[0] < w[1]));
+        assert_eq!(*H36M_DIMS_USED.last().unwrap(), 86);
+    }
+
+    #[test]
+    fn cmu_skeleton_has_38_named_joints() {
+        let s = Skeleton::cmu();
+        assert_eq!(s.len(), CMU_JOINT_COUNT);
+        assert_eq!(s.expmap_width(), CMU_FRAME_DIMS);
+        assert_eq!(s.joint(7).name, "joint_07");
+        assert_eq!(s.joint(2).offset, [1.65674, -1.80282, 0.62477]);
+    }
+
+    fn j(name: &str, parent: Option<usize>) -> Joint {
+        Joint::new(name, parent, [0.0; 3], vec![Channel::Xrotation])
+    }
+
+    #[test]
+    fn validation_rejects_bad_hierarchies() {
+        assert_eq!(Skeleton::new(vec![]), Err(SkeletonError::Empty));
+        assert!(matches!(
+            Skeleton::new(vec![j("a", Some(0))]),
+            Err(SkeletonError::RootHasParent { .. })
+        ));
+        assert!(matches!(
+            Skeleton::new(vec![j("a", None), j("b", None)]),
+            Err(SkeletonError::MultipleRoots { index: 1, .. })
+        ));
+        assert!(matches!(
+            Skeleton::new(vec![j("a", None), j("b", Some(2)), j("c", Some(0))]),
+            Err(SkeletonError::ParentNotBefore { index: 1, .. })
+        ));
+        assert!(matches!(
+            Skeleton::new(vec![j("a", None), j("a", Some(0))]),
+            Err(SkeletonError::DuplicateName {
+                first: 0,
+                second: 1,
+                ..
+            })
+        ));
+        let mut site = Joint::end_site("s", 0, [1.0, 0.0, 0.0]);
+        site.channels.push(Channel::Xrotation);
+        assert!(matches!(
+            Skeleton::new(vec![j("a", None), site]),
+            Err(SkeletonError::BadEndSite { .. })
+        ));
+        assert!(matches!(
+            Skeleton::new(vec![
+                j("a", None),
+                Joint::end_site("s", 0, [1.0, 0.0, 0.0]),
+                j("c", Some(1))
+            ]),
+            Err(SkeletonError::BadEndSite { index: 1, .. })
+        ));
+        let mut twice = j("a", None);
+        twice.channels.push(Channel::Xrotation);
+        assert!(matches!(
+            Skeleton::new(vec![twice]),
+            Err(SkeletonError::DuplicateChannel { .. })
+        ));
+        let mut nan = j("a", None);
+        nan.offset[1] = f64::NAN;
+        assert!(matches!(
+            Skeleton::new(vec![nan]),
+            Err(SkeletonError::NonFiniteOffset { .. })
+        ));
+    }
+
+    #[test]
+    fn end_sites_take_no_channels() {
+        let s = Skeleton::new(vec![
+            Joint::new(
+                "root",
+                None,
+                [0.0; 3],
+                vec![Channel::Yposition, Channel::Zrotation],
+            ),
+            Joint::end_site("root_end", 0, [0.0, 10.0, 0.0]),
+            Joint::new("arm", Some(0), [1.0, 0.0, 0.0], vec![Channel::Xrotation]),
+        ])
+        .unwrap();
+        assert_eq!(s.channel_count(), 3);
+        assert_eq!(s.channel_start(1), 2);
+        assert_eq!(s.channel_start(2), 2);
+        assert!(s.joint(1).is_end_site);
+        assert_eq!(s.bone_length(1), 10.0);
+    }
+
+    #[test]
+    fn channel_names_round_trip() {
+        use Channel::*;
+        for c in [
+            Xposition, Yposition, Zposition, Xrotation, Yrotation, Zrotation,
+        ] {
+            assert_eq!(Channel::from_bvh_name(c.bvh_name()), Some(c));
+        }
+        assert_eq!(Channel::from_bvh_name("xrotation"), None);
+    }
+}

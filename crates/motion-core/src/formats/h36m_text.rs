@@ -179,3 +179,119 @@ fn temp_path(path: &Path) -> PathBuf {
 pub fn downsample_protocol(frames: ArrayView2<f64>) -> Array2<f64> {
     frames.slice(ndarray::s![..;2, ..]).to_owned()
 }
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use ndarray::Array2;
+
+    /// A scratch directory removed on drop.
+    pub(crate) struct Scratch(pub PathBuf);
+
+    impl Scratch {
+        pub(crate) fn new(tag: &str) -> Scratch {
+            let dir = std::env::temp_dir().join(format!(
+                "motion-core-{tag}-{}-{:?}",
+                std::process::id(),
+                std::thread::current().id()
+            ));
+            std::fs::create_dir_all(&dir).unwrap();
+            Scratch(dir)
+        }
+    }
+
+    impl Drop for Scratch {
+        fn drop(&mut self) {
+            let _ = std::fs::remove_dir_all(&self.0);
+        }
+    }
+
+    fn sample(frames: usize, cols: usize) -> Array2<f64> {
+        Array2::from_shape_fn((frames, cols), |(t, k)| {
+            ((t * 31 + k * 7) as f64 * 0.1234567).sin() * 10f64.powi((k % 5) as i32 - 2)
+        })
+    }
+
+    fn parse(text: &str) -> Result<Array2<f64>, FormatError> {
+        parse_expmap_text(text.as_bytes(), Path::new("clip.txt"))
+    }
+
+    #[test]
+    fn text_and_gzip_round_trip_bit_exactly() {
+        let dir = Scratch::new("text");
+        for (name, cols) in [("a.txt", 99), ("b.txt.gz", 117), ("c.txt", 1)] {
+            let x = sample(13, cols);
+            let path = dir.0.join(name);
+            write_expmap_text(&path, x.view()).unwrap();
+            let y = read_expmap_text(&path).unwrap();
+            assert_eq!(x, y, "{name}");
+        }
+        // The gzip file really is gzip.
+        let bytes = std::fs::read(dir.0.join("b.txt.gz")).unwrap();
+        assert_eq!(&bytes[..2], &[0x1f, 0x8b]);
+        // No temporary files are left behind.
+        assert_eq!(std::fs::read_dir(&dir.0).unwrap().count(), 3);
+    }
+
+    #[test]
+    fn tolerant_of_spacing_crlf_and_blank_lines() {
+        let x = parse("1, 2,3\r\n\n  -4.5e-3,5,6  \n\n").unwrap();
+        assert_eq!(x, ndarray::array![[1.0, 2.0, 3.0], [-4.5e-3, 5.0, 6.0]]);
+    }
+
+    #[test]
+    fn errors_name_file_line_and_problem() {
+        let msg = |e: FormatError| e.to_string();
+        let e = parse("1,2,3\n4,5\n").unwrap_err();
+        assert!(matches!(e, FormatError::Parse { line: 2, .. }));
+        assert!(msg(e).contains("clip.txt:2: expected 3 comma-separated values"));
+        let e = parse("1,2,3\n4,x,6\n").unwrap_err();
+        assert!(msg(e).contains("clip.txt:2: column 2: expected a number, found \"x\""));
+        let e = parse("\n1,nan,3\n").unwrap_err();
+        assert!(matches!(e, FormatError::Parse { line: 2, .. }));
+        let e = parse("1,inf,3\n").unwrap_err();
+        assert!(msg(e).contains("finite"));
+        let e = parse("1,,3\n").unwrap_err();
+        assert!(matches!(e, FormatError::Parse { line: 1, .. }));
+        let e = parse("\n \n").unwrap_err();
+        assert!(matches!(e, FormatError::Invalid { .. }));
+        assert!(msg(e).contains("empty"));
+    }
+
+    #[test]
+    fn missing_and_corrupt_files_are_clear_errors() {
+        let dir = Scratch::new("missing");
+        let e = read_expmap_text(dir.0.join("nope.txt.gz")).unwrap_err();
+        assert!(matches!(e, FormatError::Io { .. }));
+        assert!(e.to_string().contains("nope.txt.gz"));
+        let bad = dir.0.join("bad.txt.gz");
+        std::fs::write(&bad, b"this is not gzip").unwrap();
+        let e = read_expmap_text(&bad).unwrap_err();
+        assert!(e.to_string().contains("bad.txt.gz"), "{e}");
+        let binary = dir.0.join("bin.txt");
+        std::fs::write(&binary, [0xff, 0xfe, 0x00, 0x31]).unwrap();
+        assert!(read_expmap_text(&binary).is_err());
+    }
+
+    #[test]
+    fn failed_write_leaves_nothing() {
+        let dir = Scratch::new("failwrite");
+        let path = dir.0.join("no_such_dir").join("x.txt");
+        assert!(write_expmap_text(&path, sample(2, 3).view()).is_err());
+        assert!(!path.exists());
+    }
+
+    #[test]
+    fn downsampling_keeps_even_frames() {
+        let x = Array2::from_shape_fn((7, 2), |(t, k)| (10 * t + k) as f64);
+        let y = downsample_protocol(x.view());
+        assert_eq!(y.nrows(), 4);
+        for (i, t) in [0, 2, 4, 6].into_iter().enumerate() {
+            assert_eq!(y.row(i), x.row(t));
+        }
+        assert_eq!(
+            downsample_protocol(x.slice(ndarray::s![..6, ..])).nrows(),
+            3
+        );
+    }
+}

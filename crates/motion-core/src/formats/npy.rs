@@ -121,3 +121,105 @@ where
             .map_err(|e| std::io::Error::other(e.to_string()))
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::formats::h36m_text::tests::Scratch;
+    use ndarray::{Array2, Array3, Array4, Array5, ShapeBuilder};
+
+    #[test]
+    fn arrays_of_rank_2_to_5_round_trip() {
+        let dir = Scratch::new("npy");
+        let a2 = Array2::from_shape_fn((4, 99), |(i, j)| (i * 99 + j) as f64 * 0.5);
+        let a3 = Array3::from_shape_fn((3, 32, 3), |(i, j, k)| (i + j * k) as f64 - 7.25);
+        let a4 = Array4::from_shape_fn((2, 3, 4, 5), |(a, b, c, d)| (a + b + c + d) as f64);
+        let a5 = Array5::from_shape_fn((1, 2, 3, 2, 3), |(a, b, c, d, e)| {
+            (a * b + c * d + e) as f64
+        });
+        write_npy(dir.0.join("a2.npy"), &a2).unwrap();
+        write_npy(dir.0.join("a3.npy"), &a3).unwrap();
+        write_npy(dir.0.join("a4.npy"), &a4).unwrap();
+        write_npy(dir.0.join("a5.npy"), &a5).unwrap();
+        assert_eq!(read_npy_frames(dir.0.join("a2.npy")).unwrap(), a2);
+        assert_eq!(read_npy_positions(dir.0.join("a3.npy")).unwrap(), a3);
+        assert_eq!(
+            read_npy_as::<ndarray::Ix4>(dir.0.join("a4.npy")).unwrap(),
+            a4
+        );
+        assert_eq!(
+            read_npy_as::<ndarray::Ix5>(dir.0.join("a5.npy")).unwrap(),
+            a5
+        );
+        // Fortran-ordered and transposed views are written in C order.
+        let f = Array2::from_shape_vec((2, 3).f(), vec![1.0, 2.0, 3.0, 4.0, 5.0, 6.0]).unwrap();
+        write_npy(dir.0.join("f.npy"), &f.t()).unwrap();
+        assert_eq!(read_npy_frames(dir.0.join("f.npy")).unwrap(), f.t());
+    }
+
+    #[test]
+    fn float32_files_are_widened() {
+        let dir = Scratch::new("npy32");
+        let a = Array2::from_shape_fn((3, 4), |(i, j)| (i as f32) * 0.1 + j as f32);
+        let path = dir.0.join("f32.npy");
+        ndarray_npy::write_npy(&path, &a).unwrap();
+        let b = read_npy_frames(&path).unwrap();
+        assert_eq!(b, a.mapv(f64::from));
+    }
+
+    #[test]
+    fn wrong_rank_dtype_and_truncation_are_named_errors() {
+        let dir = Scratch::new("npybad");
+        let a3 = Array3::<f64>::zeros((2, 3, 4));
+        let path = dir.0.join("pos.npy");
+        write_npy(&path, &a3).unwrap();
+        let e = read_npy_frames(&path).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("expected a 2-D array, found shape [2, 3, 4]"),
+            "{e}"
+        );
+        let e = read_npy_positions(&path).unwrap_err();
+        assert!(e.to_string().contains("[frames, joints, 3]"), "{e}");
+        assert!(e.to_string().contains("pos.npy"));
+
+        let ints = dir.0.join("ints.npy");
+        ndarray_npy::write_npy(&ints, &Array2::<i64>::zeros((2, 2))).unwrap();
+        let e = read_npy_frames(&ints).unwrap_err();
+        assert!(e.to_string().contains("expected float64 or float32"), "{e}");
+
+        let bytes = std::fs::read(&path).unwrap();
+        let cut = dir.0.join("cut.npy");
+        std::fs::write(&cut, &bytes[..bytes.len() - 8]).unwrap();
+        let e = read_npy_dyn(&cut).unwrap_err();
+        assert!(e.to_string().contains("needs 192 bytes"), "{e}");
+
+        let junk = dir.0.join("junk.npy");
+        std::fs::write(&junk, b"\x93NUMPY garbage").unwrap();
+        assert!(read_npy_dyn(&junk).is_err());
+        assert!(matches!(
+            read_npy_dyn(dir.0.join("missing.npy")),
+            Err(FormatError::Io { .. })
+        ));
+    }
+
+    #[test]
+    fn huge_declared_shapes_do_not_allocate() {
+        let dir = Scratch::new("npyhuge");
+        let header =
+            "{'descr': '<f8', 'fortran_order': False, 'shape': (4000000000, 4000000000), }";
+        let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
+        let mut h = header.to_string();
+        while !(10 + h.len() + 1).is_multiple_of(64) {
+            h.push(' ');
+        }
+        h.push('\n');
+        bytes.extend_from_slice(&(h.len() as u16).to_le_bytes());
+        bytes.extend_from_slice(h.as_bytes());
+        bytes.extend_from_slice(&[0u8; 16]);
+        let path = dir.0.join("huge.npy");
+        std::fs::write(&path, bytes).unwrap();
+        let e = read_npy_dyn(&path).unwrap_err();
+        assert!(e.to_string().contains("needs"), "{e}");
+    }
+}
