@@ -2,3 +2,4 @@
 pub mod bvh;
 pub mod h36m_text;
 pub mod npy;
+pub mod expmap_bvh;
