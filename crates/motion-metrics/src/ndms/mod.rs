@@ -10,6 +10,7 @@ pub mod index;
 pub mod similarity;
 pub mod word;
 
+use motion_core::skeleton::{H36M_LEFT_HIP, H36M_NDMS_JOINTS, H36M_RIGHT_HIP};
 use ndarray::{Array3, ArrayView3, Axis};
 use rayon::prelude::*;
 
@@ -39,9 +40,9 @@ impl NdmsConfig {
     pub fn h36m() -> Self {
         Self {
             kappa: 8,
-            joints: vec![19, 27, 18, 26, 17, 25, 6, 1, 7, 2, 8, 3],
-            left_hip: 6,
-            right_hip: 1,
+            joints: H36M_NDMS_JOINTS.to_vec(),
+            left_hip: H36M_LEFT_HIP,
+            right_hip: H36M_RIGHT_HIP,
             vertical_axis: 1,
             words_per_bin: 10,
         }
