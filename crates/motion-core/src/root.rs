@@ -208,35 +208,60 @@ pub fn delta_between(prev: &RootPose, cur: &RootPose, times: usize) -> ([f64; 3]
 }
 
 /// The exp-map `r` with `expmap2rotmat(r)^times == m`, solving the float32-epsilon formula
-/// exactly (fixed-point iteration on top of the exact logarithm), so that integrating and
-/// differentiating root deltas round-trips to ~1e-12.
+/// exactly, so that integrating and differentiating root deltas round-trips to ~1e-12 at every
+/// angle scale (also for angles near or below ε, where the formula is far from Rodrigues').
+///
+/// `expmap2rotmat(r)` keeps the axis of `r` exactly (only the angle is deformed by ε), so the
+/// axis comes from the exact logarithm of `m` and the angle from a secant solve of the scalar
+/// equation `angle(expmap2rotmat(θ · axis)^times) = angle(m)`. For `times > 1` the rotation of
+/// one step must stay below `π / times` (root deltas are a few degrees at most).
 pub fn rotmat_to_expmap_pow(m: &Mat3, times: usize) -> [f64; 3] {
     let times = times.max(1);
     let target = log_rotation(m);
-    let inv_times = 1.0 / times as f64;
-    let mut r = [
-        target[0] * inv_times,
-        target[1] * inv_times,
-        target[2] * inv_times,
-    ];
-    for _ in 0..20 {
-        let e = expmap2rotmat(r);
+    let psi_t = (target[0] * target[0] + target[1] * target[1] + target[2] * target[2]).sqrt();
+    if psi_t == 0.0 {
+        return [0.0; 3];
+    }
+    let axis = [target[0] / psi_t, target[1] / psi_t, target[2] / psi_t];
+    let at = |theta: f64| [axis[0] * theta, axis[1] * theta, axis[2] * theta];
+    // Signed angle of expmap2rotmat(θ·axis)^times about `axis`, minus the target angle.
+    let residual = |theta: f64| {
+        let e = expmap2rotmat(at(theta));
         let mut p = e;
         for _ in 1..times {
             p = mat3_mul(&p, &e);
         }
         let got = log_rotation(&p);
-        let mut change = 0.0f64;
-        for k in 0..3 {
-            let c = (target[k] - got[k]) * inv_times;
-            r[k] += c;
-            change = change.max(c.abs());
-        }
-        if change < 1e-16 {
+        got[0] * axis[0] + got[1] * axis[1] + got[2] * axis[2] - psi_t
+    };
+    let mut x0 = psi_t / times as f64;
+    let mut f0 = residual(x0);
+    if f0 == 0.0 {
+        return at(x0);
+    }
+    // First step assumes the Rodrigues slope `times`; then secant steps.
+    let mut x1 = x0 - f0 / times as f64;
+    let mut f1 = residual(x1);
+    let mut best = if f1.abs() < f0.abs() { x1 } else { x0 };
+    let mut best_f = f1.abs().min(f0.abs());
+    for _ in 0..60 {
+        if f1 == 0.0 || f1 == f0 {
             break;
         }
+        let x2 = x1 - f1 * (x1 - x0) / (f1 - f0);
+        if !x2.is_finite() || x2 == x1 {
+            break;
+        }
+        x0 = x1;
+        f0 = f1;
+        x1 = x2;
+        f1 = residual(x1);
+        if f1.abs() < best_f {
+            best = x1;
+            best_f = f1.abs();
+        }
     }
-    r
+    at(best)
 }
 
 /// Logarithm of a (near-)rotation matrix in the convention of [`expmap2rotmat`] without its ε:
@@ -395,6 +420,47 @@ mod tests {
                     // non-orthonormal matrices: one exp-map reproduces them to ~1e-7 only.
                     assert!((p.rotation[i][j] - poses[t].rotation[i][j]).abs() < 1e-6);
                 }
+            }
+        }
+    }
+
+    #[test]
+    fn expmap_inverse_is_exact_at_every_angle_scale() {
+        for exponent in -14..=0 {
+            for (i, times) in [1usize, 2, 3].into_iter().enumerate() {
+                let angle = 10f64.powi(exponent) * (1.0 + 0.37 * i as f64);
+                if angle * times as f64 >= 3.0 {
+                    continue; // beyond π per frame: not a delta any integration produces
+                }
+                let r = [0.6 * angle, -0.48 * angle, 0.64 * angle];
+                let mut m = expmap2rotmat(r);
+                let e = m;
+                for _ in 1..times {
+                    m = mat3_mul(&m, &e);
+                }
+                let back = rotmat_to_expmap_pow(&m, times);
+                for k in 0..3 {
+                    let err = (back[k] - r[k]).abs();
+                    assert!(
+                        err <= 1e-9 * angle.max(1e-6) && err <= 1e-12,
+                        "angle {angle:e} x{times}: {back:?} vs {r:?}"
+                    );
+                }
+            }
+        }
+        assert_eq!(rotmat_to_expmap_pow(&MAT3_IDENTITY, 2), [0.0; 3]);
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn expmap_inverse_round_trips_random_rotations(
+            x in -1.0f64..1.0, y in -1.0f64..1.0, z in -1.0f64..1.0, scale in 0.0f64..3.0
+        ) {
+            let r = [x * scale, y * scale, z * scale];
+            proptest::prop_assume!((x * x + y * y + z * z).sqrt() * scale < 3.1);
+            let back = rotmat_to_expmap_pow(&expmap2rotmat(r), 1);
+            for k in 0..3 {
+                proptest::prop_assert!((back[k] - r[k]).abs() < 1e-9, "{:?} vs {:?}", back, r);
             }
         }
     }
