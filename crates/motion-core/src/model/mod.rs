@@ -1,1 +1,24 @@
 //! Motion predictors (VGRU-d, GRU-d), self-describing weights and closed-loop generation.
+//!
+//! - [`weights`]: safetensors tensors by state-dict name, [`WeightsError`].
+//! - [`config`]: the `config` / `provenance` metadata of the schema in `weights/README.md`.
+//! - [`MotionModel`]: a loaded predictor (shared, immutable); [`vgru`] and [`grud`] its networks.
+//! - [`Generator`] (one character) and [`BatchGenerator`] (many in lockstep): closed-loop frames.
+//! - [`random`]: schema-conformant files with random weights (benchmarks, tests).
+pub mod batch;
+pub mod config;
+pub mod generate_error;
+pub mod generator;
+pub mod grud;
+pub mod norm;
+pub mod predictor;
+pub mod random;
+pub mod vgru;
+pub mod weights;
+
+pub use batch::{BatchGenerator, FrameScalar, Noise};
+pub use config::{Architecture, ModelConfig, Provenance};
+pub use generate_error::GenerateError;
+pub use generator::Generator;
+pub use predictor::{MotionModel, Network};
+pub use weights::{WeightStore, WeightsError};

@@ -1,1 +1,19 @@
 //! Neural-network layers (Linear, GRU cells in both conventions, body GRU, LSTM, MLP).
+//!
+//! Every layer is a `Config` plus `load(store, prefix, config)` reading PyTorch state-dict names
+//! from a [`WeightStore`](crate::model::weights::WeightStore). Weights are immutable after loading
+//! (share them with `Arc`); recurrent state and per-step scratch buffers belong to the caller and
+//! are sized once, so a step allocates nothing. All compute is f32.
+pub mod activation;
+pub mod body_gru;
+pub mod gemm;
+pub mod gru;
+pub mod linear;
+pub mod lstm;
+pub mod mlp;
+
+pub use body_gru::{BodyGruCell, BodyGruConfig};
+pub use gru::{GruCell, GruConfig, GruConvention, GruScratch};
+pub use linear::{Linear, LinearConfig};
+pub use lstm::{LstmCell, LstmConfig, LstmScratch};
+pub use mlp::{Mlp, MlpConfig, MlpScratch};

@@ -1,0 +1,362 @@
+//! Closed-loop generation for a batch of characters (or of samples of one character) in lockstep.
+//!
+//! Every step is the same sequence for all rows: derivative features of the current normalized
+//! frame, one recurrent step, the decoder, optional residual, un-normalization. The per-step work
+//! is matrix-matrix products over the batch (see [`crate::nn::gemm`]); all buffers are sized in
+//! [`BatchGenerator::new`], so a step allocates nothing of its own.
+//!
+//! The fed-back frame is the model's normalized output itself (as in `training/models.py`), not
+//! a re-normalized copy of the full frame it returns.
+use super::config::ModelConfig;
+use super::generate_error::GenerateError;
+use super::grud::GruDState;
+use super::predictor::{MotionModel, Network};
+use super::vgru::{NoiseSource, VgruState};
+use crate::derivatives::DerivativeBuffer;
+use ndarray::{ArrayView2, ArrayView3};
+use std::sync::Arc;
+
+/// A number seed frames may be given in (`f32` or `f64`); the model computes in `f32`.
+pub trait FrameScalar: Copy {
+    /// The value as f32 (what the model computes with).
+    fn to_f32(self) -> f32;
+    /// The value as f64 (for error messages).
+    fn to_f64(self) -> f64;
+}
+
+impl FrameScalar for f32 {
+    fn to_f32(self) -> f32 {
+        self
+    }
+    fn to_f64(self) -> f64 {
+        self as f64
+    }
+}
+
+impl FrameScalar for f64 {
+    fn to_f32(self) -> f32 {
+        self as f32
+    }
+    fn to_f64(self) -> f64 {
+        self
+    }
+}
+
+/// The plan noise of one character (VGRU-d only; deterministic models ignore it).
+#[derive(Debug, Clone, Copy)]
+pub enum Noise<'a> {
+    /// `eps ~ N(0, I)` from `StdRng::seed_from_u64(seed)`; each new plan block draws again.
+    Seed(u64),
+    /// This `eps` (length `plan_hidden`) for every plan block.
+    Explicit(&'a [f32]),
+}
+
+#[derive(Debug)]
+enum NetState {
+    Vgru(Box<VgruState>),
+    Grud(GruDState),
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Phase {
+    /// Not seeded yet.
+    Idle,
+    /// The prediction in `out_*` has not been handed out yet.
+    Fresh,
+    /// The prediction in `out_*` was handed out; the next step feeds it back.
+    Running,
+}
+
+/// Generator for `batch` characters sharing one model; see the module doc.
+#[derive(Debug)]
+pub struct BatchGenerator {
+    model: Arc<MotionModel>,
+    batch: usize,
+    plan_horizon: usize,
+    derivatives: Vec<DerivativeBuffer<f32>>,
+    frame: Vec<f32>,
+    x_norm: Vec<f32>,
+    features: Vec<f32>,
+    out_norm: Vec<f32>,
+    out_full: Vec<f32>,
+    state: NetState,
+    body_steps: usize,
+    phase: Phase,
+}
+
+impl BatchGenerator {
+    /// A generator for `batch` characters (at least 1), with buffers for the model's training
+    /// seed length and horizon.
+    pub fn new(model: Arc<MotionModel>, batch: usize) -> Self {
+        let batch = batch.max(1);
+        let cfg = model.config().clone();
+        let (o, i, f) = (cfg.output_dims(), cfg.input_dims(), cfg.frame_dims);
+        let state = match model.network() {
+            Network::Vgru(v) => {
+                NetState::Vgru(Box::new(v.new_state(batch, cfg.seed_frames + cfg.horizon)))
+            }
+            Network::Grud(g) => NetState::Grud(g.new_state(batch)),
+        };
+        Self {
+            batch,
+            plan_horizon: cfg.horizon.max(1),
+            derivatives: (0..batch)
+                .map(|_| DerivativeBuffer::new(o, cfg.derivative_order))
+                .collect(),
+            frame: vec![0.0; f],
+            x_norm: vec![0.0; batch * o],
+            features: vec![0.0; batch * i],
+            out_norm: vec![0.0; batch * o],
+            out_full: vec![0.0; batch * f],
+            state,
+            body_steps: 0,
+            phase: Phase::Idle,
+            model,
+        }
+    }
+
+    /// The shared model.
+    pub fn model(&self) -> &Arc<MotionModel> {
+        &self.model
+    }
+
+    /// Number of characters generated in lockstep.
+    pub fn batch(&self) -> usize {
+        self.batch
+    }
+
+    /// Predicted frames per VGRU plan block (default: the model's training `horizon`).
+    pub fn plan_horizon(&self) -> usize {
+        self.plan_horizon
+    }
+
+    /// Sets the VGRU plan horizon `T` used by the next [`start`](Self::start): the first plan
+    /// covers `seed + T` steps, later blocks `T` steps each.
+    pub fn set_plan_horizon(&mut self, horizon: usize) -> Result<(), GenerateError> {
+        if horizon == 0 {
+            return Err(GenerateError::ZeroHorizon);
+        }
+        self.plan_horizon = horizon;
+        Ok(())
+    }
+
+    /// Body steps run since the last start (seed frames included).
+    pub fn body_steps(&self) -> usize {
+        self.body_steps
+    }
+
+    /// Seeds every character: `seeds [batch, S, frame_dims]` full frames, `actions` one label per
+    /// character or one for all (ignored by unconditioned models), `noise` one per character
+    /// (VGRU-d; may be empty for deterministic models). Afterwards [`step`](Self::step) yields
+    /// frame `S` first.
+    pub fn start<T: FrameScalar>(
+        &mut self,
+        seeds: ArrayView3<'_, T>,
+        actions: &[&str],
+        noise: &[Noise<'_>],
+    ) -> Result<(), GenerateError> {
+        self.start_with(seeds, actions, noise, |_, _| {})
+    }
+
+    /// Like [`start`](Self::start), also handing out each teacher-forced prediction: after seed
+    /// frame `t`, `teacher_forced(t, frames [batch, frame_dims])` gets the prediction of frame `t + 1`.
+    pub fn start_with<T: FrameScalar, F: FnMut(usize, ArrayView2<'_, f32>)>(
+        &mut self,
+        seeds: ArrayView3<'_, T>,
+        actions: &[&str],
+        noise: &[Noise<'_>],
+        mut teacher_forced: F,
+    ) -> Result<(), GenerateError> {
+        let model = Arc::clone(&self.model);
+        let cfg = model.config();
+        let (rows, seed_len, width) = seeds.dim();
+        self.validate_seeds(cfg, &seeds)?;
+        if rows != self.batch {
+            return Err(GenerateError::WrongBatch {
+                what: "seed sequences",
+                expected: self.batch,
+                got: rows,
+            });
+        }
+        debug_assert_eq!(width, cfg.frame_dims);
+        let action_indices = self.action_indices(cfg, actions)?;
+        let sources = match model.network() {
+            Network::Vgru(net) => self.noise_sources(net.plan_hidden(), noise)?,
+            Network::Grud(_) => Vec::new(),
+        };
+        match (&mut self.state, model.network()) {
+            (NetState::Vgru(state), Network::Vgru(net)) => {
+                net.begin(state, &action_indices, sources, seed_len, self.plan_horizon);
+            }
+            (NetState::Grud(state), Network::Grud(net)) => net.reset(state, self.batch),
+            _ => unreachable!("state built for this model"),
+        }
+        for d in &mut self.derivatives {
+            d.reset();
+        }
+        self.body_steps = 0;
+        let norm = model.normalization();
+        let o = cfg.output_dims();
+        for t in 0..seed_len {
+            for b in 0..self.batch {
+                for (dst, &src) in self
+                    .frame
+                    .iter_mut()
+                    .zip(seeds.slice(ndarray::s![b, t, ..]))
+                {
+                    *dst = src.to_f32();
+                }
+                norm.normalize(&self.frame, &mut self.x_norm[b * o..(b + 1) * o]);
+            }
+            self.advance(&model);
+            teacher_forced(t, self.frames());
+        }
+        self.phase = Phase::Fresh;
+        Ok(())
+    }
+
+    /// The next full frame of every character, `[batch, frame_dims]`: the first call after
+    /// [`start`](Self::start) returns the prediction made from the last seed frame, each later
+    /// call feeds the previous output back (closed loop).
+    pub fn step(&mut self) -> Result<ArrayView2<'_, f32>, GenerateError> {
+        match self.phase {
+            Phase::Idle => return Err(GenerateError::NotStarted),
+            Phase::Fresh => {}
+            Phase::Running => {
+                std::mem::swap(&mut self.x_norm, &mut self.out_norm);
+                let model = Arc::clone(&self.model);
+                self.advance(&model);
+            }
+        }
+        self.phase = Phase::Running;
+        Ok(self.frames())
+    }
+
+    /// The current predictions `[batch, frame_dims]`.
+    fn frames(&self) -> ArrayView2<'_, f32> {
+        let f = self.model.config().frame_dims;
+        ArrayView2::from_shape((self.batch, f), &self.out_full).expect("buffer sized in new")
+    }
+
+    /// One body step from `x_norm` to `out_norm` / `out_full`.
+    fn advance(&mut self, model: &MotionModel) {
+        let cfg = model.config();
+        let (o, i, f) = (cfg.output_dims(), cfg.input_dims(), cfg.frame_dims);
+        let batch = self.batch;
+        for (b, d) in self.derivatives.iter_mut().enumerate() {
+            d.push(
+                &self.x_norm[b * o..(b + 1) * o],
+                &mut self.features[b * i..(b + 1) * i],
+            );
+        }
+        let hidden = match (&mut self.state, model.network()) {
+            (NetState::Vgru(state), Network::Vgru(net)) => {
+                net.step(state, &self.features, batch, self.body_steps)
+            }
+            (NetState::Grud(state), Network::Grud(net)) => net.step(state, &self.features, batch),
+            _ => unreachable!("state built for this model"),
+        };
+        model.decoder().forward(hidden, batch, &mut self.out_norm);
+        if cfg.residual {
+            for (y, x) in self.out_norm.iter_mut().zip(&self.x_norm) {
+                *y += x;
+            }
+        }
+        let norm = model.normalization();
+        for b in 0..batch {
+            norm.unnormalize(
+                &self.out_norm[b * o..(b + 1) * o],
+                &mut self.out_full[b * f..(b + 1) * f],
+            );
+        }
+        self.body_steps += 1;
+    }
+
+    fn validate_seeds<T: FrameScalar>(
+        &self,
+        cfg: &ModelConfig,
+        seeds: &ArrayView3<'_, T>,
+    ) -> Result<(), GenerateError> {
+        let (_, seed_len, width) = seeds.dim();
+        if width != cfg.frame_dims {
+            return Err(GenerateError::WrongWidth {
+                expected: cfg.frame_dims,
+                got: width,
+            });
+        }
+        if seed_len < 1 {
+            return Err(GenerateError::TooFewSeedFrames {
+                needed: 1,
+                got: seed_len,
+            });
+        }
+        for ((character, frame, dim), v) in seeds.indexed_iter() {
+            let value = v.to_f64();
+            if !value.is_finite() || !v.to_f32().is_finite() {
+                return Err(GenerateError::NonFiniteSeed {
+                    character,
+                    frame,
+                    dim,
+                    value,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    fn action_indices(
+        &self,
+        cfg: &ModelConfig,
+        actions: &[&str],
+    ) -> Result<Vec<usize>, GenerateError> {
+        if cfg.actions.is_empty() {
+            return Ok(vec![0; self.batch]);
+        }
+        let resolve = |label: &str| {
+            cfg.action_index(label)
+                .ok_or_else(|| GenerateError::UnknownAction {
+                    label: label.to_string(),
+                    valid: cfg.actions.clone(),
+                })
+        };
+        let needed = matches!(self.model.network(), Network::Vgru(_));
+        match actions.len() {
+            0 if needed => Err(GenerateError::MissingAction {
+                valid: cfg.actions.clone(),
+            }),
+            0 => Ok(vec![0; self.batch]),
+            1 => Ok(vec![resolve(actions[0])?; self.batch]),
+            n if n == self.batch => actions.iter().map(|a| resolve(a)).collect(),
+            n => Err(GenerateError::WrongBatch {
+                what: "actions",
+                expected: self.batch,
+                got: n,
+            }),
+        }
+    }
+
+    fn noise_sources(
+        &self,
+        plan: usize,
+        noise: &[Noise<'_>],
+    ) -> Result<Vec<NoiseSource>, GenerateError> {
+        if noise.len() != self.batch {
+            return Err(GenerateError::WrongBatch {
+                what: "noise sources",
+                expected: self.batch,
+                got: noise.len(),
+            });
+        }
+        noise
+            .iter()
+            .map(|n| match *n {
+                Noise::Seed(seed) => Ok(NoiseSource::seeded(seed)),
+                Noise::Explicit(eps) if eps.len() == plan => Ok(NoiseSource::Fixed(eps.to_vec())),
+                Noise::Explicit(eps) => Err(GenerateError::WrongNoiseLength {
+                    expected: plan,
+                    got: eps.len(),
+                }),
+            })
+            .collect()
+    }
+}

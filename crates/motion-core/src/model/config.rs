@@ -1,0 +1,165 @@
+//! The `config` and `provenance` metadata of a motion-weights file (schema: weights/README.md).
+use crate::nn::GruConvention;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+use super::weights::WeightsError;
+
+/// The metadata `format` value of a motion-weights file.
+pub const FORMAT_NAME: &str = "motion-weights";
+/// The one `format_version` this crate reads.
+pub const FORMAT_VERSION: u32 = 1;
+/// The only derivative padding defined by the schema.
+pub const DERIVATIVE_PADDING: &str = "repeat-first";
+
+/// Which predictor a weights file holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Architecture {
+    /// VTLN-RNN with derivative inputs: plan GRU + body GRU + decoder (paper 000, 3.2).
+    #[serde(rename = "vgru-d")]
+    VgruD,
+    /// Stacked GRU layers with derivative inputs + decoder (paper 000, GRU-d).
+    #[serde(rename = "gru-d")]
+    GruD,
+}
+
+impl Architecture {
+    /// The schema name (`vgru-d` or `gru-d`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Architecture::VgruD => "vgru-d",
+            Architecture::GruD => "gru-d",
+        }
+    }
+}
+
+/// The `config` JSON object: everything an engine needs to build and drive the model.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ModelConfig {
+    /// `vgru-d` or `gru-d`.
+    pub architecture: Architecture,
+    /// Width of a full frame as callers see it (99 for H3.6M).
+    pub frame_dims: usize,
+    /// Indices of the full-frame dims the model predicts; the others are restored to the mean.
+    pub dims_used: Vec<usize>,
+    /// Body GRU units (`vgru-d`) or units per layer (`gru-d`).
+    pub hidden: usize,
+    /// Stacked GRU layers (`gru-d`; 1 for `vgru-d`).
+    pub layers: usize,
+    /// Plan GRU units (`vgru-d` only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub plan_hidden: Option<usize>,
+    /// Candidate convention of every GRU cell in the file.
+    pub gru_convention: GruConvention,
+    /// Output = input frame (normalized used dims) + decoder.
+    pub residual: bool,
+    /// 0 (plain frames) or up to 3 (frame + backward differences of order 1..=n).
+    pub derivative_order: usize,
+    /// `repeat-first` (the only padding defined).
+    pub derivative_padding: String,
+    /// Frame rate the model was trained at.
+    pub fps: f64,
+    /// Skeleton name (`h36m-32`).
+    pub skeleton: String,
+    /// Action labels in one-hot order (empty for unconditioned models).
+    #[serde(default)]
+    pub actions: Vec<String>,
+    /// Seed length used in training.
+    pub seed_frames: usize,
+    /// Predicted frames per plan in training; a VGRU plan covers `seed + horizon` steps.
+    pub horizon: usize,
+}
+
+impl ModelConfig {
+    /// Parses and validates the `config` metadata value of `path`.
+    pub fn from_json(json: &str, path: &Path) -> Result<Self, WeightsError> {
+        let bad = |problem: String| WeightsError::BadConfig {
+            path: path.to_path_buf(),
+            key: "config".into(),
+            problem,
+        };
+        let config: ModelConfig = serde_json::from_str(json).map_err(|e| bad(e.to_string()))?;
+        config.validate().map_err(bad)?;
+        Ok(config)
+    }
+
+    /// Checks the fields against each other; returns what is wrong.
+    pub fn validate(&self) -> Result<(), String> {
+        if self.dims_used.is_empty() {
+            return Err("dims_used is empty".into());
+        }
+        if let Some(&d) = self.dims_used.iter().find(|&&d| d >= self.frame_dims) {
+            return Err(format!(
+                "dims_used holds {d}, beyond frame_dims {}",
+                self.frame_dims
+            ));
+        }
+        let mut sorted = self.dims_used.clone();
+        sorted.sort_unstable();
+        if sorted.windows(2).any(|w| w[0] == w[1]) {
+            return Err("dims_used holds a repeated index".into());
+        }
+        if self.hidden == 0 {
+            return Err("hidden is 0".into());
+        }
+        if self.derivative_order > 3 {
+            return Err(format!(
+                "derivative_order {} (expected 0..=3)",
+                self.derivative_order
+            ));
+        }
+        if self.derivative_padding != DERIVATIVE_PADDING {
+            return Err(format!(
+                "derivative_padding `{}` (only `{DERIVATIVE_PADDING}` is defined)",
+                self.derivative_padding
+            ));
+        }
+        if !(self.fps.is_finite() && self.fps > 0.0) {
+            return Err(format!("fps {} is not a positive number", self.fps));
+        }
+        match self.architecture {
+            Architecture::GruD if self.layers == 0 => return Err("gru-d with 0 layers".into()),
+            Architecture::VgruD => {
+                if self.plan_hidden.unwrap_or(0) == 0 {
+                    return Err("vgru-d needs plan_hidden > 0".into());
+                }
+                if self.actions.is_empty() {
+                    return Err("vgru-d needs at least one action label".into());
+                }
+                if self.horizon == 0 {
+                    return Err("vgru-d needs horizon > 0".into());
+                }
+            }
+            Architecture::GruD => {}
+        }
+        Ok(())
+    }
+
+    /// Model output width `O` (= number of used dims).
+    pub fn output_dims(&self) -> usize {
+        self.dims_used.len()
+    }
+
+    /// Model input width `I = O * (1 + derivative_order)`.
+    pub fn input_dims(&self) -> usize {
+        self.output_dims() * (1 + self.derivative_order)
+    }
+
+    /// The index of an action label in one-hot order.
+    pub fn action_index(&self, label: &str) -> Option<usize> {
+        self.actions.iter().position(|a| a == label)
+    }
+}
+
+/// The `provenance` JSON object (data, iterations, date, command, best_validation, seed), kept as
+/// JSON so fields the engine does not interpret survive untouched.
+pub type Provenance = serde_json::Map<String, serde_json::Value>;
+
+/// Parses the `provenance` metadata value of `path` (must be a JSON object).
+pub fn parse_provenance(json: &str, path: &Path) -> Result<Provenance, WeightsError> {
+    serde_json::from_str::<Provenance>(json).map_err(|e| WeightsError::BadConfig {
+        path: path.to_path_buf(),
+        key: "provenance".into(),
+        problem: e.to_string(),
+    })
+}

@@ -1,0 +1,72 @@
+//! Errors of closed-loop generation: bad seeds, actions or noise given to a generator.
+
+/// Bad input to [`Generator`](super::Generator) or [`BatchGenerator`](super::BatchGenerator).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum GenerateError {
+    /// Fewer seed frames than the model needs.
+    #[error("{got} seed frames given, the model needs at least {needed}")]
+    TooFewSeedFrames {
+        /// Frames the model needs.
+        needed: usize,
+        /// Frames given.
+        got: usize,
+    },
+    /// Seed frames of the wrong width.
+    #[error("seed frames have {got} values, the model's frames have {expected}")]
+    WrongWidth {
+        /// The model's `frame_dims`.
+        expected: usize,
+        /// The width given.
+        got: usize,
+    },
+    /// A seed value is NaN or infinite.
+    #[error("seed of character {character}: frame {frame}, dim {dim} is {value}")]
+    NonFiniteSeed {
+        /// Batch row (0 for a single generator).
+        character: usize,
+        /// 0-based frame.
+        frame: usize,
+        /// 0-based dim.
+        dim: usize,
+        /// The value found.
+        value: f64,
+    },
+    /// An action label the model was not trained with.
+    #[error("unknown action `{label}`; valid actions: {}", valid.join(", "))]
+    UnknownAction {
+        /// The label given.
+        label: String,
+        /// The model's labels.
+        valid: Vec<String>,
+    },
+    /// The model is action-conditioned and no action was given.
+    #[error("this model needs an action; valid actions: {}", valid.join(", "))]
+    MissingAction {
+        /// The model's labels.
+        valid: Vec<String>,
+    },
+    /// An explicit noise vector of the wrong length.
+    #[error("noise eps has {got} values, the plan needs {expected}")]
+    WrongNoiseLength {
+        /// The plan width `P`.
+        expected: usize,
+        /// The length given.
+        got: usize,
+    },
+    /// Per-character arguments (seeds, actions, noise) disagree with the batch size.
+    #[error("{what}: {got} given for a batch of {expected}")]
+    WrongBatch {
+        /// Which argument.
+        what: &'static str,
+        /// The generator's batch size.
+        expected: usize,
+        /// The count given.
+        got: usize,
+    },
+    /// A plan horizon of 0 steps.
+    #[error("plan horizon must be at least 1 step")]
+    ZeroHorizon,
+    /// `step` was called before `start`.
+    #[error("step() called before start(): seed the generator first")]
+    NotStarted,
+}

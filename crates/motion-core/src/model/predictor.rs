@@ -1,0 +1,142 @@
+//! A loaded motion predictor: configuration, provenance, normalization, recurrent network and
+//! decoder, read from one self-describing safetensors file (schema: weights/README.md).
+//!
+//! Citation: Gopalakrishnan, Mali, Kifer, Giles, Ororbia, "A Neural Temporal Model for Human
+//! Motion Prediction", CVPR 2019 — paper 000, sections 3.2-3.3.
+use super::config::{
+    parse_provenance, Architecture, ModelConfig, Provenance, FORMAT_NAME, FORMAT_VERSION,
+};
+use super::grud::GruD;
+use super::norm::Normalization;
+use super::vgru::VgruD;
+use super::weights::{WeightStore, WeightsError};
+use crate::nn::{Linear, LinearConfig};
+use std::path::{Path, PathBuf};
+
+/// The recurrent part of a predictor.
+#[derive(Debug, Clone)]
+pub enum Network {
+    /// VGRU-d: plan GRU + body GRU.
+    Vgru(Box<VgruD>),
+    /// GRU-d: stacked GRU layers.
+    Grud(GruD),
+}
+
+/// Immutable predictor weights; share one across characters and threads with `Arc`.
+#[derive(Debug, Clone)]
+pub struct MotionModel {
+    path: PathBuf,
+    config: ModelConfig,
+    provenance: Provenance,
+    norm: Normalization,
+    network: Network,
+    decoder: Linear,
+    stored_dtype: String,
+}
+
+impl MotionModel {
+    /// Loads a motion-weights file.
+    pub fn load(path: impl AsRef<Path>) -> Result<Self, WeightsError> {
+        Self::from_store(&WeightStore::open(path)?)
+    }
+
+    /// Builds the predictor from an already parsed file, checking the schema's metadata and every
+    /// tensor the configuration implies (presence, dtype, shape, finiteness).
+    pub fn from_store(store: &WeightStore) -> Result<Self, WeightsError> {
+        let path = store.path().to_path_buf();
+        let format = store.require_metadata("format")?;
+        if format != FORMAT_NAME {
+            return Err(WeightsError::UnknownFormat {
+                path,
+                found: format.to_string(),
+            });
+        }
+        let version = store.require_metadata("format_version")?;
+        if version.trim() != FORMAT_VERSION.to_string() {
+            return Err(WeightsError::UnsupportedVersion {
+                path,
+                found: version.to_string(),
+                supported: FORMAT_VERSION,
+            });
+        }
+        let config = ModelConfig::from_json(store.require_metadata("config")?, &path)?;
+        let provenance = match store.metadata("provenance") {
+            Some(json) => parse_provenance(json, &path)?,
+            None => Provenance::new(),
+        };
+        let norm = Normalization::load(store, config.frame_dims, &config.dims_used)?;
+        let network = match config.architecture {
+            Architecture::VgruD => Network::Vgru(Box::new(VgruD::load(store, &config)?)),
+            Architecture::GruD => Network::Grud(GruD::load(store, &config)?),
+        };
+        let decoder = Linear::load(
+            store,
+            "decoder",
+            LinearConfig {
+                inputs: config.hidden,
+                outputs: config.output_dims(),
+            },
+        )?;
+        let stored_dtype = store
+            .dtype_name("decoder.weight")
+            .unwrap_or_else(|| "F32".into());
+        Ok(Self {
+            path,
+            config,
+            provenance,
+            norm,
+            network,
+            decoder,
+            stored_dtype,
+        })
+    }
+
+    /// The file the weights came from.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// The `config` metadata.
+    pub fn config(&self) -> &ModelConfig {
+        &self.config
+    }
+
+    /// The `provenance` metadata (empty if the file has none).
+    pub fn provenance(&self) -> &Provenance {
+        &self.provenance
+    }
+
+    /// Normalization statistics.
+    pub fn normalization(&self) -> &Normalization {
+        &self.norm
+    }
+
+    /// The recurrent network.
+    pub fn network(&self) -> &Network {
+        &self.network
+    }
+
+    /// The output decoder.
+    pub fn decoder(&self) -> &Linear {
+        &self.decoder
+    }
+
+    /// Dtype the weights were stored in (`F32`, `F16` or `BF16`; computed in f32 regardless).
+    pub fn stored_dtype(&self) -> &str {
+        &self.stored_dtype
+    }
+
+    /// Trainable parameters (normalization statistics excluded), as PyTorch counts them.
+    pub fn parameter_count(&self) -> usize {
+        let net = match &self.network {
+            Network::Vgru(v) => v.parameter_count(),
+            Network::Grud(g) => g.parameter_count(),
+        };
+        net + self.decoder.parameter_count()
+    }
+
+    /// Width of the hidden state the decoder reads.
+    pub fn top_hidden(&self) -> usize {
+        self.config.hidden
+    }
+}

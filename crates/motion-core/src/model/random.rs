@@ -1,0 +1,139 @@
+//! Motion-weights files with random weights, for benchmarks and tests of the engine (never for
+//! motion): every tensor the schema names, uniform in `±1/sqrt(fan)` like PyTorch's default
+//! init, serialized to real safetensors bytes so the normal loader (and its checks) is used.
+use super::config::{Architecture, ModelConfig, DERIVATIVE_PADDING, FORMAT_NAME, FORMAT_VERSION};
+use super::predictor::MotionModel;
+use super::weights::{serialize_f32, WeightStore, WeightsError};
+use crate::nn::GruConvention;
+use crate::skeleton::{H36M_ACTIONS, H36M_DIMS_USED, H36M_FRAME_DIMS};
+use rand::rngs::StdRng;
+use rand::{RngExt, SeedableRng};
+use std::collections::BTreeMap;
+
+impl ModelConfig {
+    /// The paper's configuration (paper 000, section 4): H3.6M frames (99 dims, 54 used),
+    /// derivative order 3, 512 units (GRU-d: 2 layers, PyTorch convention, unconditioned;
+    /// VGRU-d: plan 512, paper convention, the 15 H3.6M actions), 50 seed + 100 predicted frames.
+    pub fn paper(architecture: Architecture) -> Self {
+        let vgru = architecture == Architecture::VgruD;
+        ModelConfig {
+            architecture,
+            frame_dims: H36M_FRAME_DIMS,
+            dims_used: H36M_DIMS_USED.to_vec(),
+            hidden: 512,
+            layers: if vgru { 1 } else { 2 },
+            plan_hidden: vgru.then_some(512),
+            gru_convention: if vgru {
+                GruConvention::Paper
+            } else {
+                GruConvention::PyTorch
+            },
+            residual: false,
+            derivative_order: 3,
+            derivative_padding: DERIVATIVE_PADDING.into(),
+            fps: 25.0,
+            skeleton: "h36m-32".into(),
+            actions: if vgru {
+                H36M_ACTIONS.iter().map(|a| a.to_string()).collect()
+            } else {
+                Vec::new()
+            },
+            seed_frames: 50,
+            horizon: 100,
+        }
+    }
+
+    /// Every tensor name and shape this configuration implies (schema order: norm, network, decoder).
+    pub fn tensor_shapes(&self) -> Vec<(String, Vec<usize>)> {
+        let (h, i, o, f) = (
+            self.hidden,
+            self.input_dims(),
+            self.output_dims(),
+            self.frame_dims,
+        );
+        let mut shapes = vec![
+            ("norm.mean".to_string(), vec![f]),
+            ("norm.std".to_string(), vec![f]),
+        ];
+        let mut gru = |prefix: &str, inputs: usize, hidden: usize| {
+            shapes.push((format!("{prefix}.weight_ih"), vec![3 * hidden, inputs]));
+            shapes.push((format!("{prefix}.weight_hh"), vec![3 * hidden, hidden]));
+            shapes.push((format!("{prefix}.bias_ih"), vec![3 * hidden]));
+            shapes.push((format!("{prefix}.bias_hh"), vec![3 * hidden]));
+        };
+        match self.architecture {
+            Architecture::GruD => {
+                for k in 0..self.layers {
+                    gru(&format!("rnn.{k}"), if k == 0 { i } else { h }, h);
+                }
+            }
+            Architecture::VgruD => {
+                let p = self.plan_hidden.unwrap_or(0);
+                gru("plan.cell", self.actions.len(), p);
+                gru("body", i, h);
+                shapes.push(("plan.mu".into(), vec![p]));
+                shapes.push(("plan.sigma".into(), vec![p]));
+                shapes.push(("body.weight_ph".into(), vec![3 * h, p]));
+            }
+        }
+        shapes.push(("decoder.weight".into(), vec![o, h]));
+        shapes.push(("decoder.bias".into(), vec![o]));
+        shapes
+    }
+}
+
+/// Safetensors bytes of a schema-conformant file for `config` with random weights drawn from
+/// `seed` (norm: mean 0, std 1).
+pub fn random_weights_bytes(config: &ModelConfig, seed: u64) -> Vec<u8> {
+    let mut rng = StdRng::seed_from_u64(seed);
+    let tensors: Vec<(String, Vec<usize>, Vec<f32>)> = config
+        .tensor_shapes()
+        .into_iter()
+        .map(|(name, shape)| {
+            let n: usize = shape.iter().product();
+            let values: Vec<f32> = match name.as_str() {
+                "norm.mean" | "plan.mu" | "plan.sigma" => vec![0.0; n],
+                "norm.std" => vec![1.0; n],
+                _ => {
+                    let fan = if name.contains("bias") || shape.len() < 2 {
+                        config.hidden
+                    } else {
+                        shape[1].max(1)
+                    };
+                    let bound = 1.0 / (fan as f32).sqrt();
+                    (0..n).map(|_| rng.random_range(-bound..bound)).collect()
+                }
+            };
+            (name, shape, values)
+        })
+        .collect();
+    let metadata = BTreeMap::from([
+        ("format".to_string(), FORMAT_NAME.to_string()),
+        ("format_version".to_string(), FORMAT_VERSION.to_string()),
+        (
+            "config".to_string(),
+            serde_json::to_string(config).expect("config serializes"),
+        ),
+        (
+            "provenance".to_string(),
+            format!(r#"{{"data":"random","iterations":0,"seed":{seed}}}"#),
+        ),
+    ]);
+    serialize_f32(
+        tensors
+            .iter()
+            .map(|(name, shape, values)| (name.as_str(), shape.as_slice(), values.as_slice())),
+        &metadata,
+    )
+}
+
+impl MotionModel {
+    /// A predictor with random weights for `config` (see [`random_weights_bytes`]).
+    pub fn random(config: &ModelConfig, seed: u64) -> Result<Self, WeightsError> {
+        let bytes = random_weights_bytes(config, seed);
+        Self::from_store(&WeightStore::from_bytes(
+            &bytes,
+            format!("<random seed {seed}>"),
+        )?)
+    }
+}

@@ -1,0 +1,251 @@
+//! VGRU-d, the VTLN-RNN with motion-derivative inputs: a plan GRU running backwards in time over
+//! the whole sequence produces guide vectors for a body GRU (eqs. 1-4), whose hidden state a
+//! linear decoder turns into the next frame.
+//!
+//! Citation: Gopalakrishnan, Mali, Kifer, Giles, Ororbia, "A Neural Temporal Model for Human
+//! Motion Prediction", CVPR 2019 — paper 000, sections 3.2 (architecture) and 3.3 (derivative
+//! features). Tensors `plan.*` and `body.*` as in `training/models.py`.
+//!
+//! ## Plan
+//! The plan GRU is fed the action one-hot at every step from the initial state
+//! `mu + sqrt(softplus(sigma)) ⊙ eps`, for `S + T` steps (`S` seed frames, `T` the plan horizon).
+//! Its outputs are reversed in time: body step `t` reads plan output `S + T - 1 - t`.
+//!
+//! ## Streaming beyond the planned horizon (a choice of this engine; training never goes there)
+//! When body step `t` reaches `S + T`, a new block is planned: a fresh initial state (the next
+//! `eps` of the row's noise source) and `T` plan steps; body step `t` of block `k >= 1` reads the
+//! output that step `t - k T` would read in a plan of `S + T` steps, i.e. output `S + T - 1 -
+//! (t - k T)` in `0..T`. Each block thus replays the training-time situation "the seed is over,
+//! `T` frames are ahead", so guides stay in the distribution the body saw in training. The
+//! switch between blocks is not smoothed; the body's own state carries the motion across it.
+use super::config::ModelConfig;
+use super::weights::{WeightStore, WeightsError};
+use crate::nn::activation::softplus;
+use crate::nn::{BodyGruCell, BodyGruConfig, GruCell, GruConfig, GruScratch};
+use rand::rngs::StdRng;
+use rand::{RngExt, SeedableRng};
+use rand_distr::StandardNormal;
+
+/// VGRU-d recurrent weights (immutable, shareable).
+#[derive(Debug, Clone)]
+pub struct VgruD {
+    plan: GruCell,
+    mu: Vec<f32>,
+    /// `sqrt(softplus(sigma))`, precomputed.
+    scale: Vec<f32>,
+    body: BodyGruCell,
+    actions: usize,
+}
+
+/// Where a row's plan noise `eps ~ N(0, I)` comes from.
+#[derive(Debug)]
+pub enum NoiseSource {
+    /// A seeded generator: every plan block draws a fresh `eps`.
+    Rng(Box<StdRng>),
+    /// A fixed `eps` (parity tests, reproducible demos): every block reuses it.
+    Fixed(Vec<f32>),
+}
+
+impl NoiseSource {
+    /// A seeded source (`StdRng::seed_from_u64`).
+    pub fn seeded(seed: u64) -> Self {
+        NoiseSource::Rng(Box::new(StdRng::seed_from_u64(seed)))
+    }
+
+    fn fill(&mut self, eps: &mut [f32]) {
+        match self {
+            NoiseSource::Rng(rng) => {
+                for e in eps {
+                    *e = rng.sample(StandardNormal);
+                }
+            }
+            NoiseSource::Fixed(v) => eps.copy_from_slice(v),
+        }
+    }
+}
+
+/// Per-batch recurrent state of [`VgruD`]: the planned guides, the body hidden state and buffers.
+#[derive(Debug)]
+pub struct VgruState {
+    capacity: usize,
+    seed_len: usize,
+    horizon: usize,
+    /// Steps one row's guide buffer holds (`>= seed_len + horizon`).
+    plan_capacity: usize,
+    /// Plan outputs in forward order: row `b`, output `j` at `(b * plan_capacity + j) * P`.
+    guides: Vec<f32>,
+    plan_gi: Vec<f32>,
+    plan_h: Vec<f32>,
+    plan_scratch: GruScratch,
+    eps: Vec<f32>,
+    noise: Vec<NoiseSource>,
+    hidden: Vec<f32>,
+    body_scratch: GruScratch,
+}
+
+impl VgruD {
+    /// Reads `plan.cell.*`, `plan.mu`, `plan.sigma` and `body.*`.
+    pub fn load(store: &WeightStore, config: &ModelConfig) -> Result<Self, WeightsError> {
+        let p = config.plan_hidden.unwrap_or(0);
+        let actions = config.actions.len();
+        let plan = GruCell::load(
+            store,
+            "plan.cell",
+            GruConfig {
+                inputs: actions,
+                hidden: p,
+                convention: config.gru_convention,
+            },
+        )?;
+        let mu = store.tensor("plan.mu", &[p])?;
+        let sigma = store.tensor("plan.sigma", &[p])?;
+        let scale = sigma.iter().map(|&s| softplus(s).sqrt()).collect();
+        let body = BodyGruCell::load(
+            store,
+            "body",
+            BodyGruConfig {
+                gru: GruConfig {
+                    inputs: config.input_dims(),
+                    hidden: config.hidden,
+                    convention: config.gru_convention,
+                },
+                guide: p,
+            },
+        )?;
+        Ok(Self {
+            plan,
+            mu,
+            scale,
+            body,
+            actions,
+        })
+    }
+
+    /// Number of trainable parameters (plan GRU, mu, sigma, body GRU).
+    pub fn parameter_count(&self) -> usize {
+        self.plan.parameter_count() + 2 * self.mu.len() + self.body.parameter_count()
+    }
+
+    /// Plan units `P`.
+    pub fn plan_hidden(&self) -> usize {
+        self.mu.len()
+    }
+
+    /// Body units `H`.
+    pub fn hidden(&self) -> usize {
+        self.body.config().gru.hidden
+    }
+
+    /// State for up to `capacity` rows whose guide buffers hold `plan_steps` steps.
+    pub fn new_state(&self, capacity: usize, plan_steps: usize) -> VgruState {
+        let (p, h) = (self.plan_hidden(), self.hidden());
+        VgruState {
+            capacity,
+            seed_len: 0,
+            horizon: 0,
+            plan_capacity: plan_steps,
+            guides: vec![0.0; capacity * plan_steps * p],
+            plan_gi: vec![0.0; capacity * 3 * p],
+            plan_h: vec![0.0; capacity * p],
+            plan_scratch: GruScratch::new(p, capacity),
+            eps: vec![0.0; capacity * p],
+            noise: Vec::with_capacity(capacity),
+            hidden: vec![0.0; capacity * h],
+            body_scratch: GruScratch::new(h, capacity),
+        }
+    }
+
+    /// Starts `actions.len()` rows: zero body state, plan `seed_len + horizon` steps per row for
+    /// its action index (one-hot order) and noise. Grows the guide buffers if needed (this is the
+    /// only place that may allocate, once per sequence).
+    pub fn begin(
+        &self,
+        state: &mut VgruState,
+        actions: &[usize],
+        noise: Vec<NoiseSource>,
+        seed_len: usize,
+        horizon: usize,
+    ) {
+        let batch = actions.len();
+        assert!(batch <= state.capacity && noise.len() == batch);
+        let p = self.plan_hidden();
+        let steps = seed_len + horizon;
+        if steps > state.plan_capacity {
+            state.plan_capacity = steps;
+            state.guides = vec![0.0; state.capacity * steps * p];
+        }
+        state.seed_len = seed_len;
+        state.horizon = horizon;
+        state.noise = noise;
+        let g = 3 * p;
+        for (b, &a) in actions.iter().enumerate() {
+            debug_assert!(a < self.actions);
+            self.plan
+                .project_one_hot(Some(a), &mut state.plan_gi[b * g..(b + 1) * g]);
+        }
+        state.hidden[..batch * self.hidden()].fill(0.0);
+        self.plan_block(state, batch, steps);
+    }
+
+    /// Runs `steps` plan steps for `batch` rows from fresh initial states, storing outputs `0..steps`.
+    fn plan_block(&self, state: &mut VgruState, batch: usize, steps: usize) {
+        let p = self.plan_hidden();
+        for b in 0..batch {
+            let eps = &mut state.eps[b * p..(b + 1) * p];
+            state.noise[b].fill(eps);
+            let h0 = &mut state.plan_h[b * p..(b + 1) * p];
+            for (((h, m), s), e) in h0.iter_mut().zip(&self.mu).zip(&self.scale).zip(eps.iter()) {
+                *h = m + s * e;
+            }
+        }
+        for j in 0..steps {
+            self.plan.step_with_projection(
+                &state.plan_gi,
+                &mut state.plan_h,
+                batch,
+                &mut state.plan_scratch,
+            );
+            for b in 0..batch {
+                let at = (b * state.plan_capacity + j) * p;
+                state.guides[at..at + p].copy_from_slice(&state.plan_h[b * p..(b + 1) * p]);
+            }
+        }
+    }
+
+    /// The plan output read by body step `t` (see the module doc), re-planning when a new block starts.
+    fn guide_index(&self, state: &mut VgruState, batch: usize, t: usize) -> usize {
+        let (s, h) = (state.seed_len, state.horizon);
+        if t < s + h {
+            return s + h - 1 - t;
+        }
+        let block = (t - s) / h;
+        let local = t - block * h;
+        if local == s {
+            self.plan_block(state, batch, h);
+        }
+        s + h - 1 - local
+    }
+
+    /// Body step `t` for `batch` rows of features `x [batch, I]`; returns the body hidden `[batch, H]`.
+    pub fn step<'s>(
+        &self,
+        state: &'s mut VgruState,
+        x: &[f32],
+        batch: usize,
+        t: usize,
+    ) -> &'s [f32] {
+        let p = self.plan_hidden();
+        let j = self.guide_index(state, batch, t);
+        let stride = state.plan_capacity * p;
+        let guides = &state.guides[j * p..];
+        self.body.step(
+            x,
+            guides,
+            stride,
+            &mut state.hidden,
+            batch,
+            &mut state.body_scratch,
+        );
+        &state.hidden[..batch * self.hidden()]
+    }
+}

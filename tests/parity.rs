@@ -1,0 +1,382 @@
+//! Parity with the PyTorch reference modules (`training/layers.py`, `training/models.py`): the
+//! committed fixtures in `tests/fixtures/parity/` (written by `python -m training.export_fixtures`)
+//! must be reproduced within 1e-5, and loading errors must name the tensor and the file.
+use motion::core::model::weights::serialize_f32;
+use motion::core::model::{Generator, MotionModel, Noise, WeightStore, WeightsError};
+use motion::core::nn::{
+    BodyGruCell, BodyGruConfig, GruCell, GruConfig, GruConvention, GruScratch, Linear,
+    LinearConfig, LstmCell, LstmConfig, LstmScratch, Mlp, MlpConfig, MlpScratch,
+};
+use ndarray::ArrayView2;
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+use std::sync::Arc;
+
+const TOLERANCE: f32 = 1e-5;
+
+fn fixture(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures/parity")
+        .join(name)
+}
+
+fn layers() -> WeightStore {
+    WeightStore::open(fixture("layers.safetensors")).expect("layers fixture")
+}
+
+fn get(store: &WeightStore, name: &str) -> (Vec<usize>, Vec<f32>) {
+    store.tensor_any_shape(name).expect(name)
+}
+
+fn assert_close(what: &str, got: &[f32], expected: &[f32]) {
+    assert_eq!(got.len(), expected.len(), "{what}: length");
+    let (worst, at) = got
+        .iter()
+        .zip(expected)
+        .enumerate()
+        .map(|(i, (g, e))| ((g - e).abs(), i))
+        .fold((0.0f32, 0), |a, b| if b.0 > a.0 { b } else { a });
+    assert!(
+        worst <= TOLERANCE,
+        "{what}: max |diff| {worst:e} at {at} (got {}, expected {})",
+        got[at],
+        expected[at]
+    );
+}
+
+fn convention(store: &WeightStore, name: &str) -> GruConvention {
+    let text = store
+        .metadata(&format!("{name}.convention"))
+        .expect("convention metadata");
+    GruConvention::from_name(text).expect("known convention")
+}
+
+fn check_gru(name: &str) {
+    let store = layers();
+    let (xs, x) = get(&store, &format!("{name}.x"));
+    let (_, h0) = get(&store, &format!("{name}.h0"));
+    let (_, expected) = get(&store, &format!("{name}.h"));
+    let (steps, batch, inputs) = (xs[0], xs[1], xs[2]);
+    let hidden = h0.len() / batch;
+    let config = GruConfig {
+        inputs,
+        hidden,
+        convention: convention(&store, name),
+    };
+    let cell = GruCell::load(&store, name, config).unwrap();
+    // Batch 2 (sgemm path) and each row alone (GEMV path) must both match.
+    let mut scratch = GruScratch::new(hidden, batch);
+    let mut h = h0.clone();
+    for t in 0..steps {
+        cell.step(
+            &x[t * batch * inputs..(t + 1) * batch * inputs],
+            &mut h,
+            batch,
+            &mut scratch,
+        );
+        let e = &expected[t * batch * hidden..(t + 1) * batch * hidden];
+        assert_close(&format!("{name} step {t}"), &h, e);
+    }
+    for b in 0..batch {
+        let mut h = h0[b * hidden..(b + 1) * hidden].to_vec();
+        for t in 0..steps {
+            let xt = &x[(t * batch + b) * inputs..(t * batch + b + 1) * inputs];
+            cell.step(xt, &mut h, 1, &mut scratch);
+            let e = &expected[(t * batch + b) * hidden..(t * batch + b + 1) * hidden];
+            assert_close(&format!("{name} row {b} step {t}"), &h, e);
+        }
+    }
+}
+
+#[test]
+fn gru_pytorch_convention() {
+    check_gru("gru_pytorch");
+}
+
+#[test]
+fn gru_paper_convention() {
+    check_gru("gru_paper");
+}
+
+fn check_body_gru(name: &str) {
+    let store = layers();
+    let (xs, x) = get(&store, &format!("{name}.x"));
+    let (ps, p) = get(&store, &format!("{name}.p"));
+    let (_, h0) = get(&store, &format!("{name}.h0"));
+    let (_, expected) = get(&store, &format!("{name}.h"));
+    let (steps, batch, inputs, guide) = (xs[0], xs[1], xs[2], ps[2]);
+    let hidden = h0.len() / batch;
+    let config = BodyGruConfig {
+        gru: GruConfig {
+            inputs,
+            hidden,
+            convention: convention(&store, name),
+        },
+        guide,
+    };
+    let cell = BodyGruCell::load(&store, name, config).unwrap();
+    let mut scratch = GruScratch::new(hidden, batch);
+    let mut h = h0.clone();
+    for t in 0..steps {
+        let xt = &x[t * batch * inputs..(t + 1) * batch * inputs];
+        let pt = &p[t * batch * guide..(t + 1) * batch * guide];
+        cell.step(xt, pt, guide, &mut h, batch, &mut scratch);
+        let e = &expected[t * batch * hidden..(t + 1) * batch * hidden];
+        assert_close(&format!("{name} step {t}"), &h, e);
+    }
+}
+
+#[test]
+fn body_gru_paper_convention() {
+    check_body_gru("body_gru_paper");
+}
+
+#[test]
+fn body_gru_pytorch_convention() {
+    check_body_gru("body_gru_pytorch");
+}
+
+#[test]
+fn lstm_cell() {
+    let store = layers();
+    let (xs, x) = get(&store, "lstm.x");
+    let (_, h0) = get(&store, "lstm.h0");
+    let (_, c0) = get(&store, "lstm.c0");
+    let (_, eh) = get(&store, "lstm.h");
+    let (_, ec) = get(&store, "lstm.c");
+    let (steps, batch, inputs) = (xs[0], xs[1], xs[2]);
+    let hidden = h0.len() / batch;
+    let cell = LstmCell::load(&store, "lstm", LstmConfig { inputs, hidden }).unwrap();
+    let mut scratch = LstmScratch::new(hidden, batch);
+    let (mut h, mut c) = (h0, c0);
+    for t in 0..steps {
+        let xt = &x[t * batch * inputs..(t + 1) * batch * inputs];
+        cell.step(xt, &mut h, &mut c, batch, &mut scratch);
+        let span = t * batch * hidden..(t + 1) * batch * hidden;
+        assert_close(&format!("lstm h step {t}"), &h, &eh[span.clone()]);
+        assert_close(&format!("lstm c step {t}"), &c, &ec[span]);
+    }
+}
+
+#[test]
+fn linear_layer() {
+    let store = layers();
+    let (xs, x) = get(&store, "linear.x");
+    let (ys, expected) = get(&store, "linear.y");
+    let config = LinearConfig {
+        inputs: xs[1],
+        outputs: ys[1],
+    };
+    let layer = Linear::load(&store, "linear", config).unwrap();
+    let mut y = vec![0.0; expected.len()];
+    layer.forward(&x, xs[0], &mut y);
+    assert_close("linear", &y, &expected);
+    layer.forward(&x[..xs[1]], 1, &mut y[..ys[1]]);
+    assert_close("linear row 0", &y[..ys[1]], &expected[..ys[1]]);
+}
+
+#[test]
+fn mlp() {
+    let store = layers();
+    let (xs, x) = get(&store, "mlp.x");
+    let (_, expected) = get(&store, "mlp.y");
+    let sizes: serde_json::Value = serde_json::from_str(store.metadata("sizes").unwrap()).unwrap();
+    let widths: Vec<usize> = sizes["mlp"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_u64().unwrap() as usize)
+        .collect();
+    let mlp = Mlp::load(&store, "mlp", &MlpConfig { widths }).unwrap();
+    let mut scratch = MlpScratch::new(&mlp, xs[0]);
+    let mut y = vec![0.0; expected.len()];
+    mlp.forward(&x, xs[0], &mut y, &mut scratch);
+    assert_close("mlp", &y, &expected);
+}
+
+/// Runs a model fixture through the single-character Generator: teacher-forced outputs and 30
+/// closed-loop frames.
+fn check_model(name: &str) {
+    let model = Arc::new(MotionModel::load(fixture(&format!("{name}.safetensors"))).unwrap());
+    let expected = WeightStore::open(fixture(&format!("{name}.expected.safetensors"))).unwrap();
+    let (ss, seed) = get(&expected, "seed");
+    let (_, teacher) = get(&expected, "teacher_forced");
+    let (cs, closed) = get(&expected, "closed_loop");
+    let eps = expected.tensor_any_shape("eps").ok().map(|(_, v)| v);
+    let horizon: usize = expected.metadata("horizon").unwrap().parse().unwrap();
+    let action = expected.metadata("action");
+    let width = ss[1];
+    let seed = ArrayView2::from_shape((ss[0], width), &seed).unwrap();
+
+    let mut generator = Generator::new(model);
+    generator.set_plan_horizon(horizon).unwrap();
+    let noise = match &eps {
+        Some(e) => Noise::Explicit(e),
+        None => Noise::Seed(0),
+    };
+    let mut tf = vec![0.0f32; teacher.len()];
+    generator
+        .start_with(seed, action, noise, |t, frame| {
+            tf[t * width..(t + 1) * width].copy_from_slice(frame)
+        })
+        .unwrap();
+    assert_close(&format!("{name} teacher_forced"), &tf, &teacher);
+    for k in 0..cs[0] {
+        let frame = generator.step().unwrap();
+        assert_close(
+            &format!("{name} closed_loop[{k}]"),
+            frame,
+            &closed[k * width..(k + 1) * width],
+        );
+    }
+}
+
+#[test]
+fn vgru_d() {
+    check_model("vgru_d");
+}
+
+#[test]
+fn vgru_d_residual() {
+    check_model("vgru_d_residual");
+}
+
+#[test]
+fn vgru_d_f16_weights() {
+    check_model("vgru_d_f16");
+}
+
+#[test]
+fn gru_d() {
+    check_model("gru_d");
+}
+
+#[test]
+fn gru_d_residual() {
+    check_model("gru_d_residual");
+}
+
+// ---- loading errors -----------------------------------------------------------------------------
+
+/// A fixture's tensors (as f32) and metadata, for editing.
+type Parts = (
+    Vec<(String, Vec<usize>, Vec<f32>)>,
+    BTreeMap<String, String>,
+);
+
+/// Rewrites a fixture with `edit` applied to its tensors and metadata, into a temp file.
+fn edited(name: &str, edit: impl FnOnce(&mut Parts)) -> (tempfile::TempDir, PathBuf) {
+    let store = WeightStore::open(fixture(name)).unwrap();
+    let tensors = store
+        .names()
+        .map(|n| {
+            let (s, v) = store.tensor_any_shape(n).unwrap();
+            (n.to_string(), s, v)
+        })
+        .collect();
+    let mut parts: Parts = (tensors, store.metadata_map().clone());
+    edit(&mut parts);
+    let data = serialize_f32(
+        parts
+            .0
+            .iter()
+            .map(|(n, s, v)| (n.as_str(), s.as_slice(), v.as_slice())),
+        &parts.1,
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("edited.safetensors");
+    std::fs::write(&path, data).unwrap();
+    (dir, path)
+}
+
+fn load_error(path: &PathBuf) -> (WeightsError, String) {
+    let err = MotionModel::load(path).unwrap_err();
+    let msg = err.to_string();
+    (err, msg)
+}
+
+#[test]
+fn missing_tensor_is_named_with_file() {
+    let (_dir, path) = edited("gru_d.safetensors", |(t, _)| {
+        t.retain(|(n, _, _)| n != "rnn.1.weight_hh")
+    });
+    let (err, msg) = load_error(&path);
+    assert!(matches!(err, WeightsError::MissingTensor { .. }), "{msg}");
+    assert!(
+        msg.contains("rnn.1.weight_hh") && msg.contains("edited.safetensors"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn wrong_shape_is_named_with_file() {
+    let (_dir, path) = edited("vgru_d.safetensors", |(t, _)| {
+        let entry = t
+            .iter_mut()
+            .find(|(n, _, _)| n == "body.weight_ph")
+            .unwrap();
+        entry.1 = vec![entry.1[1], entry.1[0]];
+    });
+    let (err, msg) = load_error(&path);
+    assert!(matches!(err, WeightsError::WrongShape { .. }), "{msg}");
+    assert!(
+        msg.contains("body.weight_ph") && msg.contains("edited.safetensors"),
+        "{msg}"
+    );
+    assert!(msg.contains("[48, 8]"), "{msg}");
+}
+
+#[test]
+fn nan_weight_is_named_with_file() {
+    let (_dir, path) = edited("gru_d.safetensors", |(t, _)| {
+        let entry = t.iter_mut().find(|(n, _, _)| n == "decoder.bias").unwrap();
+        entry.2[3] = f32::NAN;
+    });
+    let (err, msg) = load_error(&path);
+    assert!(
+        matches!(err, WeightsError::NonFinite { index: 3, .. }),
+        "{msg}"
+    );
+    assert!(
+        msg.contains("decoder.bias") && msg.contains("edited.safetensors"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn unknown_format_version_is_rejected() {
+    let (_dir, path) = edited("gru_d.safetensors", |(_, m)| {
+        m.insert("format_version".into(), "2".into());
+    });
+    let (err, msg) = load_error(&path);
+    assert!(
+        matches!(err, WeightsError::UnsupportedVersion { .. }),
+        "{msg}"
+    );
+    assert!(
+        msg.contains("format_version") && msg.contains("edited.safetensors"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn missing_file_and_garbage_are_errors() {
+    let missing = fixture("does_not_exist.safetensors");
+    assert!(matches!(
+        MotionModel::load(&missing),
+        Err(WeightsError::Io { .. })
+    ));
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("garbage.safetensors");
+    std::fs::write(&path, b"not a safetensors file at all").unwrap();
+    let msg = MotionModel::load(&path).unwrap_err().to_string();
+    assert!(msg.contains("garbage.safetensors"), "{msg}");
+    // A layers file is valid safetensors but not a motion-weights file.
+    let msg = MotionModel::load(fixture("layers.safetensors"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        msg.contains("format") && msg.contains("layers.safetensors"),
+        "{msg}"
+    );
+}
