@@ -23,6 +23,12 @@ enum Command {
     Info(commands::info::Args),
     /// Score predictions against ground truth: NPSS, Euler error, NDMS, APD.
     Score(commands::score::Args),
+    /// Reproduce the papers' H3.6M tables: run a model on the protocol's test windows and score it.
+    Eval(commands::eval::Args),
+    /// Predict future motion from a seed sequence (BVH, H3.6M text or .npy) in closed loop.
+    Predict(commands::predict::Args),
+    /// Draw a skeleton animation or contact sheet (SVG, GIF or PNG), optionally beside a second motion.
+    Render(commands::render::Args),
 }
 
 fn main() -> ExitCode {
@@ -31,6 +37,9 @@ fn main() -> ExitCode {
         Command::Convert(args) => commands::convert::run(args),
         Command::Info(args) => commands::info::run(args),
         Command::Score(args) => commands::score::run(args),
+        Command::Eval(args) => commands::eval::run(args),
+        Command::Predict(args) => commands::predict::run(args),
+        Command::Render(args) => commands::render::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,6 +1,9 @@
 //! One module per subcommand; each exposes `Args` (clap) and `run(Args) -> anyhow::Result<()>`.
 pub mod convert;
+pub mod eval;
 pub mod info;
+pub mod predict;
+pub mod render;
 pub mod score;
 
 /// An error caused by what the user gave us (bad file, bad shape, bad flag): exit code 2.
