@@ -273,17 +273,20 @@ class VGRUD(MotionModel):
         guides = self.plan.guides(action, steps, eps, like)
         h = torch.zeros(batch, self.hidden_size, dtype=like.dtype, device=like.device)
         # V p_t for every step at once: one matrix product instead of one per step.
-        return {"h": h, "guide_gates": F.linear(guides, self.body.weight_ph), "steps": steps}
+        # Unbound into per-step views: indexing a tensor per step would make autograd allocate a full-size
+        # zero gradient for every step (quadratic memory traffic); unbind's backward stacks once.
+        guide_gates = F.linear(guides, self.body.weight_ph).unbind(0)
+        return {"h": h, "guide_gates": guide_gates, "steps": steps}
 
     def _run(self, ctx, features, t0):
         steps = features.shape[1]
         if t0 + steps > ctx["steps"]:
             raise ValueError(f"body step {t0 + steps - 1} beyond the plan's {ctx['steps']} steps")
-        gi = F.linear(features, self.body.weight_ih, self.body.bias_ih)
+        gi = F.linear(features, self.body.weight_ih, self.body.bias_ih).unbind(1)
         h = ctx["h"]
         outputs = []
         for t in range(steps):
-            h = self.body.step(gi[:, t] + ctx["guide_gates"][t0 + t], h)
+            h = self.body.step(gi[t] + ctx["guide_gates"][t0 + t], h)
             outputs.append(h)
         ctx["h"] = h
         return torch.stack(outputs, dim=1)
@@ -309,13 +312,13 @@ class GRUD(MotionModel):
 
     def _run(self, ctx, features, t0):
         steps = features.shape[1]
-        gi0 = self.rnn[0].input_gates(features)
+        gi0 = self.rnn[0].input_gates(features).unbind(1)  # per-step views (see VGRUD._begin)
         hs = list(ctx["h"])
         outputs = []
         for t in range(steps):
             x = None
             for k, cell in enumerate(self.rnn):
-                gi = gi0[:, t] if k == 0 else cell.input_gates(x)
+                gi = gi0[t] if k == 0 else cell.input_gates(x)
                 hs[k] = cell.step(gi, hs[k])
                 x = hs[k]
             outputs.append(x)
