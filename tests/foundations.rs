@@ -351,6 +351,32 @@ fn npy_round_trips_frames_and_positions() {
 }
 
 #[test]
+fn cmu_clips_stand_on_the_floor_with_an_absolute_root() {
+    let path = data_dir().join("cmu/train/walking/walking_1.txt.gz");
+    if !path.exists() {
+        eprintln!(
+            "SKIPPED: cmu_clips_stand_on_the_floor: {} not found (set MOTION_DATA_DIR)",
+            path.display()
+        );
+        return;
+    }
+    let x = read_expmap_text(&path).unwrap();
+    assert_eq!(x.ncols(), 117);
+    let skeleton = Skeleton::cmu();
+    let positions = expmap_positions(&skeleton, x.view(), RootEncoding::Absolute, 1).unwrap();
+    assert!(worst_bone_error(&skeleton, &positions) < 1e-5);
+    for t in 0..x.nrows() {
+        let lowest = (0..skeleton.len())
+            .map(|j| positions[[t, j, 1]])
+            .fold(f64::MAX, f64::min);
+        assert!(
+            (-2.0..2.5).contains(&lowest),
+            "frame {t}: lowest joint at y = {lowest}"
+        );
+    }
+}
+
+#[test]
 fn actions_are_the_fifteen_of_the_protocol() {
     assert_eq!(H36M_ACTIONS.len(), 15);
     assert_eq!(H36M_ACTIONS[12], "walking");

@@ -283,8 +283,12 @@ impl Skeleton {
     }
 
     /// The built-in CMU 38-joint skeleton of the exp-map subset (parents and offsets of
-    /// `cmu_skeleton.json`, in that loader's units; y up). The source gives no names: the joints
-    /// are called `joint_00` .. `joint_37`. Channels as in [`Skeleton::h36m`].
+    /// `cmu_skeleton.json`; y up). The source gives no names: the joints are called `joint_00` ..
+    /// `joint_37`. Channels as in [`Skeleton::h36m`].
+    ///
+    /// Units are the loader's, **not mm**: the CMU ASF unit (1/0.45 inch ≈ 56.4 mm). The files'
+    /// absolute root positions are in the same unit: with them the hips stand ≈ 16.7 units high
+    /// and the lowest joint stays within ~2 units of y = 0 (`tests/foundations.rs` checks it).
     pub fn cmu() -> Skeleton {
         build_builtin(
             CMU_JOINTS
