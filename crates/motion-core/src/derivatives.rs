@@ -256,6 +256,35 @@ mod tests {
         );
     }
 
+    /// `training/features.py::derivative_features` (PyTorch, f32) of the frames below, as bits.
+    const PYTORCH_BITS: [u32; 48] = [
+        0x00000000, 0x3fedb6db, 0x00000000, 0x00000000, 0x00000000, 0x00000000, 0x00000000,
+        0x34000000, 0x3f8ccccd, 0x403d41d4, 0x3f8ccccd, 0x3f8ccccd, 0x3f8ccccd, 0x3f8ccccd,
+        0x3f8ccccd, 0x3f8ccccd, 0x400ccccd, 0x4081d41d, 0x3f8ccccd, 0x3f8ccccc, 0x00000000,
+        0xb4000000, 0xbf8cccce, 0xbf8ccccf, 0x40533333, 0x40a50751, 0x3f8ccccc, 0x3f8cccd0,
+        0xb4000000, 0x35000000, 0xb4800000, 0x34000000, 0x408ccccd, 0x40c83a84, 0x3f8cccce,
+        0x3f8ccccc, 0x34800000, 0xb5000000, 0x35600000, 0xb5800000, 0x40b00000, 0x40eb6db7,
+        0x3f8ccccc, 0x3f8ccccc, 0xb4800000, 0x00000000, 0xb5a00000, 0x35c00000,
+    ];
+
+    #[test]
+    fn bit_identical_to_the_pytorch_training_code() {
+        // x[t][k] = ((7t + 13k) mod 101) / 7 + 0.1 t, all in f32 as in the Python snippet.
+        let x = Array2::from_shape_fn((6, 2), |(t, k)| {
+            ((t * 7 + k * 13) % 101) as f32 / 7.0f32 + t as f32 * 0.1f32
+        });
+        let batch = derivative_features(x.view(), 3);
+        let streamed = incremental(&x, 3);
+        for (i, want) in PYTORCH_BITS.iter().enumerate() {
+            assert_eq!(batch.as_slice().unwrap()[i].to_bits(), *want, "value {i}");
+            assert_eq!(
+                streamed.as_slice().unwrap()[i].to_bits(),
+                *want,
+                "value {i}"
+            );
+        }
+    }
+
     #[test]
     fn reset_starts_over() {
         let x = frames(6, 3, |v| v);
