@@ -115,7 +115,7 @@ fn writer_keeps_every_bit_of_awkward_numbers() {
         0.1 + 0.2,
         -1e-300,
         1.0 / 3.0,
-        123456789.123456789,
+        123456789.12345679,
         -0.0,
         5e-324,
         f64::MAX,
@@ -903,4 +903,33 @@ fn bvh_of_another_skeleton_is_rejected_clearly() {
         .unwrap_err()
         .to_string();
     assert!(error.contains("no joint \"RightUpLeg\""), "{error}");
+}
+
+#[test]
+fn euler_channels_stay_continuous_through_gimbal_and_wrap() {
+    use motion::core::formats::expmap_bvh::{bvh_euler_to_quat, continuous_euler_degrees};
+    for order in EulerOrder::TAIT_BRYAN {
+        // The middle angle sweeps through 90° while the others turn past 180°.
+        let mut previous = None;
+        for step in 0..=200 {
+            let s = step as f64;
+            let truth = [100.0 + 1.5 * s, 60.0 + 0.3 * s, -150.0 - 2.0 * s];
+            let q = bvh_euler_to_quat(order, truth);
+            let angles = continuous_euler_degrees(order, q, previous);
+            let back = bvh_euler_to_quat(order, angles);
+            assert!(
+                back.dot(q).abs() > 1.0 - 1e-12,
+                "{order:?}: not the same rotation"
+            );
+            if let Some(p) = previous {
+                for k in 0..3 {
+                    assert!(
+                        (angles[k] - p[k]).abs() < 5.0,
+                        "{order:?} step {step}: {p:?} -> {angles:?}"
+                    );
+                }
+            }
+            previous = Some(angles);
+        }
+    }
 }

@@ -16,7 +16,6 @@
 //!
 //! The writer uses the standard layout (tabs, one frame per line) and Rust's shortest
 //! round-trip representation of each number, so a written file reads back to the same values.
-use std::io::Write as _;
 use std::path::Path;
 
 use ndarray::Array2;
@@ -85,15 +84,8 @@ pub fn to_bvh_string(bvh: &Bvh) -> std::io::Result<String> {
     String::from_utf8(out).map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidData, e))
 }
 
-/// Writes `bvh` to `path` (created or truncated).
+/// Writes `bvh` to `path`, through a temporary file in the same directory renamed into place, so
+/// a failure never leaves a half-written file.
 pub fn write_bvh(path: impl AsRef<Path>, bvh: &Bvh) -> Result<(), FormatError> {
-    let path = path.as_ref();
-    let io_error = |source| FormatError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    let file = std::fs::File::create(path).map_err(io_error)?;
-    let mut file = std::io::BufWriter::new(file);
-    write_to(&mut file, bvh).map_err(io_error)?;
-    file.flush().map_err(io_error)
+    super::h36m_text::write_atomically(path.as_ref(), |w| write_to(&mut *w, bvh))
 }

@@ -19,16 +19,20 @@
 //! (`R`, orthonormalised), not of the ideal exp-map, so BVH FK equals exp-map FK to ~1e-9 mm; the
 //! way back solves the same formula ([`crate::root::rotmat_to_expmap_pow`]), so
 //! exp-map -> BVH -> exp-map returns the same numbers (exp-maps with angle > π come back as the
-//! equivalent one with angle < π) and BVH -> exp-map -> BVH the same angles. Rotation channels are
-//! unwrapped over time (each angle moved by multiples of 360° to be nearest the previous frame),
-//! so curves do not jump at ±180°.
+//! equivalent one with angle < π) and BVH -> exp-map -> BVH the same angles. Root deltas are
+//! taken against the re-integrated trajectory ("closed loop"), so integrating them again does not
+//! drift over long clips.
+//!
+//! Rotation channels are continuous over time ([`continuous_euler_degrees`]): each frame takes,
+//! of the equivalent Euler triples, the one nearest the previous frame, so curves neither jump at
+//! ±180° nor flip when a middle angle passes ±90°. The first frame has the canonical angles.
 use std::sync::Arc;
 
 use glam::DQuat;
 use ndarray::Array2;
 
 use crate::motion::{Motion, MotionLayout, RootEncoding};
-use crate::root::{integrate_root, root_deltas, rotmat_to_expmap_pow, RootPose};
+use crate::root::{delta_between, integrate_root, rotmat_to_expmap_pow, RootIntegrator, RootPose};
 use crate::rotation::{
     axis_quat, euler_to_quat, expmap2rotmat, quat_to_euler, quat_to_row_mat3, row_mat3_to_quat,
     EulerOrder,
@@ -217,15 +221,10 @@ pub fn expmap_to_bvh(motion: &Motion) -> Result<Bvh, ConvertError> {
                 row_mat3_to_quat(&expmap2rotmat([row[k], row[k + 1], row[k + 2]]))
             };
             let (order, columns) = layout.rotation;
-            let angles = quat_to_euler(order, q);
+            let previous_angles = (t > 0).then(|| columns.map(|c| previous[layout.start + c]));
+            let angles = continuous_euler_degrees(order, q, previous_angles);
             for axis in 0..3 {
-                let column = layout.start + columns[axis];
-                let degrees = angles[axis].to_degrees();
-                out[column] = if t == 0 {
-                    degrees
-                } else {
-                    unwrap_degrees(degrees, previous[column])
-                };
+                out[layout.start + columns[axis]] = angles[axis];
             }
         }
         for (dst, &src) in frames.row_mut(t).iter_mut().zip(&out) {
@@ -238,6 +237,53 @@ pub fn expmap_to_bvh(motion: &Motion) -> Result<Bvh, ConvertError> {
         frames,
         frame_time: motion.frame_time(),
     })
+}
+
+/// Euler angles in degrees of the rotation `q`: without `previous`, the canonical ones of
+/// [`quat_to_euler`]; with it, whichever of the equivalent triples (the canonical one, the other
+/// solution `(a + 180, 180 - b, c + 180)` of Tait-Bryan orders or `(a + 180, -b, c + 180)` of
+/// proper ones, each angle moved by whole turns) is nearest `previous`, so that curves stay
+/// continuous through ±180° and through the middle angle's ±90°.
+pub fn continuous_euler_degrees(
+    order: EulerOrder,
+    q: DQuat,
+    previous: Option<[f64; 3]>,
+) -> [f64; 3] {
+    let canonical = quat_to_euler(order, q).map(f64::to_degrees);
+    let Some(previous) = previous else {
+        return canonical;
+    };
+    let [a, b, c] = canonical;
+    let mut best = canonical;
+    let mut best_distance = f64::INFINITY;
+    // At gimbal lock only a combination of the first and third angles is defined: keep the
+    // third where it was and solve for the first.
+    let [first, second, third] = order.axes();
+    let rest = q * axis_quat(third, -previous[2].to_radians()) * axis_quat(second, -b.to_radians());
+    let axis_part = [rest.x, rest.y, rest.z][first];
+    let locked_first = (2.0 * axis_part.atan2(rest.w)).to_degrees();
+    for candidate in [
+        [a, b, c],
+        [a + 180.0, 180.0 - b, c + 180.0],
+        [a + 180.0, -b, c + 180.0],
+        [locked_first, b, previous[2]],
+    ] {
+        // Only triples that are the same rotation (the other solution depends on the order).
+        // Only triples that are the same rotation to 1e-9 rad (the other solution depends on
+        // the order; the gimbal-lock one holds only at the lock). The vector part of the
+        // difference measures small angles precisely, where `dot` would not.
+        let difference = euler_to_quat(order, candidate.map(f64::to_radians)).inverse() * q;
+        if 2.0 * difference.xyz().length() > 1e-9 {
+            continue;
+        }
+        let unwrapped = [0, 1, 2].map(|k| unwrap_degrees(candidate[k], previous[k]));
+        let distance: f64 = (0..3).map(|k| (unwrapped[k] - previous[k]).powi(2)).sum();
+        if distance < best_distance {
+            best_distance = distance;
+            best = unwrapped;
+        }
+    }
+    best
 }
 
 /// `angle` plus the multiple of 360° that brings it nearest to `previous`.
@@ -401,7 +447,7 @@ pub fn bvh_to_expmap(bvh: &Bvh, target: ExpMapTarget) -> Result<Motion, ConvertE
     }
     match target.root() {
         RootEncoding::Deltas => {
-            let deltas = root_deltas(&poses, root_step_for_frame_time(bvh.frame_time));
+            let deltas = closed_loop_deltas(&poses, root_step_for_frame_time(bvh.frame_time));
             frames.slice_mut(ndarray::s![.., 0..6]).assign(&deltas);
         }
         RootEncoding::Absolute => {
@@ -426,6 +472,25 @@ pub fn bvh_to_expmap(bvh: &Bvh, target: ExpMapTarget) -> Result<Motion, ConvertE
         joint: String::new(),
         problem: e.to_string(),
     })
+}
+
+/// Root deltas whose integration ([`crate::root::integrate_root`]) gives `poses`, each delta taken
+/// from the pose that integration reaches (not the exact previous pose), so rounding errors do
+/// not accumulate over thousands of frames: integrating the result lands within ~1e-12 of every
+/// pose.
+fn closed_loop_deltas(poses: &[RootPose], step: usize) -> Array2<f64> {
+    let mut out = Array2::zeros((poses.len(), 6));
+    let mut integrator = RootIntegrator::new(step);
+    for (t, pose) in poses.iter().enumerate() {
+        let times = if t == 0 { 1 } else { step.max(1) };
+        let (d, rd) = delta_between(&integrator.pose(), pose, times);
+        let delta = [d[0], d[1], d[2], rd[0], rd[1], rd[2]];
+        integrator.push(&delta);
+        for (k, value) in delta.into_iter().enumerate() {
+            out[[t, k]] = value;
+        }
+    }
+    out
 }
 
 /// A joint's local rotation (its rotation channels composed in listed order, column vectors) and
