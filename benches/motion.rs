@@ -2,10 +2,12 @@
 //! Sub-modules live in `benches/motion/`.
 use criterion::{criterion_group, criterion_main};
 
+#[path = "motion/foundations.rs"]
+mod foundations;
 #[path = "motion/metrics.rs"]
 mod metrics;
 #[path = "motion/nn.rs"]
 mod nn;
 
-criterion_group!(benches, nn::benches, metrics::benches);
+criterion_group!(benches, foundations::benches, nn::benches, metrics::benches);
 criterion_main!(benches);
