@@ -1,10 +1,741 @@
-//! `motion-cli score` (being built).
+//! `motion-cli score`: NPSS (paper definition and the published code's variant), the protocol's
+//! Euler error, NDMS and APD of predictions, from `.npy` arrays, exp-map text files or BVH files
+//! (or folders of them).
+//!
+//! Inputs are read into `sequences x samples x frames x width` (samples = 1 for plain
+//! sequences). In the exp-map space (the default for 99- and 117-dim data) NPSS and the Euler
+//! error use the protocol's Euler sequences and NDMS/APD use FK positions; in the raw space the
+//! numbers are used as given (positions `N x T x J x 3` for NDMS).
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result};
+use ndarray::{
+    concatenate, s, Array2, Array3, Array4, ArrayD, ArrayView2, ArrayView3, Axis, Ix2, Ix3, Ix4,
+    Ix5,
+};
+use serde_json::{json, Map, Value};
+
+use motion_core::formats::bvh::read_bvh;
+use motion_core::formats::expmap_bvh::{bvh_to_expmap, ExpMapTarget};
+use motion_core::formats::h36m_text::{downsample_protocol, read_expmap_text};
+use motion_core::formats::npy::read_npy_dyn;
+use motion_core::formats::FileFormat;
+use motion_core::kinematics::expmap_positions;
+use motion_core::protocol::expmap_batch_to_euler_protocol;
+use motion_core::skeleton::{CMU_FRAME_DIMS, H36M_FRAME_DIMS};
+use motion_core::{RootEncoding, Skeleton};
+use motion_metrics::ndms::{NdmsConfig, NdmsDatabase, NnMethod};
+use motion_metrics::npss::{Npss, SpectrumPower, NPSS_WINDOWS_25HZ};
+use motion_metrics::{
+    apd_batch, euler_error, euler_error_at_horizons, MetricError, EULER_HORIZONS_MS,
+};
+
+use super::UsageError;
+
+/// How the numbers of the inputs are read.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum InputSpace {
+    /// Exp-map frames: Euler conversion for NPSS/Euler, FK positions for NDMS/APD.
+    Expmap,
+    /// As given: NPSS/Euler on the numbers, NDMS on positions `N x T x J x 3`.
+    Raw,
+}
+
+/// The exact nearest-neighbour strategy of NDMS.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NnChoice {
+    /// Blocked brute force as matrix products, exact re-checks.
+    BruteForce,
+    /// kd-tree over a PCA projection, exact re-ranking.
+    PcaKdTree,
+}
 
 /// Arguments of `motion-cli score`.
 #[derive(clap::Args, Debug)]
-pub struct Args {}
+pub struct Args {
+    /// Ground truth: .npy (N x T x D), exp-map text (.txt/.txt.gz) or BVH files, or folders of them.
+    #[arg(long, num_args = 1..)]
+    pub gt: Vec<PathBuf>,
+    /// Predictions, as --gt; for APD samples N x S x T x D (.npy).
+    #[arg(long, required = true, num_args = 1..)]
+    pub pred: Vec<PathBuf>,
+    /// Comma list of npss, npss-reference, euler, ndms, apd, or all (= every metric the inputs allow).
+    #[arg(long, default_value = "all", value_delimiter = ',')]
+    pub metric: Vec<String>,
+    /// NDMS reference sequences (the word database). Exp-map text files are taken as the dataset's
+    /// 50 Hz files and downsampled to the protocol's 25 Hz; .npy and BVH are used at their rate.
+    #[arg(long, num_args = 1..)]
+    pub db: Vec<PathBuf>,
+    /// Observed frames before each prediction (N x T_s x D): NDMS then prepends their last κ-1
+    /// frames so that the first word straddles the seam.
+    #[arg(long, num_args = 1..)]
+    pub seed: Vec<PathBuf>,
+    /// How to read the numbers (default: expmap for 99- and 117-dim data, raw otherwise).
+    #[arg(long, value_enum)]
+    pub input_space: Option<InputSpace>,
+    /// NDMS nearest-neighbour search (both exact).
+    #[arg(long, value_enum, default_value = "brute-force")]
+    pub nn: NnChoice,
+    /// Print one JSON object instead of a table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Metric {
+    Npss,
+    NpssReference,
+    Euler,
+    Ndms,
+    Apd,
+}
+
+const ALL_METRICS: [Metric; 5] = [
+    Metric::Npss,
+    Metric::NpssReference,
+    Metric::Euler,
+    Metric::Ndms,
+    Metric::Apd,
+];
+
+impl Metric {
+    fn name(self) -> &'static str {
+        match self {
+            Metric::Npss => "npss",
+            Metric::NpssReference => "npss-reference",
+            Metric::Euler => "euler",
+            Metric::Ndms => "ndms",
+            Metric::Apd => "apd",
+        }
+    }
+}
+
+/// Loaded data: `sequences x samples x frames x width`; `joints` is set for positions
+/// (width = joints · 3).
+#[derive(Debug, Clone)]
+struct Batch {
+    data: Array4<f64>,
+    has_samples: bool,
+    joints: Option<usize>,
+    what: String,
+}
+
+fn usage(message: impl Into<String>) -> anyhow::Error {
+    UsageError(message.into()).into()
+}
+
+fn metric_error(what: &str, err: MetricError) -> anyhow::Error {
+    usage(format!("{what}: {err}"))
+}
 
 /// Runs the command.
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    Err(super::UsageError("score is not built yet".into()).into())
+pub fn run(args: Args) -> Result<()> {
+    let requested = parse_metrics(&args.metric)?;
+    let pred_raw = load_group(&args.pred, "--pred")?;
+    let space = args.input_space.unwrap_or_else(|| default_space(&pred_raw));
+    let pred = classify_group(pred_raw, space, "--pred")?;
+    let gt = if args.gt.is_empty() {
+        None
+    } else {
+        Some(classify_group(
+            load_group(&args.gt, "--gt")?,
+            space,
+            "--gt",
+        )?)
+    };
+    if let Some(gt) = &gt {
+        if gt.has_samples {
+            return Err(usage(format!(
+                "--gt must hold sequences (N x T x D), not samples: {}",
+                gt.what
+            )));
+        }
+    }
+    let seed = if args.seed.is_empty() {
+        None
+    } else {
+        Some(classify_group(
+            load_group(&args.seed, "--seed")?,
+            space,
+            "--seed",
+        )?)
+    };
+
+    let available = |m: Metric| match m {
+        Metric::Npss | Metric::NpssReference | Metric::Euler => gt.is_some(),
+        Metric::Ndms => !args.db.is_empty(),
+        Metric::Apd => pred.has_samples,
+    };
+    let metrics: Vec<Metric> = match requested {
+        None => ALL_METRICS.into_iter().filter(|&m| available(m)).collect(),
+        Some(list) => {
+            for &m in &list {
+                if !available(m) {
+                    let need = match m {
+                        Metric::Ndms => "--db reference sequences",
+                        Metric::Apd => "samples in --pred (N x S x T x D)",
+                        _ => "--gt",
+                    };
+                    return Err(usage(format!("metric {} needs {need}", m.name())));
+                }
+            }
+            list
+        }
+    };
+    if metrics.is_empty() {
+        return Err(usage(
+            "nothing to score: give --gt (NPSS, Euler error), --db (NDMS) or samples in --pred (APD)",
+        ));
+    }
+
+    let mut report = Map::new();
+    report.insert(
+        "input_space".into(),
+        json!(if space == InputSpace::Expmap {
+            "expmap"
+        } else {
+            "raw"
+        }),
+    );
+    report.insert("sequences".into(), json!(pred.data.dim().0));
+    report.insert("samples".into(), json!(pred.data.dim().1));
+    report.insert("frames".into(), json!(pred.data.dim().2));
+    if let Some(gt) = &gt {
+        score_against_ground_truth(&metrics, gt, &pred, space, &mut report)?;
+    }
+    if metrics.contains(&Metric::Ndms) {
+        let method = match args.nn {
+            NnChoice::BruteForce => NnMethod::BruteForce,
+            NnChoice::PcaKdTree => NnMethod::PcaKdTree,
+        };
+        report.insert(
+            "ndms".into(),
+            score_ndms(&args.db, &pred, seed.as_ref(), method)?,
+        );
+    }
+    if metrics.contains(&Metric::Apd) {
+        let positions = sample_positions(&pred, space)?;
+        let (n, s, t, w) = positions.dim();
+        let flat = positions
+            .into_shape_with_order((n, s, t * w))
+            .expect("contiguous");
+        let (per, mean) = apd_batch(flat.view()).map_err(|e| metric_error("APD", e))?;
+        report.insert("apd".into(), json!(mean));
+        report.insert("apd_per_sequence".into(), json!(per));
+    }
+
+    let report = Value::Object(report);
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        print!("{}", human_table(&report));
+    }
+    Ok(())
+}
+
+fn parse_metrics(list: &[String]) -> Result<Option<Vec<Metric>>> {
+    let mut out = Vec::new();
+    for item in list.iter().map(|s| s.trim().to_ascii_lowercase()) {
+        match item.as_str() {
+            "all" => return Ok(None),
+            "npss" => out.push(Metric::Npss),
+            "npss-reference" | "npss_reference" => out.push(Metric::NpssReference),
+            "euler" => out.push(Metric::Euler),
+            "ndms" => out.push(Metric::Ndms),
+            "apd" => out.push(Metric::Apd),
+            other => {
+                return Err(usage(format!(
+                "unknown metric {other:?} (expected npss, npss-reference, euler, ndms, apd or all)"
+            )))
+            }
+        }
+    }
+    out.dedup();
+    Ok(Some(out))
+}
+
+// ---------- loading ----------
+
+/// Files of `paths`, folders expanded to their motion files (sorted by name).
+fn expand(paths: &[PathBuf]) -> Result<Vec<PathBuf>> {
+    let mut files = Vec::new();
+    for path in paths {
+        if path.is_dir() {
+            let mut inside: Vec<PathBuf> = std::fs::read_dir(path)
+                .with_context(|| format!("{}: cannot list the folder", path.display()))?
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| p.is_file() && FileFormat::from_path(p).is_ok())
+                .collect();
+            inside.sort();
+            if inside.is_empty() {
+                return Err(usage(format!(
+                    "{}: no .npy, .txt, .txt.gz or .bvh files in the folder",
+                    path.display()
+                )));
+            }
+            files.extend(inside);
+        } else {
+            files.push(path.clone());
+        }
+    }
+    Ok(files)
+}
+
+/// The arrays of every file of a flag, as read.
+fn load_group(paths: &[PathBuf], flag: &str) -> Result<Vec<(PathBuf, ArrayD<f64>)>> {
+    let files = expand(paths)?;
+    if files.is_empty() {
+        return Err(usage(format!("{flag}: no files given")));
+    }
+    files
+        .into_iter()
+        .map(|path| {
+            let array = read_any(&path, false)?;
+            Ok((path, array))
+        })
+        .collect()
+}
+
+/// One file as an array: .npy as stored, exp-map text and BVH as `T x D` exp-map frames
+/// (`downsample_text`: keep the even frames of text files, the protocol's 50 -> 25 Hz).
+fn read_any(path: &Path, downsample_text: bool) -> Result<ArrayD<f64>> {
+    let array = match FileFormat::from_path(path)? {
+        FileFormat::Npy => read_npy_dyn(path)?,
+        FileFormat::ExpMapText => {
+            let frames = read_expmap_text(path)?;
+            let frames = if downsample_text {
+                downsample_protocol(frames.view())
+            } else {
+                frames
+            };
+            frames.into_dyn()
+        }
+        FileFormat::Bvh => {
+            let bvh = read_bvh(path)?;
+            let target = ExpMapTarget::detect(&bvh).map_err(|e| {
+                usage(format!(
+                    "{}: {e} (scoring reads H3.6M or CMU skeletons)",
+                    path.display()
+                ))
+            })?;
+            let motion = bvh_to_expmap(&bvh, target)
+                .map_err(|e| usage(format!("{}: {e}", path.display())))?;
+            motion.frames().to_owned().into_dyn()
+        }
+    };
+    if array.is_empty() {
+        return Err(usage(format!(
+            "{}: empty input (shape {:?})",
+            path.display(),
+            array.shape()
+        )));
+    }
+    if let Some(flat) = array.iter().position(|v| !v.is_finite()) {
+        let mut index = vec![0; array.ndim()];
+        let mut rest = flat;
+        for (slot, &len) in index.iter_mut().zip(array.shape()).rev() {
+            *slot = rest % len;
+            rest /= len;
+        }
+        return Err(usage(format!(
+            "{}: non-finite value (NaN or infinity) at index {index:?}",
+            path.display()
+        )));
+    }
+    Ok(array)
+}
+
+fn default_space(group: &[(PathBuf, ArrayD<f64>)]) -> InputSpace {
+    let width = group
+        .first()
+        .map(|(_, a)| *a.shape().last().unwrap_or(&0))
+        .unwrap_or(0);
+    if width == H36M_FRAME_DIMS || width == CMU_FRAME_DIMS {
+        InputSpace::Expmap
+    } else {
+        InputSpace::Raw
+    }
+}
+
+/// Reads one array as `sequences x samples x frames x width` by its rank and the input space:
+/// 2: `T x D`; 3: `N x T x D`; 4: positions `N x T x J x 3` (raw, last axis 3) or samples
+/// `N x S x T x D`; 5: sample positions `N x S x T x J x 3` (raw).
+fn classify(array: ArrayD<f64>, space: InputSpace, what: &str) -> Result<Batch> {
+    let shape = array.shape().to_vec();
+    let last = *shape.last().unwrap_or(&0);
+    let bad = |expected: &str| usage(format!("{what}: shape {shape:?} is not {expected}"));
+    let batch = match shape.len() {
+        2 => {
+            let a = array.into_dimensionality::<Ix2>().expect("rank 2");
+            let (t, d) = a.dim();
+            Batch { data: a.into_shape_with_order((1, 1, t, d)).expect("contiguous"), has_samples: false, joints: None, what: what.into() }
+        }
+        3 => {
+            let a = array.into_dimensionality::<Ix3>().expect("rank 3").as_standard_layout().into_owned();
+            let (n, t, d) = a.dim();
+            Batch { data: a.into_shape_with_order((n, 1, t, d)).expect("contiguous"), has_samples: false, joints: None, what: what.into() }
+        }
+        4 if space == InputSpace::Raw && last == 3 => {
+            let a = array.into_dimensionality::<Ix4>().expect("rank 4").as_standard_layout().into_owned();
+            let (n, t, j, _) = a.dim();
+            Batch { data: a.into_shape_with_order((n, 1, t, j * 3)).expect("contiguous"), has_samples: false, joints: Some(j), what: what.into() }
+        }
+        4 => {
+            let a = array.into_dimensionality::<Ix4>().expect("rank 4").as_standard_layout().into_owned();
+            Batch { data: a, has_samples: true, joints: None, what: what.into() }
+        }
+        5 if space == InputSpace::Raw && last == 3 => {
+            let a = array.into_dimensionality::<Ix5>().expect("rank 5").as_standard_layout().into_owned();
+            let (n, s, t, j, _) = a.dim();
+            Batch { data: a.into_shape_with_order((n, s, t, j * 3)).expect("contiguous"), has_samples: true, joints: Some(j), what: what.into() }
+        }
+        _ => {
+            return Err(bad(
+                "T x D, N x T x D, N x S x T x D, or (raw space) positions N x T x J x 3 / N x S x T x J x 3",
+            ))
+        }
+    };
+    if space == InputSpace::Expmap && batch.joints.is_none() {
+        let d = batch.data.dim().3;
+        if d < 6 || d % 3 != 0 {
+            return Err(usage(format!("{what}: {d} dims per frame is not an exp-map frame (3 + 3k); use --input-space raw")));
+        }
+    }
+    Ok(batch)
+}
+
+/// All files of a flag classified and stacked along the sequence axis.
+fn classify_group(
+    group: Vec<(PathBuf, ArrayD<f64>)>,
+    space: InputSpace,
+    flag: &str,
+) -> Result<Batch> {
+    let mut batches = Vec::new();
+    for (path, array) in group {
+        batches.push(classify(array, space, &path.display().to_string())?);
+    }
+    let first = batches[0].clone();
+    for b in &batches[1..] {
+        let (_, s, t, w) = b.data.dim();
+        let (_, s0, t0, w0) = first.data.dim();
+        if (s, t, w, b.joints) != (s0, t0, w0, first.joints) {
+            return Err(usage(format!(
+                "{flag}: {} has samples x frames x width {s} x {t} x {w} but {} has {s0} x {t0} x {w0}",
+                b.what, first.what
+            )));
+        }
+    }
+    let views: Vec<_> = batches.iter().map(|b| b.data.view()).collect();
+    let data = concatenate(Axis(0), &views).expect("checked shapes");
+    let what = if batches.len() == 1 {
+        first.what.clone()
+    } else {
+        format!("{flag} ({} files)", batches.len())
+    };
+    Ok(Batch {
+        data,
+        has_samples: first.has_samples,
+        joints: first.joints,
+        what,
+    })
+}
+
+// ---------- NPSS and Euler error ----------
+
+fn score_against_ground_truth(
+    metrics: &[Metric],
+    gt: &Batch,
+    pred: &Batch,
+    space: InputSpace,
+    report: &mut Map<String, Value>,
+) -> Result<()> {
+    let (n, s, t, w) = pred.data.dim();
+    let (gn, _, gt_frames, gw) = gt.data.dim();
+    if (n, t, w) != (gn, gt_frames, gw) {
+        return Err(usage(format!(
+            "shape mismatch: --pred {} has {n} sequences x {t} frames x {w} dims but --gt {} has {gn} x {gt_frames} x {gw}",
+            pred.what, gt.what
+        )));
+    }
+    // Every sample is scored against its sequence's ground truth.
+    let pred_flat = pred
+        .data
+        .to_shape((n * s, t, w))
+        .expect("contiguous")
+        .into_owned();
+    let gt_seq = gt.data.index_axis(Axis(1), 0);
+    let gt_flat: Array3<f64> = if s == 1 {
+        gt_seq.to_owned()
+    } else {
+        let repeated: Vec<_> = gt_seq
+            .outer_iter()
+            .flat_map(|g| std::iter::repeat_n(g, s))
+            .collect();
+        ndarray::stack(Axis(0), &repeated).expect("same shapes")
+    };
+    let (gt_e, pred_e) = if space == InputSpace::Expmap {
+        (
+            expmap_batch_to_euler_protocol(gt_flat.view()),
+            expmap_batch_to_euler_protocol(pred_flat.view()),
+        )
+    } else {
+        (gt_flat, pred_flat)
+    };
+    let mut npss = Npss::new();
+    let mut windows = Map::new();
+    for (metric, key, power) in [
+        (Metric::Npss, "npss", SpectrumPower::Modulus),
+        (
+            Metric::NpssReference,
+            "npss_reference",
+            SpectrumPower::RealPart,
+        ),
+    ] {
+        if !metrics.contains(&metric) {
+            continue;
+        }
+        let value = npss
+            .score(gt_e.view(), pred_e.view(), power)
+            .map_err(|e| metric_error("NPSS", e))?;
+        report.insert(key.into(), json!(value));
+        let per_window = npss
+            .score_windows(gt_e.view(), pred_e.view(), power, &NPSS_WINDOWS_25HZ)
+            .map_err(|e| metric_error("NPSS", e))?;
+        let object: Map<String, Value> = per_window
+            .iter()
+            .map(|w| (w.window.label.to_string(), json!(w.value)))
+            .collect();
+        windows.insert(key.into(), Value::Object(object));
+    }
+    if !windows.is_empty() {
+        report.insert("npss_windows".into(), Value::Object(windows));
+    }
+    if metrics.contains(&Metric::Euler) {
+        let per_frame =
+            euler_error(gt_e.view(), pred_e.view()).map_err(|e| metric_error("Euler error", e))?;
+        let horizons: Map<String, Value> = euler_error_at_horizons(&per_frame)
+            .iter()
+            .map(|(ms, v)| (ms.to_string(), json!(v)))
+            .collect();
+        report.insert("euler_error".into(), json!(per_frame));
+        report.insert("euler_error_ms".into(), Value::Object(horizons));
+    }
+    Ok(())
+}
+
+// ---------- positions (NDMS, APD) ----------
+
+/// The exp-map skeleton of a frame width: (skeleton, root encoding, root step at 25 Hz).
+fn expmap_skeleton(width: usize, what: &str) -> Result<(Skeleton, RootEncoding, usize)> {
+    if width == H36M_FRAME_DIMS {
+        // Protocol data are 25 Hz frames whose root deltas each span two 50 Hz source frames.
+        Ok((Skeleton::h36m(), RootEncoding::Deltas, 2))
+    } else if width == CMU_FRAME_DIMS {
+        Ok((Skeleton::cmu(), RootEncoding::Absolute, 1))
+    } else {
+        Err(usage(format!(
+            "{what}: no built-in skeleton has {width}-dim exp-map frames (99 = H3.6M, 117 = CMU); give positions with --input-space raw"
+        )))
+    }
+}
+
+/// `T x J x 3` positions of one `T x W` sequence (FK of exp-map frames, or raw positions).
+fn sequence_positions(
+    frames: ArrayView2<'_, f64>,
+    joints: Option<usize>,
+    what: &str,
+) -> Result<Array3<f64>> {
+    match joints {
+        Some(j) => Ok(frames
+            .to_owned()
+            .into_shape_with_order((frames.nrows(), j, 3))
+            .expect("width = J·3")),
+        None => {
+            let (skeleton, root, step) = expmap_skeleton(frames.ncols(), what)?;
+            expmap_positions(&skeleton, frames, root, step)
+                .map_err(|e| usage(format!("{what}: {e}")))
+        }
+    }
+}
+
+/// Positions of every sample: `N x S x T x (J·3)`.
+fn sample_positions(batch: &Batch, space: InputSpace) -> Result<Array4<f64>> {
+    if space == InputSpace::Raw {
+        return Ok(batch.data.clone());
+    }
+    let (n, s, t, _) = batch.data.dim();
+    let mut out: Option<Array4<f64>> = None;
+    for i in 0..n {
+        for k in 0..s {
+            let p = sequence_positions(batch.data.slice(s![i, k, .., ..]), None, &batch.what)?;
+            let width = p.dim().1 * 3;
+            let target = out.get_or_insert_with(|| Array4::zeros((n, s, t, width)));
+            target
+                .slice_mut(s![i, k, .., ..])
+                .assign(&p.into_shape_with_order((t, width)).expect("contiguous"));
+        }
+    }
+    Ok(out.expect("at least one sample"))
+}
+
+fn score_ndms(
+    db_paths: &[PathBuf],
+    pred: &Batch,
+    seed: Option<&Batch>,
+    method: NnMethod,
+) -> Result<Value> {
+    let config = NdmsConfig::h36m();
+    let mut references = Vec::new();
+    for path in expand(db_paths)? {
+        let array = read_any(&path, true)?;
+        let what = path.display().to_string();
+        // The database reads positions by shape: `T x J x 3` / `N x T x J x 3`; otherwise exp-map.
+        let batch = if array.shape().last() == Some(&3) && array.ndim() >= 3 {
+            let array = if array.ndim() == 3 {
+                array.insert_axis(Axis(0))
+            } else {
+                array
+            };
+            classify(array, InputSpace::Raw, &what)?
+        } else {
+            classify(array, InputSpace::Expmap, &what)?
+        };
+        for sequence in batch.data.index_axis(Axis(1), 0).outer_iter() {
+            references.push(sequence_positions(sequence, batch.joints, &what)?);
+        }
+    }
+    let views: Vec<ArrayView3<'_, f64>> = references.iter().map(|r| r.view()).collect();
+    let database = NdmsDatabase::from_sequences(config.clone(), &views, method)
+        .map_err(|e| metric_error("NDMS database (--db)", e))?;
+
+    let (n, s, t, _) = pred.data.dim();
+    let prefix = config.kappa - 1;
+    if let Some(seed) = seed {
+        if seed.data.dim().0 != n
+            || seed.has_samples
+            || seed.joints != pred.joints
+            || seed.data.dim().3 != pred.data.dim().3
+        {
+            return Err(usage(format!(
+                "--seed {} must hold one sequence per --pred sequence ({n}) with the same frame width; found shape {:?}",
+                seed.what,
+                seed.data.shape()
+            )));
+        }
+        if seed.data.dim().2 < prefix {
+            return Err(usage(format!(
+                "--seed {}: {} frames, NDMS needs the last κ-1 = {prefix}",
+                seed.what,
+                seed.data.dim().2
+            )));
+        }
+    } else if t < config.kappa {
+        return Err(metric_error(
+            "NDMS",
+            MetricError::TooShort {
+                what: format!("--pred {}", pred.what),
+                frames: t,
+                kappa: config.kappa,
+            },
+        ));
+    }
+    // FK of seed + forecast together keeps the integrated root continuous across the seam.
+    let mut forecasts = Vec::with_capacity(n * s);
+    let mut seeds = Vec::with_capacity(n * s);
+    for i in 0..n {
+        for k in 0..s {
+            let forecast = pred.data.slice(s![i, k, .., ..]);
+            match seed {
+                Some(seed) => {
+                    let observed = seed.data.slice(s![i, 0, .., ..]);
+                    let joined: Array2<f64> =
+                        concatenate(Axis(0), &[observed, forecast]).expect("same width");
+                    let positions = sequence_positions(joined.view(), pred.joints, &pred.what)?;
+                    let split = observed.nrows();
+                    seeds.push(
+                        positions
+                            .slice(s![split - prefix..split, .., ..])
+                            .to_owned(),
+                    );
+                    forecasts.push(positions.slice(s![split.., .., ..]).to_owned());
+                }
+                None => forecasts.push(sequence_positions(forecast, pred.joints, &pred.what)?),
+            }
+        }
+    }
+    let forecast_views: Vec<_> = forecasts.iter().map(|f| f.view()).collect();
+    let seed_views: Vec<_> = seeds.iter().map(|f| f.view()).collect();
+    let report = database
+        .score_forecasts(&forecast_views, seed.map(|_| seed_views.as_slice()))
+        .map_err(|e| metric_error("NDMS", e))?;
+    Ok(json!({
+        "mean": report.mean,
+        "per_word": report.per_word,
+        "bins": report.bins,
+        "first_word_end": report.first_word_end,
+        "exact": report.exact,
+        "database_words": database.len(),
+        "nearest_neighbour": match method { NnMethod::BruteForce => "brute-force", NnMethod::PcaKdTree => "pca-kd-tree" },
+    }))
+}
+
+// ---------- output ----------
+
+fn human_table(report: &Value) -> String {
+    let mut out = String::new();
+    let num = |v: &Value| {
+        v.as_f64()
+            .map_or_else(|| "-".to_string(), |x| format!("{x:.4}"))
+    };
+    out.push_str(&format!(
+        "sequences {}  samples {}  frames {}  input space {}\n",
+        report["sequences"],
+        report["samples"],
+        report["frames"],
+        report["input_space"].as_str().unwrap_or("")
+    ));
+    for (key, label) in [
+        ("npss", "NPSS (|DFT|², paper)"),
+        ("npss_reference", "NPSS (Re(DFT)², published code)"),
+    ] {
+        if let Some(v) = report.get(key) {
+            out.push_str(&format!("{label:<36} {}\n", num(v)));
+            if let Some(Value::Object(w)) = report.get("npss_windows").and_then(|w| w.get(key)) {
+                for (window, value) in w {
+                    out.push_str(&format!("  {window:<34} {}\n", num(value)));
+                }
+            }
+        }
+    }
+    if let Some(h) = report.get("euler_error_ms") {
+        // The papers' column order (JSON objects sort their keys).
+        out.push_str("Euler error      ");
+        for ms in EULER_HORIZONS_MS {
+            out.push_str(&format!("{:>8}", format!("{ms} ms")));
+        }
+        out.push_str("\n                 ");
+        for ms in EULER_HORIZONS_MS {
+            let cell = h[ms.to_string()]
+                .as_f64()
+                .map_or("-".to_string(), |v| format!("{v:.3}"));
+            out.push_str(&format!("{cell:>8}"));
+        }
+        out.push('\n');
+    }
+    if let Some(ndms) = report.get("ndms") {
+        out.push_str(&format!(
+            "NDMS (exact NN, {} words in D)     {}\n  0.4 s bins: {}\n",
+            ndms["database_words"],
+            num(&ndms["mean"]),
+            ndms["bins"].as_array().map_or(String::new(), |b| b
+                .iter()
+                .map(&num)
+                .collect::<Vec<_>>()
+                .join(" "))
+        ));
+    }
+    if let Some(v) = report.get("apd") {
+        out.push_str(&format!("{:<36} {}\n", "APD", num(v)));
+    }
+    out
 }

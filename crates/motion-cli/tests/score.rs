@@ -1,0 +1,300 @@
+//! `motion-cli score` driven as a binary: the zero-velocity acceptance check on the protocol's test
+//! windows (needs MOTION_DATA_DIR), identities on generated inputs, and bad input (exit code 2).
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use motion_core::formats::npy::write_npy;
+use motion_core::protocol::{dataset_dir, load_action_windows, zero_velocity, LONG_TERM_HORIZON};
+use ndarray::{Array2, Array3, Array4, Axis};
+use serde_json::Value;
+
+/// A scratch directory removed on drop.
+struct Scratch(PathBuf);
+impl Scratch {
+    fn new(name: &str) -> Scratch {
+        let dir =
+            std::env::temp_dir().join(format!("motion-cli-score-{name}-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        Scratch(dir)
+    }
+    fn path(&self, file: &str) -> PathBuf {
+        self.0.join(file)
+    }
+}
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+fn score(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_motion-cli"))
+        .arg("score")
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
+
+fn json_of(output: &Output) -> Value {
+    assert!(
+        output.status.success(),
+        "exit {:?}, stderr: {}",
+        output.status.code(),
+        String::from_utf8_lossy(&output.stderr)
+    );
+    serde_json::from_slice(&output.stdout).expect("one JSON object")
+}
+
+fn p(path: &Path) -> &str {
+    path.to_str().unwrap()
+}
+
+fn data_root() -> PathBuf {
+    std::env::var_os("MOTION_DATA_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data"))
+}
+
+/// Paper 000 Table 6, zero-velocity row: Euler error at 80, 160, 320, 400 ms.
+const TABLE_6_ZERO_VELOCITY: [(&str, [f64; 4]); 3] = [
+    ("walking", [0.39, 0.68, 0.99, 1.15]),
+    ("eating", [0.27, 0.48, 0.73, 0.86]),
+    ("smoking", [0.26, 0.48, 0.97, 0.95]),
+];
+
+#[test]
+fn zero_velocity_reproduces_paper_000_table_6() {
+    let dataset = dataset_dir(&data_root());
+    if !dataset.join("S5").is_dir() {
+        eprintln!(
+            "SKIPPED: zero-velocity acceptance check: no H3.6M data at {} (set MOTION_DATA_DIR)",
+            dataset.display()
+        );
+        return;
+    }
+    let dir = Scratch::new("zv");
+    for (action, expected) in TABLE_6_ZERO_VELOCITY {
+        let windows = load_action_windows(&dataset, action, LONG_TERM_HORIZON).unwrap();
+        assert_eq!(windows.len(), 8);
+        let gt: Vec<_> = windows.iter().map(|w| w.ground_truth.view()).collect();
+        let zv: Vec<Array2<f64>> = windows
+            .iter()
+            .map(|w| zero_velocity(w.seed.view(), LONG_TERM_HORIZON))
+            .collect();
+        let zv_views: Vec<_> = zv.iter().map(|z| z.view()).collect();
+        let gt = ndarray::stack(Axis(0), &gt).unwrap();
+        let zv = ndarray::stack(Axis(0), &zv_views).unwrap();
+        assert_eq!(gt.dim(), (8, 100, 99));
+        let (gt_path, zv_path) = (
+            dir.path(&format!("{action}_gt.npy")),
+            dir.path(&format!("{action}_zv.npy")),
+        );
+        write_npy(&gt_path, &gt).unwrap();
+        write_npy(&zv_path, &zv).unwrap();
+        let report = json_of(&score(&[
+            "--gt",
+            p(&gt_path),
+            "--pred",
+            p(&zv_path),
+            "--json",
+        ]));
+        let measured: Vec<f64> = ["80", "160", "320", "400"]
+            .iter()
+            .map(|ms| report["euler_error_ms"][*ms].as_f64().unwrap())
+            .collect();
+        eprintln!(
+            "{action}: zero-velocity Euler error {measured:.4?}; NPSS over 4 s: reference variant {:.4}, paper {:.4}; windows {}",
+            report["npss_reference"].as_f64().unwrap(),
+            report["npss"].as_f64().unwrap(),
+            report["npss_windows"]
+        );
+        for (m, e) in measured.iter().zip(expected) {
+            let rounded = (m * 100.0).round() / 100.0;
+            assert!(
+                (rounded - e).abs() <= 0.005,
+                "{action}: measured {measured:?}, paper {expected:?}"
+            );
+        }
+    }
+}
+
+/// Smooth motion of 32 joints where every joint always moves (mm).
+fn moving_positions(frames: usize, phase: f64) -> Array3<f64> {
+    Array3::from_shape_fn((frames, 32, 3), |(t, j, c)| {
+        let t = t as f64;
+        100.0 * (j as f64)
+            + 40.0 * (0.3 * t + phase + j as f64 + 2.0 * c as f64).sin()
+            + 7.0 * t * (c as f64 + 1.0)
+    })
+}
+
+#[test]
+fn identical_inputs_score_perfectly() {
+    let dir = Scratch::new("identity");
+    // Exp-map sequences: NPSS 0 and Euler error 0 against themselves.
+    let seq = Array3::from_shape_fn((2, 20, 99), |(i, t, d)| {
+        0.01 * ((i + 1) * (d + 1)) as f64 * (0.2 * t as f64).sin()
+    });
+    let path = dir.path("seq.npy");
+    write_npy(&path, &seq).unwrap();
+    let report = json_of(&score(&["--gt", p(&path), "--pred", p(&path), "--json"]));
+    assert_eq!(report["npss"].as_f64(), Some(0.0));
+    assert_eq!(report["npss_reference"].as_f64(), Some(0.0));
+    assert!(report["euler_error"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .all(|v| v.as_f64() == Some(0.0)));
+    assert!(report["euler_error_ms"]["1000"].is_null()); // 20 frames: no 1 s horizon
+    assert!(report.get("ndms").is_none() && report.get("apd").is_none());
+
+    // Raw positions: NDMS of the reference itself is 1, APD of identical samples 0.
+    let positions = moving_positions(40, 0.0);
+    let db = dir.path("db.npy");
+    write_npy(&db, &positions).unwrap();
+    let pred = positions.clone().insert_axis(Axis(0));
+    let pred_path = dir.path("pred.npy");
+    write_npy(&pred_path, &pred).unwrap();
+    let report = json_of(&score(&[
+        "--pred",
+        p(&pred_path),
+        "--db",
+        p(&db),
+        "--input-space",
+        "raw",
+        "--json",
+    ]));
+    let ndms = &report["ndms"];
+    assert!(
+        (ndms["mean"].as_f64().unwrap() - 1.0).abs() < 1e-12,
+        "{ndms}"
+    );
+    assert_eq!(ndms["exact"], Value::Bool(true));
+    assert_eq!(ndms["per_word"].as_array().unwrap().len(), 40 - 8 + 1);
+    let samples = Array4::from_shape_fn((2, 3, 10, 6), |(i, _, t, d)| (i * 100 + t * 6 + d) as f64);
+    let samples_path = dir.path("samples.npy");
+    write_npy(&samples_path, &samples).unwrap();
+    let report = json_of(&score(&[
+        "--pred",
+        p(&samples_path),
+        "--metric",
+        "apd",
+        "--json",
+    ]));
+    assert_eq!(report["apd"].as_f64(), Some(0.0));
+}
+
+#[test]
+fn exp_map_ndms_with_seed_and_both_indexes() {
+    let dir = Scratch::new("ndms");
+    // A 99-dim exp-map "walk": joints swing, root moves forward; FK gives the positions.
+    let frames = Array2::from_shape_fn((60, 99), |(t, d)| match d {
+        2 => 10.0,
+        0 | 1 | 3..=5 => 0.0,
+        _ => 0.3 * (0.25 * t as f64 + d as f64).sin(),
+    });
+    let db = dir.path("db.npy");
+    write_npy(&db, &frames).unwrap();
+    let seed = dir.path("seed.npy");
+    write_npy(
+        &seed,
+        &frames
+            .slice(ndarray::s![..20, ..])
+            .to_owned()
+            .insert_axis(Axis(0)),
+    )
+    .unwrap();
+    let pred = dir.path("pred.npy");
+    write_npy(
+        &pred,
+        &frames
+            .slice(ndarray::s![20..45, ..])
+            .to_owned()
+            .insert_axis(Axis(0)),
+    )
+    .unwrap();
+    let mut means = Vec::new();
+    for nn in ["brute-force", "pca-kd-tree"] {
+        let report = json_of(&score(&[
+            "--pred",
+            p(&pred),
+            "--seed",
+            p(&seed),
+            "--db",
+            p(&db),
+            "--nn",
+            nn,
+            "--json",
+        ]));
+        let ndms = &report["ndms"];
+        assert_eq!(ndms["per_word"].as_array().unwrap().len(), 25, "{ndms}");
+        assert_eq!(ndms["first_word_end"].as_u64(), Some(0));
+        means.push(ndms["mean"].as_f64().unwrap());
+    }
+    // The forecast continues the reference exactly: every word (seam included) is in D.
+    assert!((means[0] - 1.0).abs() < 1e-9, "{means:?}");
+    assert_eq!(means[0], means[1]);
+}
+
+fn assert_usage_error(output: &Output, needle: &str) {
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "stderr: {stderr}");
+    assert!(stderr.contains(needle), "expected {needle:?} in: {stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}
+
+#[test]
+fn bad_input_exits_with_2_and_a_clear_message() {
+    let dir = Scratch::new("bad");
+    let a = dir.path("a.npy");
+    write_npy(&a, &Array3::<f64>::ones((2, 10, 99))).unwrap();
+    let b = dir.path("b.npy");
+    write_npy(&b, &Array3::<f64>::ones((2, 12, 99))).unwrap();
+    assert_usage_error(&score(&["--gt", p(&a), "--pred", p(&b)]), "shape mismatch");
+
+    let mut nan = Array3::<f64>::ones((2, 10, 99));
+    nan[[1, 3, 7]] = f64::NAN;
+    let nan_path = dir.path("nan.npy");
+    write_npy(&nan_path, &nan).unwrap();
+    assert_usage_error(
+        &score(&["--gt", p(&a), "--pred", p(&nan_path)]),
+        "[1, 3, 7]",
+    );
+
+    let empty = dir.path("empty.npy");
+    write_npy(&empty, &Array3::<f64>::zeros((0, 10, 99))).unwrap();
+    assert_usage_error(&score(&["--gt", p(&a), "--pred", p(&empty)]), "empty");
+
+    let db = dir.path("db.npy");
+    write_npy(&db, &moving_positions(20, 0.0)).unwrap();
+    let short = dir.path("short.npy");
+    write_npy(&short, &moving_positions(5, 1.0).insert_axis(Axis(0))).unwrap();
+    assert_usage_error(
+        &score(&["--pred", p(&short), "--db", p(&db), "--input-space", "raw"]),
+        "κ = 8",
+    );
+
+    assert_usage_error(&score(&["--pred", p(&a), "--metric", "ndms"]), "needs --db");
+    assert_usage_error(
+        &score(&["--pred", p(&a), "--metric", "fid"]),
+        "unknown metric",
+    );
+    assert_usage_error(&score(&["--pred", p(&a)]), "nothing to score");
+    assert_usage_error(
+        &score(&["--gt", p(&a), "--pred", p(&dir.path("missing.npy"))]),
+        "missing.npy",
+    );
+    let text = dir.path("ragged.txt");
+    std::fs::write(&text, "1,2,3\n4,5\n").unwrap();
+    assert_usage_error(
+        &score(&["--gt", p(&text), "--pred", p(&text)]),
+        "ragged.txt:2",
+    );
+    // All-zero ground truth (zero power everywhere): NPSS is undefined, which is said.
+    let zeros = dir.path("zeros.npy");
+    write_npy(&zeros, &Array3::<f64>::zeros((2, 10, 99))).unwrap();
+    assert_usage_error(
+        &score(&["--gt", p(&zeros), "--pred", p(&a), "--metric", "npss"]),
+        "undefined",
+    );
+}
