@@ -1,10 +1,516 @@
-//! `motion-cli predict` (being built).
+//! `motion-cli predict --seed SEQ --out OUT`: closed-loop prediction from a seed sequence (BVH,
+//! exp-map text or `.npy`), one file or a whole directory in parallel.
+mod output;
+mod resample;
+mod seed;
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use motion_core::formats::expmap_bvh::ExpMapTarget;
+use motion_core::formats::FileFormat;
+use motion_core::model::{BatchGenerator, ModelConfig, MotionModel, Noise};
+use motion_core::root::{delta_between, integrate_root, RootPose};
+use motion_core::skeleton::H36M_SOURCE_FPS;
+use ndarray::{s, Array2, Array3};
+use rayon::prelude::*;
+use serde_json::{json, Value};
+
+use super::UsageError;
+use crate::model_source::{describe, load_model};
+use output::{check_output, write_clips, Clips};
+use seed::load_seed;
+
+/// The long help after the options: formats, conventions, examples.
+const LONG_HELP: &str = "\
+The seed is a BVH on the model's skeleton (H3.6M for the shipped weights: the 32 joint names of \
+h36m_skeleton.json, as `motion-cli convert` writes them), exp-map text (.txt, .txt.gz) or a \
+frames x 99 .npy. A BVH at another frame rate is resampled to the model's (rotations by slerp); \
+exp-map files carry no rate and are read as --input-fps (50 Hz, H3.6M's rate), then every 2nd \
+frame is kept for a 25 Hz model, as in the evaluation protocol. The last seed-length frames \
+(the model's seed_frames) are used.
+
+OUT's extension picks the format: .bvh (seed + prediction, the root integrated so the character \
+moves; --prediction-only drops the seed), .npy or .txt (exp-map frames, root as per-50 Hz-frame \
+deltas). With --samples N > 1, .bvh and .txt outputs become OUT_0, OUT_1, ... and .npy one array \
+samples x frames x 99. VGRU-d models draw each sample's plan noise from --rng-seed + sample.
+
+Batch mode: --seed DIR --out DIR predicts every .bvh/.txt/.txt.gz/.npy in DIR in parallel into \
+DIR/<name>.<--format>; a bad file is reported and the others go on.
+
+Examples:
+  motion-cli predict --seed examples/walk_seed.bvh --out pred.bvh
+  motion-cli predict --seed examples/walk_seed.bvh --action walking --frames 250 --out pred.bvh
+  motion-cli predict --seed S5/walking_1.txt.gz --samples 8 --rng-seed 7 --out walks.npy
+  motion-cli predict --seed seeds/ --out predictions/ --format bvh
+
+Bad input (missing or malformed file, skeleton mismatch, NaN, too few frames, unknown action, \
+invalid weights, missing output directory) prints one line naming the file and exits with 2; \
+outputs are written to a temporary file and renamed, so they are never left half-written.";
 
 /// Arguments of `motion-cli predict`.
 #[derive(clap::Args, Debug)]
-pub struct Args {}
+#[command(after_long_help = LONG_HELP)]
+pub struct Args {
+    /// Seed sequence (.bvh, .txt, .txt.gz, .npy), or a directory of them (batch mode).
+    #[arg(long, value_name = "SEQ")]
+    pub seed: PathBuf,
+    /// Weights file (default: the weights built into this binary).
+    #[arg(long, value_name = "W")]
+    pub model: Option<PathBuf>,
+    /// Action label to condition on (default: the model's first label).
+    #[arg(long, value_name = "NAME")]
+    pub action: Option<String>,
+    /// Frames to predict, at the model's frame rate.
+    #[arg(long, default_value_t = 100)]
+    pub frames: usize,
+    /// Number of samples (different plan noise for VGRU-d).
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    pub samples: usize,
+    /// Seed of sample 0's plan noise (sample i uses S + i).
+    #[arg(long, value_name = "S", default_value_t = 0)]
+    pub rng_seed: u64,
+    /// Output file (.bvh, .npy, .txt, .txt.gz), or a directory in batch mode.
+    #[arg(long, value_name = "OUT")]
+    pub out: PathBuf,
+    /// Write only the predicted frames, not the seed before them.
+    #[arg(long)]
+    pub prediction_only: bool,
+    /// Output format in batch mode.
+    #[arg(long, value_name = "EXT", default_value = "bvh", value_parser = ["bvh", "npy", "txt"])]
+    pub format: String,
+    /// Frame rate of exp-map seeds (.txt, .txt.gz, .npy), which files do not store.
+    #[arg(long, value_name = "HZ", default_value_t = H36M_SOURCE_FPS)]
+    pub input_fps: f64,
+    /// Print the results as JSON on stdout.
+    #[arg(long)]
+    pub json: bool,
+    /// No notices or progress bar on stderr.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+/// Everything one prediction needs besides the seed and output paths.
+struct Job {
+    model: Arc<MotionModel>,
+    target: ExpMapTarget,
+    action: Option<String>,
+    frames: usize,
+    samples: usize,
+    rng_seed: u64,
+    prediction_only: bool,
+    input_fps: f64,
+}
+
+/// What one prediction produced.
+struct Done {
+    outputs: Vec<PathBuf>,
+    seed_frames: usize,
+    notices: Vec<String>,
+}
 
 /// Runs the command.
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    Err(super::UsageError("predict is not built yet".into()).into())
+pub fn run(args: Args) -> anyhow::Result<()> {
+    if args.frames == 0 {
+        return Err(UsageError("--frames must be at least 1".into()).into());
+    }
+    if args.samples == 0 {
+        return Err(UsageError("--samples must be at least 1".into()).into());
+    }
+    if !(args.input_fps.is_finite() && args.input_fps > 0.0) {
+        return Err(UsageError(format!(
+            "--input-fps must be positive, got {}",
+            args.input_fps
+        ))
+        .into());
+    }
+    let batch = args.seed.is_dir();
+    if !batch {
+        if !args.seed.exists() {
+            return Err(UsageError(format!("{}: no such file", args.seed.display())).into());
+        }
+        check_output(&args.out)?;
+    } else if !args.out.is_dir() {
+        return Err(UsageError(format!(
+            "{}: with a seed directory, --out must be an existing directory",
+            args.out.display()
+        ))
+        .into());
+    }
+    let model = load_model(args.model.as_deref())?;
+    let job = Job {
+        target: target_of(model.config(), &describe(args.model.as_deref()))?,
+        action: choose_action(model.config(), args.action.as_deref())?,
+        model,
+        frames: args.frames,
+        samples: args.samples,
+        rng_seed: args.rng_seed,
+        prediction_only: args.prediction_only,
+        input_fps: args.input_fps,
+    };
+    if !args.quiet
+        && !args.json
+        && args.samples > 1
+        && job.model.config().architecture.name() == "gru-d"
+    {
+        eprintln!(
+            "note: the model is deterministic (gru-d): all {} samples are identical",
+            args.samples
+        );
+    }
+    if batch {
+        run_batch(&args, &job)
+    } else {
+        let done = predict_one(&job, &args.seed, &args.out)?;
+        if !args.quiet && !args.json {
+            done.notices.iter().for_each(|n| eprintln!("{n}"));
+        }
+        if args.json {
+            let report = json!({
+                "model": describe(args.model.as_deref()),
+                "action": job.action,
+                "fps": job.model.config().fps,
+                "seed": args.seed,
+                "seed_frames": done.seed_frames,
+                "predicted_frames": job.frames,
+                "samples": job.samples,
+                "rng_seed": job.rng_seed,
+                "outputs": done.outputs,
+                "notices": done.notices,
+            });
+            println!("{}", serde_json::to_string_pretty(&report)?);
+        } else if !args.quiet {
+            for path in &done.outputs {
+                eprintln!(
+                    "wrote {} ({} seed + {} predicted frames at {} Hz)",
+                    path.display(),
+                    if job.prediction_only {
+                        0
+                    } else {
+                        done.seed_frames
+                    },
+                    job.frames,
+                    job.model.config().fps
+                );
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The built-in skeleton of the model's frames.
+fn target_of(config: &ModelConfig, model: &str) -> anyhow::Result<ExpMapTarget> {
+    [ExpMapTarget::H36m, ExpMapTarget::Cmu]
+        .into_iter()
+        .find(|t| t.skeleton().expmap_width() == config.frame_dims)
+        .ok_or_else(|| {
+            UsageError(format!(
+                "{model}: frames of {} values fit no built-in skeleton (99 = H3.6M, 117 = CMU)",
+                config.frame_dims
+            ))
+            .into()
+        })
+}
+
+/// `--action`, checked, or the model's first label (None for unconditioned models).
+fn choose_action(config: &ModelConfig, action: Option<&str>) -> anyhow::Result<Option<String>> {
+    match action {
+        None => Ok(config.actions.first().cloned()),
+        Some(_) if config.actions.is_empty() => Err(UsageError(
+            "--action: this model is not action-conditioned (it has no action labels)".into(),
+        )
+        .into()),
+        Some(label) if config.action_index(label).is_some() => Ok(Some(label.to_string())),
+        Some(label) => Err(UsageError(format!(
+            "unknown action `{label}`; valid actions: {}",
+            config.actions.join(", ")
+        ))
+        .into()),
+    }
+}
+
+/// Predicts from one seed file into `out` (format by extension).
+fn predict_one(job: &Job, seed_path: &Path, out: &Path) -> anyhow::Result<Done> {
+    let format = check_output(out)?;
+    let config = job.model.config();
+    let seed = load_seed(seed_path, job.target, config.fps, job.input_fps)?;
+    let needed = config.seed_frames.max(1);
+    let total = seed.frames.nrows();
+    if total < needed {
+        return Err(UsageError(format!(
+            "{}: {total} frames at {} Hz, the model needs at least {needed} ({:.2} s)",
+            seed_path.display(),
+            config.fps,
+            needed as f64 / config.fps
+        ))
+        .into());
+    }
+    let start = total - needed;
+    let predictions = generate(job, &model_input(&seed.frames, start, job.target))?;
+    let window = if format == FileFormat::Bvh {
+        anchored_window(&seed.frames, start, job.target, config.fps)
+    } else {
+        seed.frames.slice(s![start.., ..]).to_owned()
+    };
+    let samples: Vec<Array2<f64>> = predictions
+        .outer_iter()
+        .map(|prediction| {
+            if job.prediction_only {
+                prediction.to_owned()
+            } else {
+                ndarray::concatenate(ndarray::Axis(0), &[window.view(), prediction])
+                    .expect("same width")
+            }
+        })
+        .collect();
+    let outputs = write_clips(
+        out,
+        format,
+        &Clips {
+            samples: &samples,
+            fps: config.fps,
+            target: job.target,
+        },
+    )?;
+    Ok(Done {
+        outputs,
+        seed_frames: needed,
+        notices: seed.notices,
+    })
+}
+
+/// The seed window the model reads. A window that starts at the clip's first frame has that
+/// frame's root "delta" relative to the world origin (the absolute start pose); the model was
+/// trained on frame-to-frame deltas, so that frame gets its successor's delta instead.
+fn model_input(frames: &Array2<f64>, start: usize, target: ExpMapTarget) -> Array2<f64> {
+    let mut window = frames.slice(s![start.., ..]).to_owned();
+    if start == 0 && target == ExpMapTarget::H36m && window.nrows() > 1 {
+        let next = window.slice(s![1, 0..6]).to_owned();
+        window.slice_mut(s![0, 0..6]).assign(&next);
+    }
+    window
+}
+
+/// The seed window for BVH output: its first frame's root delta replaced by the absolute pose it
+/// has in the whole clip, so that the written seed stays where it was in the input.
+fn anchored_window(
+    frames: &Array2<f64>,
+    start: usize,
+    target: ExpMapTarget,
+    fps: f64,
+) -> Array2<f64> {
+    let mut window = frames.slice(s![start.., ..]).to_owned();
+    if target == ExpMapTarget::H36m && start > 0 {
+        let step = ((H36M_SOURCE_FPS / fps).round() as usize).max(1);
+        let poses = integrate_root(frames.slice(s![..=start, ..]), step);
+        let (d, rd) = delta_between(&RootPose::IDENTITY, &poses[start], 1);
+        for axis in 0..3 {
+            window[[0, axis]] = d[axis];
+            window[[0, 3 + axis]] = rd[axis];
+        }
+    }
+    window
+}
+
+/// `job.samples` predictions of `job.frames` frames each: `[samples, frames, frame_dims]`.
+fn generate(job: &Job, seed: &Array2<f64>) -> anyhow::Result<Array3<f64>> {
+    let config = job.model.config();
+    let n = job.samples;
+    let mut generator = BatchGenerator::new(Arc::clone(&job.model), n);
+    let seeds = seed
+        .broadcast((n, seed.nrows(), seed.ncols()))
+        .expect("broadcast");
+    let actions: Vec<&str> = job.action.as_deref().into_iter().collect();
+    let noise: Vec<Noise<'_>> = (0..n as u64)
+        .map(|i| Noise::Seed(job.rng_seed.wrapping_add(i)))
+        .collect();
+    generator
+        .start(seeds, &actions, &noise)
+        .map_err(|e| UsageError(format!("seed: {e}")))?;
+    let mut out = Array3::zeros((n, job.frames, config.frame_dims));
+    for t in 0..job.frames {
+        let frames = generator.step()?;
+        for (i, row) in frames.outer_iter().enumerate() {
+            out.slice_mut(s![i, t, ..])
+                .zip_mut_with(&row, |o, &v| *o = f64::from(v));
+        }
+    }
+    Ok(out)
+}
+
+/// The seed files of a directory (BVH, exp-map text, `.npy`), sorted by name.
+fn seed_files(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
+    let entries =
+        std::fs::read_dir(dir).map_err(|e| UsageError(format!("{}: {e}", dir.display())))?;
+    let mut files: Vec<PathBuf> = entries
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.is_file() && FileFormat::from_path(p).is_ok())
+        .collect();
+    files.sort();
+    Ok(files)
+}
+
+/// Output names `DIR/<stem>.<ext>`; two seeds with one stem (`a.bvh`, `a.npy`) keep their
+/// extension in the name (`a_bvh.<ext>`, `a_npy.<ext>`) so that neither overwrites the other.
+fn output_names(files: &[PathBuf], out_dir: &Path, ext: &str) -> Vec<PathBuf> {
+    let split = |p: &PathBuf| {
+        let name = p
+            .file_name()
+            .unwrap_or_default()
+            .to_string_lossy()
+            .into_owned();
+        let lower = name.to_ascii_lowercase();
+        let cut = if lower.ends_with(".txt.gz") {
+            name.len() - 7
+        } else {
+            name.rfind('.').unwrap_or(name.len())
+        };
+        (
+            name[..cut].to_string(),
+            name[cut..].trim_start_matches('.').replace('.', "_"),
+        )
+    };
+    let stems: Vec<(String, String)> = files.iter().map(split).collect();
+    stems
+        .iter()
+        .map(|(stem, in_ext)| {
+            let shared = stems.iter().filter(|(s, _)| s == stem).count() > 1;
+            let name = if shared {
+                format!("{stem}_{in_ext}.{ext}")
+            } else {
+                format!("{stem}.{ext}")
+            };
+            out_dir.join(name)
+        })
+        .collect()
+}
+
+/// Batch mode: every seed of a directory, in parallel, with a progress bar and a summary.
+fn run_batch(args: &Args, job: &Job) -> anyhow::Result<()> {
+    let files = seed_files(&args.seed)?;
+    if files.is_empty() {
+        return Err(UsageError(format!(
+            "{}: no .bvh, .txt, .txt.gz or .npy files in this directory",
+            args.seed.display()
+        ))
+        .into());
+    }
+    if let (Ok(a), Ok(b)) = (args.seed.canonicalize(), args.out.canonicalize()) {
+        if a == b {
+            return Err(UsageError(format!(
+                "{}: --out must be another directory than the seeds'",
+                args.out.display()
+            ))
+            .into());
+        }
+    }
+    let outputs = output_names(&files, &args.out, &args.format);
+    let bar = ProgressBar::new(files.len() as u64);
+    if args.quiet || args.json {
+        bar.set_draw_target(ProgressDrawTarget::hidden());
+    } else {
+        bar.set_draw_target(ProgressDrawTarget::stderr());
+        bar.set_style(
+            ProgressStyle::with_template("{bar:40} {pos}/{len} seeds {elapsed} {msg}")
+                .expect("valid template"),
+        );
+    }
+    let results: Vec<anyhow::Result<Done>> = files
+        .par_iter()
+        .zip(&outputs)
+        .map(|(seed, out)| {
+            let result = predict_one(job, seed, out);
+            bar.inc(1);
+            result
+        })
+        .collect();
+    bar.finish_and_clear();
+
+    let failed = results.iter().filter(|r| r.is_err()).count();
+    let mut entries: Vec<Value> = Vec::with_capacity(files.len());
+    for (seed, result) in files.iter().zip(&results) {
+        match result {
+            Ok(done) => {
+                if !args.quiet && !args.json {
+                    done.notices.iter().for_each(|n| eprintln!("{n}"));
+                }
+                entries.push(json!({"seed": seed, "outputs": done.outputs}));
+            }
+            Err(err) => {
+                let message = super::error_chain(err);
+                if !args.json {
+                    eprintln!("failed: {message}");
+                }
+                entries.push(json!({"seed": seed, "error": message}));
+            }
+        }
+    }
+    let succeeded = files.len() - failed;
+    if args.json {
+        let report = json!({
+            "model": describe(args.model.as_deref()),
+            "action": job.action,
+            "fps": job.model.config().fps,
+            "predicted_frames": job.frames,
+            "samples": job.samples,
+            "rng_seed": job.rng_seed,
+            "succeeded": succeeded,
+            "failed": failed,
+            "seeds": entries,
+        });
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else if !args.quiet {
+        eprintln!(
+            "predicted {succeeded} of {} seeds into {} ({failed} failed)",
+            files.len(),
+            args.out.display()
+        );
+    }
+    if failed > 0 {
+        return Err(UsageError(format!(
+            "{failed} of {} seeds in {} failed",
+            files.len(),
+            args.seed.display()
+        ))
+        .into());
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn batch_names_avoid_collisions() {
+        let files = [
+            PathBuf::from("s/a.bvh"),
+            PathBuf::from("s/a.npy"),
+            PathBuf::from("s/b.txt.gz"),
+        ];
+        let names = output_names(&files, Path::new("o"), "bvh");
+        assert_eq!(
+            names,
+            [
+                PathBuf::from("o/a_bvh.bvh"),
+                PathBuf::from("o/a_npy.bvh"),
+                PathBuf::from("o/b.bvh")
+            ]
+        );
+    }
+
+    #[test]
+    fn anchoring_puts_the_window_where_it_was() {
+        let mut frames = Array2::zeros((6, 99));
+        for t in 0..6 {
+            frames[[t, 2]] = 10.0; // 10 mm forward per source frame
+        }
+        let window = anchored_window(&frames, 3, ExpMapTarget::H36m, 25.0);
+        // Frame 3 at 25 Hz: 10 (frame 0, once) + 3 steps * 2 source frames * 10 = 70 mm.
+        assert!((window[[0, 2]] - 70.0).abs() < 1e-9);
+        assert_eq!(window[[1, 2]], 10.0);
+        let input = model_input(&frames, 0, ExpMapTarget::H36m);
+        assert_eq!(input[[0, 2]], 10.0);
+    }
 }

@@ -1,10 +1,199 @@
-//! `motion-cli render` (being built).
+//! `motion-cli render IN [--compare OTHER] --out FILE.svg|FILE.gif|FILE.png`: the skeleton over
+//! time from a fixed camera, as an animation (SVG, GIF) or a contact sheet of frames (PNG).
+pub(crate) mod font;
+mod gif_anim;
+mod paint;
+pub(crate) mod raster;
+mod scene;
+mod sheet;
+mod style;
+mod svg_anim;
+
+use std::path::{Path, PathBuf};
+
+use motion_core::skeleton::H36M_SOURCE_FPS;
+use serde_json::json;
+
+use super::UsageError;
+use paint::Picture;
+use raster::write_atomically;
+use scene::{floor_grid, floor_height, load_track, timeline, Camera};
+
+/// The long help after the options.
+const LONG_HELP: &str = "\
+IN and OTHER are .bvh (any skeleton), exp-map .txt/.txt.gz/.npy (99 columns = H3.6M, 117 = \
+CMU; read at --input-fps, since these files store no rate: pass --input-fps 25 for the output \
+of `predict`), a .npy of samples x frames x 99 (--sample picks one) or of positions frames x \
+joints x 3 (32 = H3.6M, 38 = CMU joints).
+
+The camera looks from the character's front right (a 3/4 view, H3.6M characters face +z), \
+slightly from above, orthographic, y up. Animations (.svg: SMIL, plays in browsers; .gif) keep \
+one frame that fits the whole trajectory over a floor grid; the .png contact sheet shows \
+--cells moments, each cell following the character. With --compare, OTHER is drawn over IN in \
+orange (IN in blue); with --seed-frames N, IN's first N frames are drawn grey and the \
+seed/prediction boundary is marked in red.
+
+Examples:
+  motion-cli predict --seed examples/walk_seed.bvh --out pred.bvh
+  motion-cli render pred.bvh --seed-frames 50 --out pred.gif
+  motion-cli render pred.bvh --seed-frames 50 --out pred.png
+  motion-cli render pred.bvh --compare truth.bvh --seed-frames 50 --out compare.svg";
 
 /// Arguments of `motion-cli render`.
 #[derive(clap::Args, Debug)]
-pub struct Args {}
+#[command(after_long_help = LONG_HELP)]
+pub struct Args {
+    /// Motion to draw (.bvh, .txt, .txt.gz, .npy).
+    pub input: PathBuf,
+    /// A second motion drawn over the first in another colour (e.g. the ground truth).
+    #[arg(long, value_name = "OTHER")]
+    pub compare: Option<PathBuf>,
+    /// Output: .svg or .gif (animation) or .png (contact sheet).
+    #[arg(long, value_name = "FILE")]
+    pub out: PathBuf,
+    /// IN's first N frames are the seed: drawn grey, the boundary marked.
+    #[arg(long, value_name = "N")]
+    pub seed_frames: Option<usize>,
+    /// Frame rate of exp-map inputs (.txt, .txt.gz, .npy), which files do not store.
+    #[arg(long, value_name = "HZ", default_value_t = H36M_SOURCE_FPS)]
+    pub input_fps: f64,
+    /// Which sample of a samples x frames x dims .npy to draw.
+    #[arg(long, default_value_t = 0)]
+    pub sample: usize,
+    /// Cells of the PNG contact sheet.
+    #[arg(long, default_value_t = 12)]
+    pub cells: usize,
+    /// Cells per row of the PNG contact sheet.
+    #[arg(long, default_value_t = 6)]
+    pub columns: usize,
+    /// Animation width in pixels.
+    #[arg(long, default_value_t = 640)]
+    pub width: usize,
+    /// Animation height in pixels.
+    #[arg(long, default_value_t = 400)]
+    pub height: usize,
+    /// Print what was written as JSON on stdout.
+    #[arg(long)]
+    pub json: bool,
+    /// No notices on stderr.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+/// What the output extension asks for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Kind {
+    Svg,
+    Gif,
+    Png,
+}
+
+fn kind_of(out: &Path) -> anyhow::Result<Kind> {
+    let ext = out
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    match ext.as_str() {
+        "svg" => Ok(Kind::Svg),
+        "gif" => Ok(Kind::Gif),
+        "png" => Ok(Kind::Png),
+        _ => Err(UsageError(format!(
+            "{}: unknown picture format (expected .svg, .gif or .png)",
+            out.display()
+        ))
+        .into()),
+    }
+}
 
 /// Runs the command.
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    Err(super::UsageError("render is not built yet".into()).into())
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let kind = kind_of(&args.out)?;
+    let dir = match args.out.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    if !dir.is_dir() {
+        return Err(UsageError(format!(
+            "{}: the output directory {} does not exist",
+            args.out.display(),
+            dir.display()
+        ))
+        .into());
+    }
+    if !(args.input_fps.is_finite() && args.input_fps > 0.0) {
+        return Err(UsageError(format!(
+            "--input-fps must be positive, got {}",
+            args.input_fps
+        ))
+        .into());
+    }
+    if !(64..=4096).contains(&args.width) || !(64..=4096).contains(&args.height) {
+        return Err(
+            UsageError("--width and --height must be between 64 and 4096 pixels".into()).into(),
+        );
+    }
+    let first = load_track(&args.input, args.input_fps, args.sample)?;
+    let second = match &args.compare {
+        Some(path) => Some(load_track(path, args.input_fps, args.sample)?),
+        None => None,
+    };
+    if let Some(n) = args.seed_frames {
+        if n > first.len() {
+            return Err(UsageError(format!(
+                "{}: --seed-frames {n} but the motion has only {} frames",
+                args.input.display(),
+                first.len()
+            ))
+            .into());
+        }
+    }
+    let mut tracks = vec![&first];
+    tracks.extend(second.as_ref());
+    if !args.quiet && !args.json {
+        if let Some(s) = &second {
+            if (s.fps - first.fps).abs() > 1e-3 * first.fps {
+                eprintln!(
+                    "note: {} is {} Hz, {} {} Hz: frames are matched by time",
+                    s.name, s.fps, first.name, first.fps
+                );
+            }
+        }
+    }
+    let floor = floor_height(&tracks);
+    let picture = Picture {
+        grid: floor_grid(&tracks, floor, 500.0, 600.0),
+        tracks,
+        camera: Camera::three_quarter(35f64.to_radians(), 12f64.to_radians()),
+        seed_frames: args.seed_frames,
+    };
+    let times = timeline(&picture.tracks);
+    let bytes = match kind {
+        Kind::Svg => svg_anim::animate(&picture, &times, args.width, args.height).into_bytes(),
+        Kind::Gif => gif_anim::animate(&picture, &times, args.width, args.height)?,
+        Kind::Png => {
+            sheet::contact_sheet(&picture, &times, args.cells, args.columns).encode_png()?
+        }
+    };
+    write_atomically(&args.out, &bytes)
+        .map_err(|e| UsageError(format!("{}: cannot write: {e}", args.out.display())))?;
+    if args.json {
+        let report = json!({
+            "input": args.input,
+            "compare": args.compare,
+            "out": args.out,
+            "frames": times.len(),
+            "fps": first.fps,
+            "seed_frames": args.seed_frames,
+            "bytes": bytes.len(),
+        });
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else if !args.quiet {
+        eprintln!(
+            "wrote {} ({} frames, {:.2} s)",
+            args.out.display(),
+            times.len(),
+            times.len() as f64 / first.fps
+        );
+    }
+    Ok(())
 }

@@ -1,0 +1,126 @@
+//! Writing predictions: `.bvh` (root integrated, imports into Blender), `.npy` or exp-map `.txt`;
+//! several samples as `OUT_0`, `OUT_1`, ... or one `.npy` with a samples axis. Every file goes
+//! through a temporary file and a rename (the writers of `motion_core::formats` do that).
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use motion_core::formats::bvh::write_bvh;
+use motion_core::formats::expmap_bvh::{expmap_to_bvh, ExpMapTarget};
+use motion_core::formats::h36m_text::write_expmap_text;
+use motion_core::formats::npy::write_npy;
+use motion_core::formats::FileFormat;
+use motion_core::motion::{Motion, MotionLayout};
+use ndarray::{Array2, Array3, Axis};
+
+use crate::commands::UsageError;
+
+/// The clips to write: one `frames x frame_dims` exp-map array per sample, all of one length.
+pub struct Clips<'a> {
+    /// Exp-map frames per sample (root as deltas for H3.6M).
+    pub samples: &'a [Array2<f64>],
+    /// Their frame rate.
+    pub fps: f64,
+    /// Their skeleton.
+    pub target: ExpMapTarget,
+}
+
+/// Checks that `out` can be written (known extension, existing directory) before any work.
+pub fn check_output(out: &Path) -> anyhow::Result<FileFormat> {
+    let format = FileFormat::from_path(out)?;
+    let dir = match out.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    if !dir.is_dir() {
+        return Err(UsageError(format!(
+            "{}: the output directory {} does not exist",
+            out.display(),
+            dir.display()
+        ))
+        .into());
+    }
+    Ok(format)
+}
+
+/// `out` with `_{index}` before its extension (`pred.bvh` -> `pred_0.bvh`, `a.txt.gz` ->
+/// `a_0.txt.gz`).
+pub fn numbered(out: &Path, index: usize) -> PathBuf {
+    let name = out
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let lower = name.to_ascii_lowercase();
+    let ext_len = [".txt.gz", ".bvh", ".npy", ".txt"]
+        .iter()
+        .find(|e| lower.ends_with(*e))
+        .map_or(0, |e| e.len());
+    let (stem, ext) = name.split_at(name.len() - ext_len);
+    out.with_file_name(format!("{stem}_{index}{ext}"))
+}
+
+/// Writes the clips to `out` in `format`; returns the files written.
+pub fn write_clips(
+    out: &Path,
+    format: FileFormat,
+    clips: &Clips<'_>,
+) -> anyhow::Result<Vec<PathBuf>> {
+    let n = clips.samples.len();
+    if format == FileFormat::Npy && n > 1 {
+        let (frames, dims) = clips.samples[0].dim();
+        let mut stacked = Array3::zeros((n, frames, dims));
+        for (mut dst, src) in stacked.axis_iter_mut(Axis(0)).zip(clips.samples) {
+            dst.assign(src);
+        }
+        write_npy(out, &stacked)?;
+        return Ok(vec![out.to_path_buf()]);
+    }
+    let mut written = Vec::with_capacity(n);
+    for (i, frames) in clips.samples.iter().enumerate() {
+        let path = if n == 1 {
+            out.to_path_buf()
+        } else {
+            numbered(out, i)
+        };
+        match format {
+            FileFormat::Npy => write_npy(&path, frames)?,
+            FileFormat::ExpMapText => write_expmap_text(&path, frames.view())?,
+            FileFormat::Bvh => {
+                let motion = Motion::new(
+                    Arc::new(clips.target.skeleton()),
+                    MotionLayout::ExpMap {
+                        root: clips.target.root(),
+                    },
+                    frames.clone(),
+                    clips.fps,
+                )?;
+                let bvh = expmap_to_bvh(&motion).map_err(|e| {
+                    anyhow::anyhow!(
+                        "{}: the prediction cannot be written as BVH: {e}",
+                        path.display()
+                    )
+                })?;
+                write_bvh(&path, &bvh)?;
+            }
+        }
+        written.push(path);
+    }
+    Ok(written)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbered_names_keep_the_extension() {
+        assert_eq!(
+            numbered(Path::new("out/pred.bvh"), 0),
+            Path::new("out/pred_0.bvh")
+        );
+        assert_eq!(
+            numbered(Path::new("a.txt.gz"), 12),
+            Path::new("a_12.txt.gz")
+        );
+        assert_eq!(numbered(Path::new("P.NPY"), 1), Path::new("P_1.NPY"));
+    }
+}

@@ -1,0 +1,398 @@
+//! What is drawn: motions loaded as world joint positions over time (from BVH, exp-map text or
+//! `.npy`), their bones, and a fixed orthographic camera (a 3/4 view from the front right,
+//! slightly from above; y up).
+use std::path::Path;
+use std::sync::Arc;
+
+use motion_core::formats::bvh::read_bvh;
+use motion_core::formats::h36m_text::read_expmap_text;
+use motion_core::formats::npy::read_npy_dyn;
+use motion_core::formats::FileFormat;
+use motion_core::kinematics::channel_positions;
+use motion_core::motion::{Motion, MotionLayout, RootEncoding};
+use motion_core::skeleton::{Skeleton, CMU_FRAME_DIMS, H36M_FRAME_DIMS};
+use ndarray::{Array2, Array3, Ix2, Ix3};
+
+use crate::commands::UsageError;
+
+/// Which side of the body a bone is on (drawn in different shades).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Side {
+    /// The character's left.
+    Left,
+    /// The character's right.
+    Right,
+    /// Spine, head, or unnamed joints.
+    Centre,
+}
+
+/// A bone: parent joint, child joint, side.
+#[derive(Debug, Clone, Copy)]
+pub struct Bone {
+    /// Parent joint index.
+    pub from: usize,
+    /// Child joint index.
+    pub to: usize,
+    /// Side of the body.
+    pub side: Side,
+}
+
+/// One motion to draw.
+#[derive(Debug, Clone)]
+pub struct Track {
+    /// The file name, for legends.
+    pub name: String,
+    /// World joint positions, `frames x joints x 3` (mm, y up).
+    pub positions: Array3<f64>,
+    /// Bones of non-zero length.
+    pub bones: Vec<Bone>,
+    /// Frames per second.
+    pub fps: f64,
+}
+
+impl Track {
+    /// Number of frames.
+    pub fn len(&self) -> usize {
+        self.positions.dim().0
+    }
+
+    /// Duration in seconds (frames / fps).
+    pub fn duration(&self) -> f64 {
+        self.len() as f64 / self.fps
+    }
+
+    /// The frame shown at time `t` (s): the nearest one, the last after the end.
+    pub fn frame_at(&self, t: f64) -> usize {
+        ((t * self.fps).round().max(0.0) as usize).min(self.len().saturating_sub(1))
+    }
+
+    /// The root's position at frame `f`.
+    pub fn root(&self, f: usize) -> [f64; 3] {
+        [0, 1, 2].map(|a| self.positions[[f, 0, a]])
+    }
+}
+
+fn usage(path: &Path, problem: impl std::fmt::Display) -> anyhow::Error {
+    UsageError(format!("{}: {problem}", path.display())).into()
+}
+
+/// Loads a motion file as a track. Exp-map files (no stored rate) are read at `input_fps`; a
+/// 3-D `.npy` is `samples x frames x dims` (sample `sample` is drawn) or positions
+/// `frames x joints x 3` on the H3.6M (32) or CMU (38) skeleton.
+pub fn load_track(path: &Path, input_fps: f64, sample: usize) -> anyhow::Result<Track> {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let (skeleton, positions, fps) = match FileFormat::from_path(path)? {
+        FileFormat::Bvh => {
+            let bvh = read_bvh(path)?;
+            let positions =
+                channel_positions(&bvh.skeleton, bvh.frames.view()).map_err(|e| usage(path, e))?;
+            let fps = bvh.fps();
+            (bvh.skeleton, positions, fps)
+        }
+        FileFormat::ExpMapText => {
+            let frames = read_expmap_text(path)?;
+            let (skeleton, positions) = expmap_positions(path, frames, input_fps)?;
+            (skeleton, positions, input_fps)
+        }
+        FileFormat::Npy => {
+            let array = read_npy_dyn(path)?;
+            match array.ndim() {
+                2 => {
+                    let frames = array.into_dimensionality::<Ix2>().expect("2-D");
+                    let (skeleton, positions) = expmap_positions(path, frames, input_fps)?;
+                    (skeleton, positions, input_fps)
+                }
+                3 => {
+                    let array = array.into_dimensionality::<Ix3>().expect("3-D");
+                    let (a, _, c) = array.dim();
+                    if c == 3 {
+                        let skeleton = match array.dim().1 {
+                            32 => Skeleton::h36m(),
+                            38 => Skeleton::cmu(),
+                            j => {
+                                return Err(usage(
+                                    path,
+                                    format!("positions of {j} joints fit no built-in skeleton (32 = H3.6M, 38 = CMU)"),
+                                ))
+                            }
+                        };
+                        (skeleton, array, input_fps)
+                    } else {
+                        if sample >= a {
+                            return Err(usage(
+                                path,
+                                format!(
+                                    "--sample {sample} is out of range: the file has {a} samples"
+                                ),
+                            ));
+                        }
+                        let frames = array.index_axis(ndarray::Axis(0), sample).to_owned();
+                        let (skeleton, positions) = expmap_positions(path, frames, input_fps)?;
+                        (skeleton, positions, input_fps)
+                    }
+                }
+                _ => {
+                    return Err(usage(
+                        path,
+                        format!(
+                            "expected a 2-D or 3-D array, found shape {:?}",
+                            array.shape()
+                        ),
+                    ))
+                }
+            }
+        }
+    };
+    if positions.dim().0 == 0 {
+        return Err(usage(path, "no frames"));
+    }
+    if positions.iter().any(|v| !v.is_finite()) {
+        return Err(usage(path, "has NaN or infinite values"));
+    }
+    Ok(Track {
+        name,
+        bones: bones(&skeleton, &positions),
+        positions,
+        fps,
+    })
+}
+
+/// World positions of exp-map frames on the skeleton their width names.
+fn expmap_positions(
+    path: &Path,
+    frames: Array2<f64>,
+    fps: f64,
+) -> anyhow::Result<(Skeleton, Array3<f64>)> {
+    if let Some(t) = frames
+        .rows()
+        .into_iter()
+        .position(|r| r.iter().any(|v| !v.is_finite()))
+    {
+        return Err(usage(
+            path,
+            format!("frame {t} has a NaN or infinite value"),
+        ));
+    }
+    let (skeleton, root) = match frames.ncols() {
+        H36M_FRAME_DIMS => (Skeleton::h36m(), RootEncoding::Deltas),
+        CMU_FRAME_DIMS => (Skeleton::cmu(), RootEncoding::Absolute),
+        n => {
+            return Err(usage(
+                path,
+                format!("{n} values per frame fit no built-in skeleton ({H36M_FRAME_DIMS} = H3.6M, {CMU_FRAME_DIMS} = CMU)"),
+            ))
+        }
+    };
+    let motion = Motion::new(
+        Arc::new(skeleton.clone()),
+        MotionLayout::ExpMap { root },
+        frames,
+        fps,
+    )
+    .map_err(|e| usage(path, e))?;
+    Ok((skeleton, motion.positions()))
+}
+
+/// Bones of the skeleton whose length (at frame 0) is over 1 mm; sides from the joint names.
+fn bones(skeleton: &Skeleton, positions: &Array3<f64>) -> Vec<Bone> {
+    let side = |j: usize| {
+        let name = skeleton.joint(j).name.to_ascii_lowercase();
+        if name.starts_with("left") || name.starts_with("l_") {
+            Side::Left
+        } else if name.starts_with("right") || name.starts_with("r_") {
+            Side::Right
+        } else {
+            Side::Centre
+        }
+    };
+    let joints = positions.dim().1.min(skeleton.len());
+    (1..joints)
+        .filter_map(|j| {
+            let p = skeleton.parent(j)?;
+            let d: f64 = (0..3)
+                .map(|a| (positions[[0, j, a]] - positions[[0, p, a]]).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            (d > 1.0).then_some(Bone {
+                from: p,
+                to: j,
+                side: side(j),
+            })
+        })
+        .collect()
+}
+
+/// An orthographic camera: world point -> (right, up, depth) in mm.
+#[derive(Debug, Clone, Copy)]
+pub struct Camera {
+    right: [f64; 3],
+    up: [f64; 3],
+    forward: [f64; 3],
+}
+
+impl Camera {
+    /// Looking from the character's front right (H3.6M characters walk along +z, face +z, and
+    /// have their left at +x), `azimuth` rad off the pure side view, `elevation` rad from above.
+    pub fn three_quarter(azimuth: f64, elevation: f64) -> Camera {
+        let (sa, ca) = azimuth.sin_cos();
+        let (se, ce) = elevation.sin_cos();
+        let forward = [ce * ca, -se, -ce * sa];
+        let right = [sa, 0.0, ca];
+        // up = right x forward
+        let up = [
+            right[1] * forward[2] - right[2] * forward[1],
+            right[2] * forward[0] - right[0] * forward[2],
+            right[0] * forward[1] - right[1] * forward[0],
+        ];
+        Camera { right, up, forward }
+    }
+
+    /// The view coordinates of a world point: (right, up, depth; larger depth is farther).
+    pub fn project(&self, p: [f64; 3]) -> (f64, f64, f64) {
+        let dot = |v: [f64; 3]| v[0] * p[0] + v[1] * p[1] + v[2] * p[2];
+        (dot(self.right), dot(self.up), dot(self.forward))
+    }
+}
+
+/// A view-space rectangle mapped onto a pixel rectangle, uniformly scaled.
+#[derive(Debug, Clone, Copy)]
+pub struct Viewport {
+    /// Pixels per mm.
+    pub scale: f64,
+    /// View coordinates at the pixel rectangle's centre.
+    pub centre: (f64, f64),
+    /// The pixel rectangle's centre.
+    pub pixel_centre: (f64, f64),
+}
+
+impl Viewport {
+    /// Fits the view-space box `min..max` into a `width x height` pixel box at `(x, y)` with
+    /// `margin` pixels on each side.
+    pub fn fit(
+        min: (f64, f64),
+        max: (f64, f64),
+        x: f64,
+        y: f64,
+        width: f64,
+        height: f64,
+        margin: f64,
+    ) -> Viewport {
+        let w = (max.0 - min.0).max(1.0);
+        let h = (max.1 - min.1).max(1.0);
+        let scale = ((width - 2.0 * margin) / w)
+            .min((height - 2.0 * margin) / h)
+            .max(1e-6);
+        Viewport {
+            scale,
+            centre: ((min.0 + max.0) / 2.0, (min.1 + max.1) / 2.0),
+            pixel_centre: (x + width / 2.0, y + height / 2.0),
+        }
+    }
+
+    /// Pixel coordinates of view coordinates (y down).
+    pub fn to_pixels(self, v: (f64, f64)) -> (f64, f64) {
+        (
+            self.pixel_centre.0 + (v.0 - self.centre.0) * self.scale,
+            self.pixel_centre.1 - (v.1 - self.centre.1) * self.scale,
+        )
+    }
+}
+
+/// The view-space bounding box of every joint of every frame of `tracks`.
+pub fn bounds(camera: &Camera, tracks: &[&Track]) -> ((f64, f64), (f64, f64)) {
+    let mut min = (f64::INFINITY, f64::INFINITY);
+    let mut max = (f64::NEG_INFINITY, f64::NEG_INFINITY);
+    for track in tracks {
+        for p in track.positions.rows() {
+            let (u, v, _) = camera.project([p[0], p[1], p[2]]);
+            min = (min.0.min(u), min.1.min(v));
+            max = (max.0.max(u), max.1.max(v));
+        }
+    }
+    (min, max)
+}
+
+/// The lowest joint height over all frames of `tracks` (the floor).
+pub fn floor_height(tracks: &[&Track]) -> f64 {
+    tracks
+        .iter()
+        .flat_map(|t| t.positions.rows().into_iter().map(|p| p[1]))
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Floor grid lines (world segments on `y = floor`), every `spacing` mm, covering the roots'
+/// floor positions plus `reach` mm around them.
+pub fn floor_grid(
+    tracks: &[&Track],
+    floor: f64,
+    spacing: f64,
+    reach: f64,
+) -> Vec<([f64; 3], [f64; 3])> {
+    let (mut x0, mut x1, mut z0, mut z1) = (
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+    );
+    for track in tracks {
+        for f in 0..track.len() {
+            let r = track.root(f);
+            x0 = x0.min(r[0]);
+            x1 = x1.max(r[0]);
+            z0 = z0.min(r[2]);
+            z1 = z1.max(r[2]);
+        }
+    }
+    let snap_down = |v: f64| ((v - reach) / spacing).floor() * spacing;
+    let snap_up = |v: f64| ((v + reach) / spacing).ceil() * spacing;
+    let (x0, x1, z0, z1) = (snap_down(x0), snap_up(x1), snap_down(z0), snap_up(z1));
+    let mut lines = Vec::new();
+    let mut x = x0;
+    while x <= x1 + 1e-9 && lines.len() < 400 {
+        lines.push(([x, floor, z0], [x, floor, z1]));
+        x += spacing;
+    }
+    let mut z = z0;
+    while z <= z1 + 1e-9 && lines.len() < 800 {
+        lines.push(([x0, floor, z], [x1, floor, z]));
+        z += spacing;
+    }
+    lines
+}
+
+/// Frame times of an animation of `tracks`: every frame of the first track, extended to the
+/// longest track at the same rate.
+pub fn timeline(tracks: &[&Track]) -> Vec<f64> {
+    let fps = tracks[0].fps;
+    let duration = tracks.iter().map(|t| t.duration()).fold(0.0, f64::max);
+    let frames = ((duration * fps).round() as usize).max(1);
+    (0..frames).map(|k| k as f64 / fps).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn camera_shows_up_as_up_and_forward_walking_to_the_right() {
+        let cam = Camera::three_quarter(0.6, 0.25);
+        let (_, up, _) = cam.project([0.0, 1.0, 0.0]);
+        assert!(up > 0.9);
+        let (right, _, _) = cam.project([0.0, 0.0, 1.0]);
+        assert!(right > 0.5);
+        // The basis is orthonormal.
+        let (a, b, c) = cam.project([0.3, -0.4, 0.5]);
+        assert!(((a * a + b * b + c * c) - 0.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn viewport_fits_the_box() {
+        let v = Viewport::fit((-100.0, 0.0), (100.0, 1800.0), 0.0, 0.0, 200.0, 400.0, 10.0);
+        let top = v.to_pixels((0.0, 1800.0));
+        let bottom = v.to_pixels((0.0, 0.0));
+        assert!((top.1 - 10.0).abs() < 1e-9 && (bottom.1 - 390.0).abs() < 1e-9);
+    }
+}
