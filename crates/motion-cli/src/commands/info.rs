@@ -1,10 +1,203 @@
-//! `motion-cli info` (being built).
+//! `motion-cli info WEIGHTS [--json]`: describe a motion-weights file (schema: weights/README.md)
+//! — architecture, sizes, parameter count, fps, actions, dims, residual, GRU convention and
+//! training provenance. Loading checks every tensor, so this also validates the file.
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+use motion_core::model::{Architecture, MotionModel};
+use motion_core::nn::GruConvention;
 
 /// Arguments of `motion-cli info`.
 #[derive(clap::Args, Debug)]
-pub struct Args {}
+pub struct Args {
+    /// A motion-weights safetensors file.
+    pub weights: PathBuf,
+    /// Print one JSON object (config, provenance, parameter count) instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
 
 /// Runs the command.
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    Err(super::UsageError("info is not built yet".into()).into())
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let model = MotionModel::load(&args.weights)?;
+    let text = if args.json {
+        json_summary(&model)?
+    } else {
+        text_summary(&model)
+    };
+    print!("{text}");
+    Ok(())
+}
+
+/// Groups digits by thousands: 2724918 -> "2,724,918".
+fn thousands(n: usize) -> String {
+    let digits = n.to_string();
+    let mut out = String::new();
+    for (i, c) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i).is_multiple_of(3) {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    out
+}
+
+fn convention_formula(c: GruConvention) -> &'static str {
+    match c {
+        GruConvention::PyTorch => "n = tanh(W_n x + b_in + r * (U_n h + b_hn))",
+        GruConvention::Paper => "n = tanh(W_n x + b_in + U_n (r * h) + b_hn)",
+    }
+}
+
+fn text_summary(model: &MotionModel) -> String {
+    let c = model.config();
+    let mut s = String::new();
+    let mut line = |key: &str, value: String| {
+        let _ = writeln!(s, "{key:<15} {value}");
+    };
+    line("file", model.path().display().to_string());
+    let sizes = match c.architecture {
+        Architecture::VgruD => {
+            line(
+                "architecture",
+                "vgru-d (VTLN-RNN: plan GRU + body GRU + linear decoder, paper 000)".into(),
+            );
+            format!(
+                "body GRU {} units, plan GRU {} units",
+                c.hidden,
+                c.plan_hidden.unwrap_or(0)
+            )
+        }
+        Architecture::GruD => {
+            line(
+                "architecture",
+                "gru-d (stacked GRU + linear decoder, paper 000)".into(),
+            );
+            format!("{} GRU layers x {} units", c.layers, c.hidden)
+        }
+    };
+    line(
+        "sizes",
+        format!(
+            "{sizes}; input {} = {} dims x (1 + derivative order {}); output {} dims",
+            c.input_dims(),
+            c.output_dims(),
+            c.derivative_order,
+            c.output_dims()
+        ),
+    );
+    line(
+        "parameters",
+        format!(
+            "{} (stored {}, computed in f32)",
+            thousands(model.parameter_count()),
+            model.stored_dtype()
+        ),
+    );
+    line(
+        "frames",
+        format!(
+            "{} dims, {} predicted (others restored to the training mean); skeleton {}",
+            c.frame_dims,
+            c.output_dims(),
+            c.skeleton
+        ),
+    );
+    line("fps", format!("{}", c.fps));
+    line(
+        "actions",
+        if c.actions.is_empty() {
+            "none (unconditioned)".into()
+        } else {
+            format!("{}: {}", c.actions.len(), c.actions.join(", "))
+        },
+    );
+    line(
+        "residual",
+        if c.residual {
+            "yes (output = input frame + decoder)".into()
+        } else {
+            "no".into()
+        },
+    );
+    line(
+        "gru convention",
+        format!(
+            "{} ({})",
+            c.gru_convention.name(),
+            convention_formula(c.gru_convention)
+        ),
+    );
+    line(
+        "derivatives",
+        format!(
+            "order {}, padding {}",
+            c.derivative_order, c.derivative_padding
+        ),
+    );
+    line(
+        "training",
+        format!(
+            "{} seed frames, horizon {} frames",
+            c.seed_frames, c.horizon
+        ),
+    );
+    if model.provenance().is_empty() {
+        line("provenance", "(none recorded)".into());
+    } else {
+        let _ = writeln!(s, "provenance");
+        for (key, value) in model.provenance() {
+            let shown = match value {
+                serde_json::Value::String(text) => text.clone(),
+                other => other.to_string(),
+            };
+            let _ = writeln!(s, "  {key:<13} {shown}");
+        }
+    }
+    s
+}
+
+fn json_summary(model: &MotionModel) -> anyhow::Result<String> {
+    let summary = serde_json::json!({
+        "file": model.path().display().to_string(),
+        "parameters": model.parameter_count(),
+        "stored_dtype": model.stored_dtype(),
+        "config": model.config(),
+        "provenance": model.provenance(),
+    });
+    Ok(format!("{}\n", serde_json::to_string_pretty(&summary)?))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn groups_thousands() {
+        assert_eq!(thousands(0), "0");
+        assert_eq!(thousands(999), "999");
+        assert_eq!(thousands(1000), "1,000");
+        assert_eq!(thousands(2724918), "2,724,918");
+    }
+
+    #[test]
+    fn summary_of_a_random_model() {
+        let config = motion_core::model::ModelConfig::paper(Architecture::VgruD);
+        let model = MotionModel::random(&config, 3).unwrap();
+        let text = text_summary(&model);
+        for needle in [
+            "vgru-d",
+            "2,748,982",
+            "walkingdog",
+            "paper",
+            "fps",
+            "25",
+            "provenance",
+        ] {
+            assert!(text.contains(needle), "{needle} missing from:\n{text}");
+        }
+        let json: serde_json::Value = serde_json::from_str(&json_summary(&model).unwrap()).unwrap();
+        assert_eq!(json["parameters"], 2748982);
+        assert_eq!(json["config"]["architecture"], "vgru-d");
+    }
 }

@@ -37,6 +37,7 @@ pub fn exit_code(err: &anyhow::Error) -> u8 {
     let is_input = err.chain().any(|c| {
         c.is::<UsageError>()
             || c.is::<motion_core::FormatError>()
+            || c.is::<motion_core::model::WeightsError>()
             || c.is::<std::io::Error>()
     });
     if is_input { 2 } else { 1 }

@@ -1,0 +1,364 @@
+//! Closed-loop generation: determinism, noise, batch/single agreement, streaming past the plan,
+//! typed errors for bad input, no heap allocation per step, parameter counts at paper size.
+use motion::core::model::{
+    Architecture, BatchGenerator, GenerateError, Generator, ModelConfig, MotionModel, Noise,
+    WeightStore,
+};
+use ndarray::{Array2, Array3, ArrayView2};
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+use std::path::PathBuf;
+use std::sync::Arc;
+
+// ---- allocation counting (per thread, so parallel tests do not disturb each other) --------------
+
+struct CountingAllocator;
+
+thread_local! {
+    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
+}
+
+// SAFETY: forwards to the system allocator; only counts calls.
+unsafe impl GlobalAlloc for CountingAllocator {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: CountingAllocator = CountingAllocator;
+
+fn allocations() -> usize {
+    ALLOCATIONS.with(|c| c.get())
+}
+
+// ---- helpers -------------------------------------------------------------------------------------
+
+fn fixture(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures/parity")
+        .join(name)
+}
+
+fn model(name: &str) -> Arc<MotionModel> {
+    Arc::new(MotionModel::load(fixture(&format!("{name}.safetensors"))).unwrap())
+}
+
+/// The fixture's seed frames `[10, 99]`.
+fn seed() -> Array2<f32> {
+    let store = WeightStore::open(fixture("vgru_d.expected.safetensors")).unwrap();
+    let (shape, values) = store.tensor_any_shape("seed").unwrap();
+    Array2::from_shape_vec((shape[0], shape[1]), values).unwrap()
+}
+
+fn run(
+    model: &Arc<MotionModel>,
+    seed: ArrayView2<f32>,
+    action: Option<&str>,
+    noise: Noise,
+    n: usize,
+) -> Array2<f32> {
+    let mut g = Generator::new(Arc::clone(model));
+    g.start(seed, action, noise).unwrap();
+    g.generate(n).unwrap()
+}
+
+// ---- determinism and noise -------------------------------------------------------------------------
+
+#[test]
+fn same_rng_seed_gives_bit_identical_frames_and_another_seed_differs() {
+    let m = model("vgru_d");
+    let s = seed();
+    // 80 frames > plan horizon 30: crosses two re-planned blocks.
+    let a = run(&m, s.view(), Some("walking"), Noise::Seed(7), 80);
+    let b = run(&m, s.view(), Some("walking"), Noise::Seed(7), 80);
+    assert_eq!(a, b, "same seed must give bit-identical frames");
+    let c = run(&m, s.view(), Some("walking"), Noise::Seed(8), 80);
+    assert_ne!(a, c, "a different noise seed must give a different future");
+    assert!(a.iter().all(|v| v.is_finite()));
+    let d = run(&m, s.view(), Some("eating"), Noise::Seed(7), 80);
+    assert_ne!(a, d, "the action conditions the plan");
+}
+
+#[test]
+fn gru_d_ignores_noise_and_is_deterministic() {
+    let m = model("gru_d");
+    let s = seed();
+    let a = run(&m, s.view(), None, Noise::Seed(1), 40);
+    let b = run(&m, s.view(), None, Noise::Seed(2), 40);
+    assert_eq!(a, b);
+}
+
+#[test]
+fn restart_reproduces_and_f64_seeds_match_f32() {
+    let m = model("vgru_d_residual");
+    let s = seed();
+    let mut g = Generator::new(Arc::clone(&m));
+    g.start(s.view(), Some("smoking"), Noise::Seed(3)).unwrap();
+    let first = g.generate(45).unwrap();
+    let s64 = s.mapv(f64::from);
+    g.start(s64.view(), Some("smoking"), Noise::Seed(3))
+        .unwrap();
+    let second = g.generate(45).unwrap();
+    assert_eq!(
+        first, second,
+        "restarting resets all state; f64 seeds convert exactly"
+    );
+}
+
+#[test]
+fn explicit_noise_is_reused_by_every_plan_block() {
+    let m = model("vgru_d");
+    let s = seed();
+    let eps = vec![0.3f32; 8];
+    let a = run(&m, s.view(), Some("walking"), Noise::Explicit(&eps), 100);
+    let b = run(&m, s.view(), Some("walking"), Noise::Explicit(&eps), 100);
+    assert_eq!(a, b);
+    assert!(a.iter().all(|v| v.is_finite()));
+}
+
+#[test]
+fn dropped_dims_are_the_mean() {
+    let m = model("gru_d");
+    let used = &m.config().dims_used;
+    let mean = m.normalization().mean().to_vec();
+    let frames = run(&m, seed().view(), None, Noise::Seed(0), 5);
+    for row in frames.rows() {
+        for (d, v) in row.iter().enumerate() {
+            if !used.contains(&d) {
+                assert_eq!(*v, mean[d]);
+            }
+        }
+    }
+}
+
+// ---- batch API -----------------------------------------------------------------------------------
+
+#[test]
+fn batch_rows_match_single_generators() {
+    for name in ["vgru_d", "gru_d_residual"] {
+        let m = model(name);
+        let s = seed();
+        let rows = 3;
+        let mut seeds = Array3::<f32>::zeros((rows, s.nrows(), s.ncols()));
+        for b in 0..rows {
+            // Different seed motion per character.
+            seeds
+                .slice_mut(ndarray::s![b, .., ..])
+                .assign(&s.mapv(|v| v * (1.0 + 0.05 * b as f32)));
+        }
+        let actions = ["walking", "eating", "walking"];
+        let noise = [Noise::Seed(1), Noise::Seed(2), Noise::Seed(3)];
+        let mut batch = BatchGenerator::new(Arc::clone(&m), rows);
+        batch.start(seeds.view(), &actions, &noise).unwrap();
+        let mut got = Array3::<f32>::zeros((rows, 70, s.ncols()));
+        for k in 0..70 {
+            let frames = batch.step().unwrap();
+            got.slice_mut(ndarray::s![.., k, ..]).assign(&frames);
+        }
+        for b in 0..rows {
+            let single = run(
+                &m,
+                seeds.slice(ndarray::s![b, .., ..]),
+                Some(actions[b]),
+                noise[b],
+                70,
+            );
+            let diff = (&single - &got.slice(ndarray::s![b, .., ..]))
+                .iter()
+                .fold(0.0f32, |a, v| a.max(v.abs()));
+            assert!(diff < 1e-4, "{name} row {b}: max diff {diff}");
+        }
+    }
+}
+
+#[test]
+fn batch_errors() {
+    let m = model("vgru_d");
+    let s = seed();
+    let seeds = Array3::<f32>::zeros((2, s.nrows(), s.ncols()));
+    let mut g = BatchGenerator::new(Arc::clone(&m), 2);
+    let err = g
+        .start(seeds.view(), &["walking"], &[Noise::Seed(1)])
+        .unwrap_err();
+    assert!(matches!(
+        err,
+        GenerateError::WrongBatch {
+            what: "noise sources",
+            expected: 2,
+            got: 1
+        }
+    ));
+    let err = g
+        .start(
+            seeds.view(),
+            &["walking", "eating", "posing"],
+            &[Noise::Seed(1), Noise::Seed(2)],
+        )
+        .unwrap_err();
+    assert!(matches!(
+        err,
+        GenerateError::WrongBatch {
+            what: "actions",
+            ..
+        }
+    ));
+    // One action for all rows is fine.
+    g.start(
+        seeds.view(),
+        &["walking"],
+        &[Noise::Seed(1), Noise::Seed(2)],
+    )
+    .unwrap();
+    assert_eq!(g.step().unwrap().dim(), (2, 99));
+}
+
+// ---- errors ----------------------------------------------------------------------------------------
+
+#[test]
+fn bad_input_gives_typed_errors() {
+    let m = model("vgru_d");
+    let mut g = Generator::new(Arc::clone(&m));
+    assert_eq!(g.step().unwrap_err(), GenerateError::NotStarted);
+
+    let empty = Array2::<f32>::zeros((0, 99));
+    let err = g
+        .start(empty.view(), Some("walking"), Noise::Seed(0))
+        .unwrap_err();
+    assert_eq!(err, GenerateError::TooFewSeedFrames { needed: 1, got: 0 });
+    assert!(err.to_string().contains("at least 1"));
+
+    let narrow = Array2::<f32>::zeros((5, 98));
+    let err = g
+        .start(narrow.view(), Some("walking"), Noise::Seed(0))
+        .unwrap_err();
+    assert_eq!(
+        err,
+        GenerateError::WrongWidth {
+            expected: 99,
+            got: 98
+        }
+    );
+
+    let s = seed();
+    let err = g
+        .start(s.view(), Some("moonwalk"), Noise::Seed(0))
+        .unwrap_err();
+    let msg = err.to_string();
+    assert!(matches!(err, GenerateError::UnknownAction { .. }));
+    assert!(
+        msg.contains("moonwalk") && msg.contains("walkingdog") && msg.contains("directions"),
+        "{msg}"
+    );
+
+    let err = g.start(s.view(), None, Noise::Seed(0)).unwrap_err();
+    assert!(matches!(err, GenerateError::MissingAction { .. }));
+
+    let mut bad = s.clone();
+    bad[[4, 17]] = f32::NAN;
+    let err = g
+        .start(bad.view(), Some("walking"), Noise::Seed(0))
+        .unwrap_err();
+    assert!(
+        matches!(
+            err,
+            GenerateError::NonFiniteSeed {
+                character: 0,
+                frame: 4,
+                dim: 17,
+                ..
+            }
+        ),
+        "{err}"
+    );
+
+    let eps = [0.0f32; 3];
+    let err = g
+        .start(s.view(), Some("walking"), Noise::Explicit(&eps))
+        .unwrap_err();
+    assert_eq!(
+        err,
+        GenerateError::WrongNoiseLength {
+            expected: 8,
+            got: 3
+        }
+    );
+
+    assert_eq!(
+        g.set_plan_horizon(0).unwrap_err(),
+        GenerateError::ZeroHorizon
+    );
+    let mut out = vec![0.0f32; 10];
+    g.start(s.view(), Some("walking"), Noise::Seed(0)).unwrap();
+    assert!(matches!(
+        g.step_into(&mut out),
+        Err(GenerateError::WrongWidth { .. })
+    ));
+}
+
+// ---- real-time properties --------------------------------------------------------------------------
+
+#[test]
+fn a_step_does_not_allocate() {
+    for name in ["vgru_d", "gru_d"] {
+        let m = model(name);
+        let mut g = Generator::new(Arc::clone(&m));
+        g.set_plan_horizon(20).unwrap();
+        g.start(seed().view(), Some("walking"), Noise::Seed(5))
+            .unwrap();
+        let mut frame = vec![0.0f32; 99];
+        let probe = allocations();
+        std::hint::black_box(vec![0u8; 16]);
+        assert!(allocations() > probe, "the counter sees allocations");
+        let before = allocations();
+        // 100 steps cross several re-planned blocks of 20.
+        for _ in 0..100 {
+            g.step_into(&mut frame).unwrap();
+        }
+        assert_eq!(
+            allocations() - before,
+            0,
+            "{name}: heap allocations during steps"
+        );
+    }
+}
+
+#[test]
+fn weights_are_shareable_and_generators_movable() {
+    fn send_sync<T: Send + Sync>() {}
+    fn send<T: Send>() {}
+    send_sync::<MotionModel>();
+    send_sync::<Arc<MotionModel>>();
+    send::<Generator>();
+    send::<BatchGenerator>();
+}
+
+#[test]
+fn parameter_counts_at_paper_size() {
+    // Paper 000 Table 1 reports GRU-d 2,735,670 and VGRU-d 3,413,047 (TensorFlow 1 cells, whose
+    // bias layout differs from PyTorch's two bias vectors); these are the PyTorch-layout counts.
+    let grud = MotionModel::random(&ModelConfig::paper(Architecture::GruD), 1).unwrap();
+    let (i, h, o) = (216, 512, 54);
+    let gru = |inp: usize| 3 * h * inp + 3 * h * h + 6 * h;
+    assert_eq!(grud.parameter_count(), gru(i) + gru(h) + o * h + o);
+    assert_eq!(grud.parameter_count(), 2_724_918);
+    let vgru = MotionModel::random(&ModelConfig::paper(Architecture::VgruD), 1).unwrap();
+    let p = 512;
+    let plan = 3 * p * 15 + 3 * p * p + 6 * p + 2 * p;
+    let body = gru(i) + 3 * h * p;
+    assert_eq!(vgru.parameter_count(), plan + body + o * h + o);
+    assert_eq!(vgru.parameter_count(), 2_748_982);
+    eprintln!(
+        "parameters at paper size: GRU-d {} (paper 2,735,670), VGRU-d {} (paper 3,413,047)",
+        grud.parameter_count(),
+        vgru.parameter_count()
+    );
+}
