@@ -1,0 +1,111 @@
+"""Training loop (training/train.py): schedules, a tiny smoke run on synthetic data, exact resume, rollback, export.
+
+Synthetic data (smooth random walks shaped like H3.6M frames) keeps these tests independent of the dataset and fast.
+"""
+
+import argparse
+
+import numpy as np
+import pytest
+import torch
+
+from training import data, train
+from training.export import load_weights
+
+
+def synthetic_dataset(seed=0, frames=400):
+    rng = np.random.default_rng(seed)
+    seqs = []
+    for _ in range(2 * len(data.ACTIONS)):
+        x = np.cumsum(rng.normal(scale=0.02, size=(frames, data.FRAME_DIMS)), axis=0)
+        x[:, 10:20] = 0.5  # constant dims are dropped
+        seqs.append(x)
+    stats = data.normalization_stats(seqs)
+    by_action = []
+    for i, a in enumerate(data.ACTIONS):
+        by_action.append([((1, a, k + 1), stats.normalize(seqs[2 * i + k][::2]).astype(np.float32)) for k in range(2)])
+    ts = data.TrainingSet(actions=tuple(data.ACTIONS), stats=stats, by_action=by_action)
+    wins = [
+        data.ValidationWindow(action=a, subaction=1, start=0, frames=seqs[2 * i][:150].copy())
+        for i, a in enumerate(data.ACTIONS[:3])
+    ]
+    return ts, wins
+
+
+SMALL = ["--hidden", "8", "--plan-hidden", "4", "--batch", "2", "--log-every", "1", "--val-every", "2"]
+
+
+def run(tmp, extra, ds, quiet=True):
+    argv = ["--run-dir", str(tmp)] + SMALL + extra
+    args = train.build_parser().parse_args(argv)
+    return train.train(args, argv, dataset=ds[0], val_windows=ds[1], quiet=quiet)
+
+
+def test_lambda_schedule():
+    assert [train.lambda_at(i) for i in (1, 499, 500, 999, 1000, 1999, 2000, 4000, 6999, 7000, 10000)] == [
+        0.0, 0.0, 0.2, 0.2, 0.4, 0.4, 0.6, 0.8, 0.8, 1.0, 1.0
+    ]
+    assert train.lambda_at(250, 0.5) == 0.2 and train.lambda_at(249, 0.5) == 0.0 and train.lambda_at(3500, 0.5) == 1.0
+
+
+def test_lr_schedule():
+    assert train.lr_at(1, 2e-4, 0.6, 2000) == 2e-4
+    assert train.lr_at(2000, 2e-4, 0.6, 2000) == 2e-4
+    assert train.lr_at(2001, 2e-4, 0.6, 2000) == pytest.approx(1.2e-4)
+    assert train.lr_at(10000, 2e-4, 0.6, 2000) == pytest.approx(2e-4 * 0.6**4)
+
+
+def test_smoke_train_resume_is_exact_and_export_loads(tmp_path):
+    ds = synthetic_dataset()
+    extra = ["--iterations", "3", "--checkpoint-every", "1", "--schedule-scale", "0.004"]  # lambda > 0 from it 2
+    full = run(tmp_path / "full", extra, ds)
+    assert full["iteration"] == 3 and np.isfinite(full["ol"]) and np.isfinite(full["cl"])
+
+    run(tmp_path / "split", ["--iterations", "2", "--checkpoint-every", "1", "--schedule-scale", "0.004"], ds)
+    resumed = run(tmp_path / "split", ["--resume", "--iterations", "3"], ds)
+    assert resumed["iteration"] == 3
+    assert resumed["ol"] == full["ol"] and resumed["cl"] == full["cl"]
+    a = torch.load(tmp_path / "full" / "last.pt", weights_only=False)["model"]
+    b = torch.load(tmp_path / "split" / "last.pt", weights_only=False)["model"]
+    for k in a:
+        assert torch.equal(a[k], b[k]), k
+    assert (tmp_path / "full" / "best.pt").is_file()
+
+    for dtype in ("float32", "float16"):
+        out = tmp_path / f"w_{dtype}.safetensors"
+        argv = ["--export", str(out), "--from", str(tmp_path / "full" / "best.pt"), "--dtype", dtype]
+        assert train.main(argv) == 0
+        model = load_weights(out)
+        assert model.config["architecture"] == "vgru-d" and model.config["residual"] is True
+        assert model.provenance["iterations"] >= 2 and "best_validation" in model.provenance
+        ref = torch.load(tmp_path / "full" / "best.pt", weights_only=False)["model"]
+        tol = 0 if dtype == "float32" else 1e-2
+        for k, v in model.state_dict().items():
+            assert torch.allclose(v, ref[k].float(), atol=tol, rtol=tol), k
+
+
+def test_gru_d_and_auto_conditioning_run(tmp_path):
+    ds = synthetic_dataset(1)
+    r = run(tmp_path / "g", ["--model", "gru-d", "--iterations", "2", "--schedule-scale", "0.002"], ds)
+    assert r["iteration"] == 2 and np.isfinite(r["cl"])
+    r = run(tmp_path / "ac", ["--loss", "auto-conditioning", "--iterations", "2"], ds)
+    assert r["iteration"] == 2 and np.isfinite(r["ol"])
+
+
+def test_blow_up_rolls_back_and_halves_lr(tmp_path, monkeypatch):
+    monkeypatch.setattr(train, "MIN_HISTORY", 1)
+    ds = synthetic_dataset(2)
+    # any closed-loop loss above 1e-9 x the median counts as a blow-up once lambda > 0 and one loss is recorded
+    with pytest.raises(SystemExit, match="rollbacks"):
+        run(
+            tmp_path / "b",
+            ["--iterations", "6", "--schedule-scale", "0.002", "--blowup-factor", "1e-9", "--max-rollbacks", "3"],
+            ds,
+        )
+    log = (tmp_path / "b" / "train.log").read_text()
+    assert log.count("BLOW-UP") == 4 and "lr scale now 0.125" in log
+
+
+def test_explicit_args_detects_given_flags():
+    assert train.explicit_args(["--run-dir", "x", "--iterations", "5", "--resume"]) == {"run_dir", "iterations", "resume"}
+    assert isinstance(train.build_parser().parse_args([]), argparse.Namespace)

@@ -1,0 +1,564 @@
+"""Train VGRU-d / GRU-d on H3.6M with the multi-objective loss of paper 000 (section 3.4, equation 6).
+
+Gopalakrishnan et al., A Neural Temporal Model for Human Motion Prediction (CVPR 2019), sections 3.4 and 4.1:
+open-loop squared error over all steps + lambda x closed-loop squared error over the horizon, lambda on the
+published step schedule, RMSprop, global gradient-norm clipping, step learning-rate decay.
+
+    python -m training.train --run-dir training/runs/NAME [options]      # train (or --resume)
+    python -m training.train --export OUT.safetensors --from RUN/best.pt --dtype float16
+
+Checkpoints (atomic) hold model, optimizer and RNG states, so `--resume` continues exactly. `best.pt` is the
+checkpoint with the best validation score (reference-variant NPSS over the S5 validation windows, mean over
+actions; ties broken by Euler error at 80 ms). A blow-up of the closed-loop loss (non-finite, or 10x its
+recent median) rolls back to the last checkpoint and halves the learning rate.
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import datetime
+import json
+import math
+import os
+import shlex
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from . import data as h36m
+from . import evaluate
+from .features import DerivativeHistory, derivative_features
+from .models import build_model, make_config, parameter_count
+
+CHECKPOINT = "last.pt"
+BEST = "best.pt"
+#: Iterations at which the published lambda schedule steps up, and the values from then on.
+LAMBDA_STEPS = ((500, 0.2), (1000, 0.4), (2000, 0.6), (4000, 0.8), (7000, 1.0))
+#: Arguments that may be changed on --resume (they do not change what is computed, except --iterations
+#: which only extends or shortens the run).
+#: Closed-loop losses (lambda > 0) needed before the blow-up guard compares against their median.
+MIN_HISTORY = 20
+RESUME_OVERRIDABLE = ("iterations", "run_dir", "data_dir", "log_every", "val_every", "checkpoint_every", "threads")
+
+
+# ------------------------------------------------------------------------------------------ schedules
+
+
+def lambda_at(iteration: int, scale: float = 1.0) -> float:
+    """Closed-loop weight at `iteration` (1-based): 0 until 500, 0.2, 0.4 from 1000, 0.6 from 2000, 0.8 from 4000,
+    1.0 from 7000. `scale` multiplies the step iterations (0.5 = the same schedule over half the iterations)."""
+    lam = 0.0
+    for start, value in LAMBDA_STEPS:
+        if iteration >= start * scale:
+            lam = value
+    return lam
+
+
+def lr_at(iteration: int, base: float, decay: float, every: int) -> float:
+    """Learning rate at `iteration` (1-based): base x decay^(number of completed `every` blocks)."""
+    return base * decay ** ((iteration - 1) // every) if every > 0 else base
+
+
+# ------------------------------------------------------------------------------------------ arguments
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """All command-line flags."""
+    p = argparse.ArgumentParser(prog="python -m training.train", description=__doc__.split("\n\n")[0])
+    g = p.add_argument_group("model")
+    g.add_argument("--model", default="vgru-d", choices=["vgru-d", "gru-d"])
+    g.add_argument("--hidden", type=int, default=512)
+    g.add_argument("--plan-hidden", type=int, default=None, help="plan GRU units (vgru-d; default = --hidden)")
+    g.add_argument("--layers", type=int, default=None, help="GRU layers (gru-d: default 2; vgru-d: 1)")
+    g.add_argument("--residual", default="true", choices=["true", "false"])
+    g.add_argument("--convention", default=None, choices=["paper", "pytorch"], help="default: paper for vgru-d")
+    g.add_argument("--dropout", type=float, default=0.3)
+    g = p.add_argument_group("data")
+    g.add_argument("--data-dir", default=None, help="H3.6M dataset dir (default $MOTION_DATA_DIR/h3.6m/dataset)")
+    g.add_argument("--actions", default="all", help="'all' or comma-separated action labels")
+    g.add_argument("--val-per-action", type=int, default=4)
+    g = p.add_argument_group("optimisation")
+    g.add_argument("--iterations", type=int, default=10000)
+    g.add_argument("--batch", type=int, default=32)
+    g.add_argument("--loss", default="multi-objective", choices=["multi-objective", "auto-conditioning"])
+    g.add_argument("--ac-length", type=int, default=5, help="auto-conditioning: ground-truth/self-fed block length")
+    g.add_argument("--schedule-scale", type=float, default=1.0, help="scales the lambda and lr step iterations")
+    g.add_argument("--lr", type=float, default=2e-4)
+    g.add_argument("--lr-decay", type=float, default=0.6)
+    g.add_argument("--lr-every", type=int, default=2000, help="decay period (before --schedule-scale)")
+    g.add_argument("--rms-decay", type=float, default=0.9)
+    g.add_argument("--momentum", type=float, default=0.0)
+    g.add_argument("--centered", default="true", choices=["true", "false"])
+    g.add_argument("--rms-eps", type=float, default=1e-8)
+    g.add_argument("--clip", type=float, default=5.0)
+    g.add_argument("--blowup-factor", type=float, default=10.0, help="closed-loop loss > this x recent median = blow-up")
+    g.add_argument("--max-rollbacks", type=int, default=20, help="stop with an error after this many rollbacks")
+    g.add_argument("--seed", type=int, default=1234)
+    g = p.add_argument_group("run")
+    g.add_argument("--run-dir", default=None)
+    g.add_argument("--resume", action="store_true", help="continue from RUN_DIR/last.pt")
+    g.add_argument("--log-every", type=int, default=10)
+    g.add_argument("--val-every", type=int, default=100)
+    g.add_argument("--checkpoint-every", type=int, default=100)
+    g.add_argument("--threads", type=int, default=1, help="torch threads (1: OpenMP barriers stall badly on a shared CPU)")
+    g = p.add_argument_group("export")
+    g.add_argument("--export", default=None, metavar="OUT.safetensors")
+    g.add_argument("--from", dest="from_ckpt", default=None, metavar="CHECKPOINT")
+    g.add_argument("--dtype", default="float16", choices=["float32", "float16", "bfloat16"])
+    return p
+
+
+def explicit_args(argv: list[str]) -> set[str]:
+    """Names of the flags given explicitly on the command line."""
+    p = build_parser()
+    for a in p._actions:
+        a.default = argparse.SUPPRESS
+    ns, _ = p.parse_known_args(argv)
+    return set(vars(ns))
+
+
+def parse_actions(spec: str) -> list[str]:
+    """'all' -> the 15 actions in h36m.md order; else the listed ones, in that order, checked."""
+    if spec == "all":
+        return list(h36m.ACTIONS)
+    acts = [a.strip() for a in spec.split(",") if a.strip()]
+    bad = [a for a in acts if a not in h36m.ACTIONS]
+    if bad or not acts:
+        raise SystemExit(f"error: unknown action(s) {bad}; valid: all or {', '.join(h36m.ACTIONS)}")
+    order = [a for a in h36m.ACTIONS if a in acts]
+    return order
+
+
+def model_config(args, dims_used) -> dict:
+    """Weights-schema config for the chosen model and sizes."""
+    kw = {
+        "hidden": args.hidden,
+        "residual": args.residual == "true",
+        "dims_used": [int(d) for d in dims_used],
+    }
+    if args.convention:
+        kw["gru_convention"] = args.convention
+    if args.model == "vgru-d":
+        kw["plan_hidden"] = args.plan_hidden or args.hidden
+        kw["actions"] = parse_actions(args.actions)
+        kw["layers"] = 1
+    else:
+        kw["layers"] = args.layers or 2
+    return make_config(args.model, **kw)
+
+
+def init_residual_decoder(model) -> None:
+    """Residual models predict a per-step change: start near zero velocity. With the generic init (orthogonal,
+    bias 0.1) the closed loop drifts by ~0.1-0.5 std per step (closed-loop loss ~10^3 at 100 steps), and RMSprop,
+    whose steps are ~lr, needs ~500 iterations to unlearn a 0.1 bias. Uniform(-0.04, 0.04) weights and zero bias,
+    as in the residual model of Martinez et al. (CVPR 2017) that paper 000 builds on."""
+    with torch.no_grad():
+        model.decoder.weight.uniform_(-0.04, 0.04)
+        model.decoder.bias.zero_()
+
+
+# ------------------------------------------------------------------------------------------ losses
+
+
+def sample_eps(model, batch: int) -> torch.Tensor | None:
+    """One plan noise vector per sequence (shared by the open- and closed-loop passes of a batch)."""
+    if hasattr(model, "plan"):
+        return torch.randn(batch, model.plan_size)
+    return None
+
+
+def multi_objective_terms(model, frames: torch.Tensor, actions: torch.Tensor, seed_frames: int, horizon: int):
+    """Open-loop mean squared error over all steps and closed-loop mean squared error over the horizon.
+
+    frames [B, seed+horizon+1, O]: open loop reads frames 0..S+T-1 and predicts 1..S+T; the closed loop is
+    seeded with 0..S-1 and predicts S..S+T-1 from its own outputs. The plan covers S+T steps in both."""
+    steps = seed_frames + horizon
+    eps = sample_eps(model, frames.shape[0])
+    ol = model.open_loop(frames[:, :steps], actions, eps)
+    ol_loss = ((ol - frames[:, 1 : steps + 1]) ** 2).mean()
+    cl = model.closed_loop(frames[:, :seed_frames], horizon, actions, eps)
+    cl_loss = ((cl - frames[:, seed_frames:steps]) ** 2).mean()
+    return ol_loss, cl_loss
+
+
+def auto_conditioning_loss(model, frames: torch.Tensor, actions: torch.Tensor, seed_frames: int, horizon: int, length: int):
+    """Auto-conditioning baseline (VGRU-ac): over the seed + horizon steps, alternate `length` ground-truth-fed
+    and `length` self-fed steps (the seed is always ground truth); squared error over all steps."""
+    steps = seed_frames + horizon
+    eps = sample_eps(model, frames.shape[0])
+    ctx = model._begin(frames.shape[0], steps, model.action_indices(actions, frames.shape[0], frames.device), eps, frames)
+    history = DerivativeHistory(model.derivative_order)
+    outputs = []
+    prev = None
+    for t in range(steps):
+        self_fed = t >= seed_frames and ((t - seed_frames) // length) % 2 == 1
+        x = prev if self_fed else frames[:, t]
+        feats = model.input_dropout(history.push(x)).unsqueeze(1)
+        out = model._decode(model._run(ctx, feats, t), x.unsqueeze(1))
+        outputs.append(out)
+        prev = out[:, 0]
+    pred = torch.cat(outputs, dim=1)
+    return ((pred - frames[:, 1 : steps + 1]) ** 2).mean()
+
+
+# ------------------------------------------------------------------------------------------ validation
+
+
+class Validator:
+    """Fixed S5 validation windows, scored with the protocol's metrics on full frames (eps = 0 for the plan)."""
+
+    def __init__(self, windows, stats: h36m.NormStats, actions: list[str]):
+        self.actions = [a for a in actions if any(w.action == a for w in windows)]
+        self.windows = [w for w in windows if w.action in self.actions]
+        self.stats = stats
+        full = np.stack([w.frames for w in self.windows])  # [N, 150, F]
+        self.seed_full = full[:, : h36m.SEED_FRAMES]
+        self.gt_full = full[:, h36m.SEED_FRAMES :]
+        self.seed_norm = torch.from_numpy(stats.normalize(self.seed_full).astype(np.float32))
+        self.window_actions = [w.action for w in self.windows]
+
+    def baseline(self) -> dict:
+        """Zero-velocity scores of the same windows."""
+        return self._score(evaluate.zero_velocity(self.seed_full, self.gt_full.shape[1]))
+
+    @torch.no_grad()
+    def __call__(self, model) -> dict:
+        was_training = model.training
+        model.eval()
+        try:
+            horizon = self.gt_full.shape[1]
+            acts = torch.tensor(
+                [model.actions.index(a) for a in self.window_actions] if model.actions else [0] * len(self.windows)
+            )
+            eps = torch.zeros(len(self.windows), model.plan_size) if hasattr(model, "plan") else None
+            pred = model.closed_loop(self.seed_norm, horizon, acts, eps).double().numpy()
+        finally:
+            model.train(was_training)
+        return self._score(self.stats.unnormalize(pred))
+
+    def _score(self, pred_full: np.ndarray) -> dict:
+        per_action = {}
+        for a in self.actions:
+            idx = [i for i, wa in enumerate(self.window_actions) if wa == a]
+            per_action[a] = evaluate.score_windows(self.gt_full[idx], pred_full[idx])
+        summary = evaluate.summarize(per_action)
+        summary["per_action"] = {
+            a: {"npss_ref": v["npss_ref"], "euler_80": float(v["euler"][1]), "euler_1000": float(v["euler"][24])}
+            for a, v in per_action.items()
+        }
+        return summary
+
+
+def better(a: dict | None, b: dict | None) -> bool:
+    """Is validation result `a` better than `b`? Lower reference NPSS, ties by Euler error at 80 ms."""
+    if a is None or not math.isfinite(a["npss_ref"]):
+        return False
+    if b is None:
+        return True
+    return (a["npss_ref"], a["euler_80"]) < (b["npss_ref"], b["euler_80"])
+
+
+# ------------------------------------------------------------------------------------------ checkpoints
+
+
+def atomic_save(obj, path: Path) -> None:
+    """torch.save to a temp file in the same directory, then rename (never a half-written checkpoint)."""
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".pt", dir=path.parent)
+    os.close(fd)
+    try:
+        torch.save(obj, tmp)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+        raise
+
+
+def load_checkpoint(path: Path) -> dict:
+    """A checkpoint written by this module."""
+    return torch.load(path, map_location="cpu", weights_only=False)
+
+
+class Logger:
+    """Progress lines to stdout and RUN_DIR/train.log; structured records to RUN_DIR/metrics.jsonl."""
+
+    def __init__(self, run_dir: Path, quiet: bool = False):
+        self.log = open(run_dir / "train.log", "a", buffering=1)
+        self.metrics = open(run_dir / "metrics.jsonl", "a", buffering=1)
+        self.quiet = quiet
+
+    def __call__(self, msg: str) -> None:
+        line = f"{datetime.datetime.now(datetime.timezone.utc).strftime('%H:%M:%S')} {msg}"
+        self.log.write(line + "\n")
+        if not self.quiet:
+            print(line, flush=True)
+
+    def record(self, **kv) -> None:
+        self.metrics.write(json.dumps(kv) + "\n")
+
+    def close(self) -> None:
+        self.log.close()
+        self.metrics.close()
+
+
+# ------------------------------------------------------------------------------------------ training
+
+
+def make_optimizer(model, args) -> torch.optim.Optimizer:
+    """RMSprop with the run's settings."""
+    return torch.optim.RMSprop(
+        model.parameters(),
+        lr=args.lr,
+        alpha=args.rms_decay,
+        eps=args.rms_eps,
+        momentum=args.momentum,
+        centered=args.centered == "true",
+    )
+
+
+def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, quiet: bool = False) -> dict:
+    """Run (or resume) training as configured by `args`. `dataset`/`val_windows` may be passed preloaded
+    (tests). Returns a summary dict (last iteration, losses, best validation)."""
+    argv = sys.argv[1:] if argv is None else argv
+    if not args.run_dir:
+        raise SystemExit("error: --run-dir is required for training")
+    run_dir = Path(args.run_dir)
+    run_dir.mkdir(parents=True, exist_ok=True)
+    ckpt_path = run_dir / CHECKPOINT
+    resume_state = None
+    if args.resume:
+        if not ckpt_path.is_file():
+            raise SystemExit(f"error: --resume but {ckpt_path} does not exist")
+        resume_state = load_checkpoint(ckpt_path)
+        given = explicit_args(argv)
+        saved = dict(resume_state["args"])
+        for k in RESUME_OVERRIDABLE:
+            if k in given:
+                saved[k] = getattr(args, k)
+        saved["resume"] = True
+        args = argparse.Namespace(**{**vars(args), **saved})
+    torch.set_num_threads(args.threads)
+    log = Logger(run_dir, quiet)
+    command = resume_state["command"] if resume_state else "python -m training.train " + shlex.join(argv)
+    log(("resuming: " if resume_state else "starting: ") + command)
+
+    actions = parse_actions(args.actions)
+    if dataset is None:
+        dataset = h36m.load_training_set(args.data_dir, actions, log=log)
+    if val_windows is None:
+        val_windows = h36m.validation_windows(args.data_dir, actions, args.val_per_action, log=log)
+    validator = Validator(val_windows, dataset.stats, actions)
+    config = model_config(args, dataset.stats.dims_used)
+    if resume_state is None:
+        torch.manual_seed(args.seed)
+    model = build_model(config, dropout=args.dropout)
+    if model.residual:
+        init_residual_decoder(model)
+    model.norm.set_stats(torch.from_numpy(dataset.stats.mean).float(), torch.from_numpy(dataset.stats.std).float())
+    model.train()
+    opt = make_optimizer(model, args)
+    rng = np.random.default_rng(args.seed)
+    # dataset.actions == config["actions"] (both in h36m.md order), so batch action indices are one-hot indices
+
+    state = {"iteration": 0, "lr_scale": 1.0, "cl_history": [], "best": None, "best_iteration": None, "rollbacks": 0}
+    if resume_state is not None:
+        model.load_state_dict(resume_state["model"])
+        opt.load_state_dict(resume_state["optimizer"])
+        rng.bit_generator.state = resume_state["np_rng"]
+        torch.set_rng_state(resume_state["torch_rng"])
+        state = dict(resume_state["state"])
+        log(f"resumed at iteration {state['iteration']} (lr scale {state['lr_scale']}, best {state['best_iteration']})")
+    else:
+        log(f"model {args.model}: {parameter_count(model):,} parameters; config {json.dumps(config)}")
+        base = validator.baseline()
+        log(f"validation zero-velocity: {fmt_val(base)}")
+        log.record(kind="baseline", **base)
+
+    def snapshot() -> dict:
+        return {
+            "model": model.state_dict(),
+            "optimizer": opt.state_dict(),
+            "np_rng": rng.bit_generator.state,
+            "torch_rng": torch.get_rng_state(),
+            "state": dict(state, cl_history=list(state["cl_history"])),
+            "args": {k: v for k, v in vars(args).items() if k not in ("export", "from_ckpt", "resume")},
+            "config": config,
+            "command": command,
+            "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+        }
+
+    if resume_state is None:
+        atomic_save(snapshot(), ckpt_path)  # iteration 0: a rollback target from the start
+
+    seed_frames, horizon = h36m.SEED_FRAMES, h36m.HORIZON
+    lr_every = max(1, int(round(args.lr_every * args.schedule_scale)))
+    history = collections.deque(state["cl_history"], maxlen=100)
+    t_last = time.time()
+    acc = {"ol": 0.0, "cl": 0.0, "n": 0, "ncl": 0}
+    last_ol = last_cl = float("nan")
+    while state["iteration"] < args.iterations:
+        it = state["iteration"] + 1
+        lam = lambda_at(it, args.schedule_scale)
+        lr = lr_at(it, args.lr, args.lr_decay, lr_every) * state["lr_scale"]
+        for g in opt.param_groups:
+            g["lr"] = lr
+        frames_np, acts_np = dataset.sample_batch(rng, args.batch, seed_frames + horizon + 1)
+        frames = torch.from_numpy(frames_np)
+        acts = torch.from_numpy(acts_np)
+        if args.loss == "auto-conditioning":
+            ol_loss = auto_conditioning_loss(model, frames, acts, seed_frames, horizon, args.ac_length)
+            cl_loss = torch.tensor(float("nan"))
+            total = ol_loss
+        elif lam > 0:
+            ol_loss, cl_loss = multi_objective_terms(model, frames, acts, seed_frames, horizon)
+            total = ol_loss + lam * cl_loss
+        else:
+            steps = seed_frames + horizon
+            eps = sample_eps(model, frames.shape[0])
+            ol = model.open_loop(frames[:, :steps], acts, eps)
+            ol_loss = ((ol - frames[:, 1 : steps + 1]) ** 2).mean()
+            total = ol_loss
+            cl_loss = torch.tensor(float("nan"))
+            if it % args.log_every == 0:  # measured for the log only; RNG forked so runs stay reproducible
+                with torch.no_grad(), torch.random.fork_rng():
+                    cl = model.closed_loop(frames[:, :seed_frames], horizon, acts, eps)
+                    cl_loss = ((cl - frames[:, seed_frames:steps]) ** 2).mean()
+        ol_v, cl_v = ol_loss.item(), cl_loss.item()
+        blown = not math.isfinite(total.item())
+        if lam > 0 and math.isfinite(cl_v) and len(history) >= MIN_HISTORY:
+            blown = blown or cl_v > args.blowup_factor * float(np.median(history))
+        if blown:
+            state["rollbacks"] += 1
+            median = float(np.median(history)) if history else float("nan")
+            log(f"BLOW-UP at it {it}: open-loop {ol_v:.4g} closed-loop {cl_v:.4g} (recent median {median:.4g})")
+            if state["rollbacks"] > args.max_rollbacks:
+                log(f"giving up after {state['rollbacks'] - 1} rollbacks (--max-rollbacks {args.max_rollbacks})")
+                log.close()
+                raise SystemExit(f"error: training unstable: {state['rollbacks'] - 1} rollbacks; see {run_dir / 'train.log'}")
+            good = load_checkpoint(ckpt_path)
+            model.load_state_dict(good["model"])
+            opt.load_state_dict(good["optimizer"])
+            state["iteration"] = good["state"]["iteration"]
+            state["lr_scale"] *= 0.5
+            log(f"rolled back to it {state['iteration']} ({ckpt_path.name}), lr scale now {state['lr_scale']}")
+            log.record(kind="rollback", iteration=it, to=state["iteration"], ol=ol_v, cl=cl_v, lr_scale=state["lr_scale"])
+            continue
+        opt.zero_grad(set_to_none=True)
+        total.backward()
+        gnorm = float(torch.nn.utils.clip_grad_norm_(model.parameters(), args.clip))
+        opt.step()
+        state["iteration"] = it
+        last_ol, last_cl = ol_v, cl_v
+        if lam > 0 and math.isfinite(cl_v):
+            history.append(cl_v)
+        acc["ol"] += ol_v
+        acc["n"] += 1
+        if math.isfinite(cl_v):
+            acc["cl"] += cl_v
+            acc["ncl"] += 1
+        if it % args.log_every == 0 or it == args.iterations:
+            now = time.time()
+            spi = (now - t_last) / max(1, acc["n"])
+            t_last = now
+            mol = acc["ol"] / max(1, acc["n"])
+            mcl = acc["cl"] / acc["ncl"] if acc["ncl"] else float("nan")
+            log(f"it {it:6d} open-loop {mol:.5f} closed-loop {mcl:.5f} lambda {lam:.1f} lr {lr:.3g} |g| {gnorm:.3g} {spi:.2f} s/it")
+            log.record(kind="train", iteration=it, ol=mol, cl=mcl, lam=lam, lr=lr, grad_norm=gnorm, s_per_it=spi)
+            acc = {"ol": 0.0, "cl": 0.0, "n": 0, "ncl": 0}
+        state["cl_history"] = list(history)
+        if it % args.val_every == 0 or it == args.iterations:
+            val = validator(model)
+            is_best = better(val, state["best"])
+            if is_best:
+                state["best"] = {k: v for k, v in val.items()}
+                state["best_iteration"] = it
+            log(f"val it {it:6d} {fmt_val(val)}{'  [best]' if is_best else ''}")
+            log.record(kind="val", iteration=it, best=is_best, **val)
+            if is_best:
+                atomic_save(snapshot(), run_dir / BEST)
+        if it % args.checkpoint_every == 0 or it == args.iterations:
+            atomic_save(snapshot(), ckpt_path)
+    log(f"done: iteration {state['iteration']}, best validation at {state['best_iteration']}: {fmt_val(state['best'])}")
+    log.close()
+    return {"iteration": state["iteration"], "ol": last_ol, "cl": last_cl, "best": state["best"], "state": state}
+
+
+def fmt_val(v: dict | None) -> str:
+    """One-line validation summary."""
+    if not v:
+        return "n/a"
+    s = (
+        f"npss_ref {v['npss_ref']:.4f} npss_paper {v['npss_paper']:.4f} "
+        f"euler@80 {v['euler_80']:.4f} euler@1000 {v['euler_1000']:.4f}"
+    )
+    pa = v.get("per_action", {})
+    if "walking" in pa:
+        w = pa["walking"]
+        s += f" | walking npss_ref {w['npss_ref']:.4f} euler@80 {w['euler_80']:.4f} @1000 {w['euler_1000']:.4f}"
+    return s
+
+
+# ------------------------------------------------------------------------------------------ export
+
+
+def export(out: str, ckpt_file: str, dtype: str, argv: list[str]) -> dict:
+    """Write the weights file of a checkpoint's model with provenance. Returns the provenance."""
+    from .export import save_weights
+
+    ck = load_checkpoint(Path(ckpt_file))
+    model = build_model(ck["config"])
+    model.load_state_dict(ck["model"])
+    model.eval()
+    st = ck["state"]
+    args = ck["args"]
+    best = st.get("best")
+    prov = {
+        "data": "H3.6M S" + ",S".join(str(s) for s in h36m.TRAIN_SUBJECTS),
+        "actions_trained": parse_actions(args["actions"]),
+        "iterations": int(st["iteration"]),
+        "date": ck.get("date") or datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+        "command": ck["command"],
+        "export_command": "python -m training.train " + shlex.join(argv),
+        "seed": int(args["seed"]),
+        "checkpoint": os.path.basename(ckpt_file),
+    }
+    if best and st.get("best_iteration") == st["iteration"]:
+        prov["best_validation"] = {
+            "iteration": st["best_iteration"],
+            "windows": "S5 validation windows disjoint from the test windows (training/data.py)",
+            "npss_ref": best["npss_ref"],
+            "npss_paper": best["npss_paper"],
+            "euler_80": best["euler_80"],
+            "euler_1000": best["euler_1000"],
+            "per_action": best.get("per_action", {}),
+        }
+    torch_dtype = {"float32": torch.float32, "float16": torch.float16, "bfloat16": torch.bfloat16}[dtype]
+    save_weights(model, out, prov, dtype=torch_dtype)
+    return prov
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else list(argv)
+    args = build_parser().parse_args(argv)
+    if args.export:
+        if not args.from_ckpt:
+            print("error: --export needs --from CHECKPOINT", file=sys.stderr)
+            return 2
+        if not Path(args.from_ckpt).is_file():
+            print(f"error: checkpoint {args.from_ckpt} does not exist", file=sys.stderr)
+            return 2
+        prov = export(args.export, args.from_ckpt, args.dtype, argv)
+        print(f"wrote {args.export} ({args.dtype}) from {args.from_ckpt}: iteration {prov['iterations']}")
+        return 0
+    train(args, argv)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
