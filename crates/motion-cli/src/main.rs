@@ -3,6 +3,7 @@
 //! Exit codes: 0 success, 2 bad input or usage (the error chain is printed once to stderr),
 //! 1 any other failure.
 mod commands;
+mod model_source;
 mod plot;
 
 use clap::{Parser, Subcommand};

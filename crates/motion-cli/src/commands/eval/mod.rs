@@ -1,10 +1,459 @@
-//! `motion-cli eval` (being built).
+//! `motion-cli eval`: runs a model on the standard H3.6M protocol's test windows (8 per action,
+//! 50 seed frames at 25 Hz) and scores it the way paper 000 and paper 003 do, beside the
+//! zero-velocity baseline and the papers' published numbers.
+//!
+//! - [`selection`]: the dataset directory and the actions to run;
+//! - [`scoring`]: every metric of one action's predictions;
+//! - [`published`]: the papers' tables as code;
+//! - [`report`]: the human-readable table;
+//! - [`npy_stream`]: `--save-predictions` written piece by piece.
+pub mod npy_stream;
+pub mod published;
+pub mod report;
+pub mod scoring;
+pub mod selection;
+
+use std::io::IsTerminal;
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use anyhow::{Context, Result};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use ndarray::{s, Array2, Array3, Array4};
+use serde_json::{json, Map, Value};
+
+use motion_core::formats::h36m_text::{downsample_protocol, read_expmap_text};
+use motion_core::model::{BatchGenerator, MotionModel, Network, Noise};
+use motion_core::protocol::{
+    load_action_windows, sequence_file, zero_velocity, ACTIONS, LONG_TERM_HORIZON, SEED_FRAMES,
+    TEST_SUBJECT,
+};
+use motion_core::skeleton::{H36M_FRAME_DIMS, H36M_PROTOCOL_FPS};
+use motion_metrics::{euler_error_at_horizons, EULER_HORIZONS_MS};
+
+use super::UsageError;
+use crate::model_source;
+use npy_stream::NpyStream;
+use scoring::{ActionTruth, NpssScores, Scores, Speed};
+use selection::{Planned, Selection};
+
+/// Test windows per action in the protocol.
+const WINDOWS_PER_ACTION: usize = 8;
+
+/// The long help after the options.
+const LONG_HELP: &str = "\
+The protocol (h36m.md): subject 5, the 8 fixed test windows per action, 50 seed frames at 25 Hz \
+and HORIZON predicted frames after them. Four actions (directions, discussion, sittingdown, \
+waiting) have no windows because their S5 files are missing from the data release; actions whose \
+files are missing are reported and skipped.
+
+Per action it reports, for the model and the zero-velocity baseline (the last seed frame \
+repeated): the Euler error at 80-1000 ms; NPSS with the paper's |DFT|² and with the published \
+code's Re(DFT)² (the variant the papers' tables were computed with) over the whole horizon and \
+0-1 s, 1-2 s, 2-4 s; NDMS (database: every motion word of the action's S5 files, exact nearest \
+neighbour; queries include the last 7 seed frames; mean and 0.4 s bins); APD with 2+ samples; \
+and the mean joint speed of the last second vs the ground truth (to catch freezing). Beside them: \
+paper 000 Tables 4-7 and paper 003 Tables 1-2.
+
+With K samples: the Euler error is the mean over all 8 x K sequences; NPSS scores each sample \
+index as a set of 8 windows and averages over the K sets; NDMS is f_sim over all words of all \
+8 x K forecasts; APD is per window over its K samples, then the mean over windows.
+
+Examples:
+  motion-cli eval --data ../shared/data --actions walking,eating,smoking --samples 5
+  motion-cli eval --model weights/vgru_d_multi.safetensors --actions all --json > eval.json
+  motion-cli eval --actions walking --save-predictions walking.npy
+
+Exit status 2 for bad input (unknown action, missing data directory, unreadable model).";
 
 /// Arguments of `motion-cli eval`.
 #[derive(clap::Args, Debug)]
-pub struct Args {}
+#[command(after_long_help = LONG_HELP)]
+pub struct Args {
+    /// Data root (holding h3.6m/dataset) or the exp-map dataset directory itself (holding S5/).
+    /// Default: $MOTION_DATA_DIR, then ../shared/data.
+    #[arg(long, value_name = "DIR")]
+    pub data: Option<PathBuf>,
+    /// Weights file (default: the weights built into this binary).
+    #[arg(long, value_name = "FILE")]
+    pub model: Option<PathBuf>,
+    /// Comma list of actions, or `all` (every action with test windows that the model may be
+    /// evaluated on).
+    #[arg(long, value_delimiter = ',', default_value = "all")]
+    pub actions: Vec<String>,
+    /// Predicted frames per window at 25 Hz (1..=100; 100 = 4 s, the long-term protocol).
+    #[arg(long, default_value_t = LONG_TERM_HORIZON)]
+    pub horizon: usize,
+    /// Samples per window (stochastic models draw a new plan noise for each).
+    #[arg(long, value_name = "K", default_value_t = 1)]
+    pub samples: usize,
+    /// Seed of the plan noise; sample k of window w of an action gets its own stream.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub rng_seed: u64,
+    /// Write the predictions (actions x 8 x K x horizon x 99, float64, un-normalized exp-map frames).
+    #[arg(long, value_name = "FILE.npy")]
+    pub save_predictions: Option<PathBuf>,
+    /// Evaluate a single-action model on other actions too.
+    #[arg(long)]
+    pub any_action: bool,
+    /// Print one JSON object instead of tables.
+    #[arg(long)]
+    pub json: bool,
+}
 
 /// Runs the command.
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    Err(super::UsageError("eval is not built yet".into()).into())
+pub fn run(args: Args) -> Result<()> {
+    if !(1..=LONG_TERM_HORIZON).contains(&args.horizon) {
+        return Err(UsageError(format!(
+            "--horizon must be 1..={LONG_TERM_HORIZON} frames (the test windows guarantee {LONG_TERM_HORIZON} frames after the seed), got {}",
+            args.horizon
+        ))
+        .into());
+    }
+    if args.samples == 0 {
+        return Err(UsageError("--samples must be at least 1".into()).into());
+    }
+    // Cheap checks first: the data and the actions, before the model is built.
+    let dataset = selection::resolve_dataset(args.data.as_deref())?;
+    let model = model_source::load_model(args.model.as_deref())?;
+    check_model(&model)?;
+    let selection = selection::select_actions(&args.actions, &model, &dataset, args.any_action)?;
+
+    let samples = args.samples;
+    let horizon = args.horizon;
+    let mut saver = match &args.save_predictions {
+        Some(path) => Some(NpyStream::create(
+            path,
+            &[
+                selection.planned.len(),
+                WINDOWS_PER_ACTION,
+                samples,
+                horizon,
+                H36M_FRAME_DIMS,
+            ],
+        )?),
+        None => None,
+    };
+
+    let progress = progress_bar(selection.planned.len() * WINDOWS_PER_ACTION, args.json);
+    let mut generator = BatchGenerator::new(Arc::clone(&model), WINDOWS_PER_ACTION * samples);
+    let mut results = Vec::new();
+    for planned in &selection.planned {
+        progress.set_message(format!("{}: loading", planned.action));
+        let windows = load_action_windows(&dataset, planned.action, horizon)?;
+        if windows.len() != WINDOWS_PER_ACTION {
+            return Err(anyhow::anyhow!(
+                "{}: {} test windows, the protocol has {WINDOWS_PER_ACTION}",
+                planned.action,
+                windows.len()
+            ));
+        }
+        let references = reference_sequences(&dataset, planned.action)?;
+        let truth = ActionTruth::new(windows, &references)?;
+        drop(references);
+
+        progress.set_message(format!("{}: predicting", planned.action));
+        let predictions = predict(
+            &mut generator,
+            &truth,
+            planned,
+            samples,
+            horizon,
+            args.rng_seed,
+        )?;
+        if let Some(saver) = saver.as_mut() {
+            saver.write(predictions.iter().copied())?;
+        }
+        progress.set_message(format!("{}: scoring", planned.action));
+        let model_scores = truth.score(predictions.view(), || progress.inc(1))?;
+        drop(predictions);
+        let baseline = zero_velocity_predictions(&truth, horizon);
+        let baseline_scores = truth.score(baseline.view(), || {})?;
+        results.push(action_json(
+            planned,
+            &truth,
+            &model_scores,
+            &baseline_scores,
+            samples,
+            horizon,
+        ));
+    }
+    progress.finish_and_clear();
+
+    let saved = match (saver, &args.save_predictions) {
+        (Some(saver), Some(path)) => {
+            saver.finish()?;
+            Some(json!({
+                "path": path.display().to_string(),
+                "shape": [selection.planned.len(), WINDOWS_PER_ACTION, samples, horizon, H36M_FRAME_DIMS],
+                "axes": ["action", "window", "sample", "frame", "dim"],
+                "actions": selection.planned.iter().map(|p| p.action).collect::<Vec<_>>(),
+            }))
+        }
+        _ => None,
+    };
+    let report = full_report(&args, &model, &dataset, &selection, results, saved);
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        print!("{}", report::table(&report));
+    }
+    Ok(())
+}
+
+/// `eval` runs the H3.6M protocol: the model must take 99-dim H3.6M frames at 25 Hz.
+fn check_model(model: &MotionModel) -> Result<(), UsageError> {
+    let config = model.config();
+    if config.frame_dims != H36M_FRAME_DIMS {
+        return Err(UsageError(format!(
+            "{}: the model's frames have {} dims; the H3.6M protocol needs {H36M_FRAME_DIMS}",
+            model.path().display(),
+            config.frame_dims
+        )));
+    }
+    if (config.fps - H36M_PROTOCOL_FPS).abs() > 1e-9 {
+        return Err(UsageError(format!(
+            "{}: the model runs at {} fps; the H3.6M protocol is {H36M_PROTOCOL_FPS} fps",
+            model.path().display(),
+            config.fps
+        )));
+    }
+    Ok(())
+}
+
+/// The action's S5 files at 25 Hz: the NDMS database (paper 003 fills it per action from the
+/// test sequences).
+fn reference_sequences(dataset: &std::path::Path, action: &str) -> Result<Vec<Array2<f64>>> {
+    let mut out = Vec::new();
+    for sub in [1, 2] {
+        let path = sequence_file(dataset, TEST_SUBJECT, action, sub);
+        if path.is_file() {
+            out.push(downsample_protocol(read_expmap_text(&path)?.view()));
+        }
+    }
+    Ok(out)
+}
+
+/// A well-mixed 64-bit seed for the plan noise of (action, window, sample): SplitMix64 steps.
+fn noise_seed(rng_seed: u64, action: usize, window: usize, sample: usize) -> u64 {
+    let mut z = rng_seed;
+    for part in [action as u64, window as u64, sample as u64] {
+        z = z.wrapping_add(0x9E37_79B9_7F4A_7C15).wrapping_add(part);
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+    }
+    z
+}
+
+/// Runs the model on all windows x samples of one action as one batch:
+/// `8 x K x horizon x 99` un-normalized frames.
+fn predict(
+    generator: &mut BatchGenerator,
+    truth: &ActionTruth,
+    planned: &Planned,
+    samples: usize,
+    horizon: usize,
+    rng_seed: u64,
+) -> Result<Array4<f64>> {
+    let windows = truth.windows();
+    let rows = windows.len() * samples;
+    if generator.batch() != rows {
+        *generator = BatchGenerator::new(Arc::clone(generator.model()), rows);
+    }
+    let seeds = Array3::from_shape_fn((rows, SEED_FRAMES, H36M_FRAME_DIMS), |(r, t, d)| {
+        windows[r / samples].seed[[t, d]]
+    });
+    let action_index = ACTIONS
+        .iter()
+        .position(|a| *a == planned.action)
+        .expect("selected from ACTIONS");
+    let noise: Vec<Noise<'_>> = (0..rows)
+        .map(|r| Noise::Seed(noise_seed(rng_seed, action_index, r / samples, r % samples)))
+        .collect();
+    let labels: Vec<&str> = planned.label.iter().map(String::as_str).collect();
+    generator
+        .start(seeds.view(), &labels, &noise)
+        .map_err(|e| UsageError(format!("{}: {e}", planned.action)))?;
+    let mut out = Array4::zeros((windows.len(), samples, horizon, H36M_FRAME_DIMS));
+    for t in 0..horizon {
+        let frames = generator
+            .step()
+            .with_context(|| format!("{}: frame {t}", planned.action))?;
+        for (r, frame) in frames.outer_iter().enumerate() {
+            out.slice_mut(s![r / samples, r % samples, t, ..])
+                .iter_mut()
+                .zip(frame.iter())
+                .for_each(|(o, v)| *o = f64::from(*v));
+        }
+    }
+    Ok(out)
+}
+
+/// The zero-velocity baseline of every window: `8 x 1 x horizon x 99`.
+fn zero_velocity_predictions(truth: &ActionTruth, horizon: usize) -> Array4<f64> {
+    let windows = truth.windows();
+    let mut out = Array4::zeros((windows.len(), 1, horizon, H36M_FRAME_DIMS));
+    for (w, window) in windows.iter().enumerate() {
+        out.slice_mut(s![w, 0, .., ..])
+            .assign(&zero_velocity(window.seed.view(), horizon));
+    }
+    out
+}
+
+fn progress_bar(total: usize, json: bool) -> ProgressBar {
+    if json || !std::io::stderr().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::with_draw_target(Some(total as u64), ProgressDrawTarget::stderr());
+    bar.set_style(
+        ProgressStyle::with_template("{bar:30} {pos}/{len} windows {elapsed} {msg}")
+            .expect("valid template"),
+    );
+    bar
+}
+
+fn npss_json(scores: &NpssScores) -> Value {
+    let windows: Map<String, Value> = scores
+        .windows
+        .iter()
+        .map(|(label, v)| (label.to_string(), json!(v)))
+        .collect();
+    json!({ "whole": scores.whole, "windows": windows })
+}
+
+fn speed_json(speed: &Speed) -> Value {
+    json!({ "world": speed.world, "pose": speed.pose })
+}
+
+fn scores_json(scores: &Scores) -> Value {
+    let horizons: Map<String, Value> = euler_error_at_horizons(&scores.euler_per_frame)
+        .iter()
+        .map(|(ms, v)| (ms.to_string(), json!(v)))
+        .collect();
+    let mut out = json!({
+        "euler_error_ms": horizons,
+        "euler_error_per_frame": scores.euler_per_frame,
+        "npss": npss_json(&scores.npss),
+        "npss_reference": npss_json(&scores.npss_reference),
+        "ndms": {
+            "mean": scores.ndms.mean,
+            "bins": scores.ndms.bins,
+            "first_word_end": scores.ndms.first_word_end,
+            "exact": scores.ndms.exact,
+        },
+        "mean_joint_speed_last_1s": speed_json(&scores.speed_last_second),
+    });
+    if let Some(apd) = scores.apd {
+        out["apd"] = json!(apd);
+    }
+    out
+}
+
+fn action_json(
+    planned: &Planned,
+    truth: &ActionTruth,
+    model: &Scores,
+    baseline: &Scores,
+    samples: usize,
+    horizon: usize,
+) -> Value {
+    json!({
+        "action": planned.action,
+        "label": planned.label,
+        "windows": truth.windows().len(),
+        "samples": samples,
+        "horizon": horizon,
+        "ndms_database_words": truth.database_words(),
+        "model": scores_json(model),
+        "zero_velocity": scores_json(baseline),
+        "ground_truth": { "mean_joint_speed_last_1s": speed_json(&truth.speed_last_second) },
+        "published": published::for_action(planned.action),
+    })
+}
+
+/// Means over the evaluated actions of the headline numbers, for model and baseline.
+fn mean_over_actions(results: &[Value], who: &str) -> Value {
+    let mean = |pointer: &str| {
+        let values: Vec<f64> = results
+            .iter()
+            .filter_map(|r| r[who].pointer(pointer).and_then(Value::as_f64))
+            .collect();
+        (values.len() == results.len() && !values.is_empty())
+            .then(|| values.iter().sum::<f64>() / values.len() as f64)
+    };
+    let euler: Map<String, Value> = EULER_HORIZONS_MS
+        .iter()
+        .map(|ms| {
+            (
+                ms.to_string(),
+                json!(mean(&format!("/euler_error_ms/{ms}"))),
+            )
+        })
+        .collect();
+    json!({
+        "npss_reference": mean("/npss_reference/whole"),
+        "npss": mean("/npss/whole"),
+        "euler_error_ms": euler,
+        "ndms": mean("/ndms/mean"),
+    })
+}
+
+fn full_report(
+    args: &Args,
+    model: &MotionModel,
+    dataset: &std::path::Path,
+    selection: &Selection,
+    results: Vec<Value>,
+    saved: Option<Value>,
+) -> Value {
+    let config = model.config();
+    let stochastic = matches!(model.network(), Network::Vgru(_));
+    let mut report = json!({
+        "model": {
+            "source": model_source::describe(args.model.as_deref()),
+            "architecture": config.architecture.name(),
+            "hidden": config.hidden,
+            "actions": config.actions,
+            "actions_trained": selection::trained_actions(model),
+            "stochastic": stochastic,
+            "plan_horizon": stochastic.then_some(config.horizon),
+            "stored_dtype": model.stored_dtype(),
+        },
+        "data": dataset.display().to_string(),
+        "protocol": {
+            "subject": TEST_SUBJECT,
+            "fps": H36M_PROTOCOL_FPS,
+            "seed_frames": SEED_FRAMES,
+            "horizon": args.horizon,
+            "windows_per_action": WINDOWS_PER_ACTION,
+            "samples": args.samples,
+            "rng_seed": args.rng_seed,
+        },
+        "method": {
+            "samples": "Euler error: mean over all 8 x K sequences; NPSS: each sample index scored as a set of the 8 windows, then the mean over the K sets; NDMS: f_sim over all words of all 8 x K forecasts; APD: per window over its K samples (world positions of all 32 joints, mm), mean over windows",
+            "npss": "npss = |DFT|² (paper 000's definition); npss_reference = Re(DFT)² (the published code, which every published NPSS used)",
+            "ndms": "database = every motion word (kappa 8, stride 1) of the action's S5 files at 25 Hz; queries = forecasts with the last 7 seed frames prepended; exact nearest neighbour (brute force); bins of 0.4 s by word end",
+            "positions": "FK of seed + forecast with the root integrated (each 25 Hz root delta applied twice)",
+            "mean_joint_speed_last_1s": "mean displacement per 25 Hz frame (mm) of the 12 NDMS joints over the last 25 frame steps; world = with the root trajectory, pose = root deltas zeroed (body motion only)",
+            "zero_velocity": "the last seed frame repeated, root deltas included (in world positions the frozen pose keeps the last root velocity)",
+        },
+        "actions": results,
+        "skipped": selection.skipped.iter().map(|(a, r)| json!({"action": a, "reason": r})).collect::<Vec<_>>(),
+        "published_averages": published::averages(),
+    });
+    let results = report["actions"].as_array().cloned().unwrap_or_default();
+    report["mean_over_actions"] = json!({
+        "actions": results.len(),
+        "model": mean_over_actions(&results, "model"),
+        "zero_velocity": mean_over_actions(&results, "zero_velocity"),
+    });
+    if !stochastic && args.samples > 1 {
+        report["model"]["note"] =
+            json!("deterministic model: the K samples are identical (APD is 0)");
+    }
+    if let Some(saved) = saved {
+        report["save_predictions"] = saved;
+    }
+    report
 }
