@@ -160,7 +160,10 @@ mod tests {
             for axis in 0..3 {
                 let (a, b) = (p_in[[2, j, axis]], p_in[[3, j, axis]]);
                 let v = p_out[[1, j, axis]];
-                assert!((v - (a + 0.4 * (b - a))).abs() < 0.5, "joint {j}: {a} {v} {b}");
+                assert!(
+                    (v - (a + 0.4 * (b - a))).abs() < 0.5,
+                    "joint {j}: {a} {v} {b}"
+                );
             }
         }
     }

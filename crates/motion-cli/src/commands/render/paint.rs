@@ -10,7 +10,7 @@ pub struct Picture<'a> {
     pub tracks: Vec<&'a Track>,
     /// The camera.
     pub camera: Camera,
-    /// Frames of IN that are seed (drawn grey), if known.
+    /// Frames of IN that are seed (IN is drawn grey there; --compare keeps its colour), if known.
     pub seed_frames: Option<usize>,
     /// World floor grid segments.
     pub grid: Vec<([f64; 3], [f64; 3])>,
@@ -41,7 +41,12 @@ impl Picture<'_> {
             for bone in &track.bones {
                 let (a, b) = (joint(bone.from), joint(bone.to));
                 let depth = (self.camera.project(a).2 + self.camera.project(b).2) / 2.0;
-                strokes.push((depth, to_px(a), to_px(b), bone_colour(k, bone.side, seed)));
+                strokes.push((
+                    depth,
+                    to_px(a),
+                    to_px(b),
+                    bone_colour(k, bone.side, seed && k == 0),
+                ));
             }
         }
         strokes.sort_by(|x, y| y.0.total_cmp(&x.0));

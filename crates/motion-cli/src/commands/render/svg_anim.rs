@@ -63,6 +63,8 @@ pub fn animate(picture: &Picture<'_>, times: &[f64], width: usize, height: usize
             let values: Vec<String> = times.iter().map(|&t| path_at(t)).collect();
             let seed_colour = bone_colour(k, side, true).hex();
             let colour = bone_colour(k, side, false).hex();
+            // Only IN has a seed; the compared motion keeps its colour throughout.
+            let boundary = boundary.filter(|_| k == 0);
             let first_colour = if boundary.is_some() {
                 &seed_colour
             } else {

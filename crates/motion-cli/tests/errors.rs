@@ -1,0 +1,480 @@
+//! Bad input, every class the CLI promises to handle, across commands: missing file, malformed
+//! BVH (with its line), skeleton mismatch, NaN/Inf, too few frames, unknown action, weights that
+//! fail validation, output directory missing or output not writable.
+//!
+//! Each case must exit with status 2, print exactly one line on stderr (`error: ...`) naming the
+//! file and the problem, never panic, and leave no output (or temporary) file behind.
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use motion_core::formats::npy::write_npy;
+use ndarray::Array2;
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn fixture_model() -> PathBuf {
+    repo().join("tests/fixtures/parity/vgru_d.safetensors")
+}
+
+fn walk_seed() -> PathBuf {
+    repo().join("examples/walk_seed.bvh")
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("errors-{name}"));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn listing(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
+/// Runs `motion-cli ARGS` in `dir` and checks the bad-input contract: exit 2, one `error:` line
+/// containing every string of `expected`, no new file in `dir`.
+fn bad_input(dir: &Path, args: &[&dyn AsRef<std::ffi::OsStr>], expected: &[&str]) {
+    let before = listing(dir);
+    let output = Command::new(env!("CARGO_BIN_EXE_motion-cli"))
+        .current_dir(dir)
+        .args(args.iter().map(|a| a.as_ref()))
+        .output()
+        .expect("runs motion-cli");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    let shown: Vec<String> = args
+        .iter()
+        .map(|a| a.as_ref().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(output.status.code(), Some(2), "{shown:?}: {stderr}");
+    let lines: Vec<&str> = stderr.lines().collect();
+    assert_eq!(
+        lines.len(),
+        1,
+        "{shown:?}: one line expected, got: {stderr}"
+    );
+    assert!(lines[0].starts_with("error: "), "{stderr}");
+    assert!(
+        !stderr.contains("panicked") && !stderr.contains("RUST_BACKTRACE"),
+        "{stderr}"
+    );
+    for text in expected {
+        assert!(
+            lines[0].contains(text),
+            "{shown:?}: `{text}` missing from: {stderr}"
+        );
+    }
+    assert_eq!(listing(dir), before, "{shown:?} left files behind");
+}
+
+/// A copy of the walk seed's text with its frames replaced by `frames` lines (and count).
+fn walk_with_frames(frames: &[String]) -> String {
+    let text = std::fs::read_to_string(walk_seed()).unwrap();
+    let (head, _) = text.split_once("MOTION").unwrap();
+    format!(
+        "{head}MOTION\nFrames: {}\nFrame Time: 0.04\n{}\n",
+        frames.len(),
+        frames.join("\n")
+    )
+}
+
+fn walk_frames() -> Vec<String> {
+    let text = std::fs::read_to_string(walk_seed()).unwrap();
+    let (_, motion) = text.split_once("Frame Time:").unwrap();
+    motion
+        .lines()
+        .skip(1)
+        .filter(|l| !l.trim().is_empty())
+        .map(String::from)
+        .collect()
+}
+
+#[test]
+fn missing_file() {
+    let dir = scratch("missing");
+    let m = fixture_model();
+    bad_input(
+        &dir,
+        &[
+            &"predict",
+            &"--model",
+            &m,
+            &"--seed",
+            &"nope.bvh",
+            &"--out",
+            &"p.bvh",
+        ],
+        &["nope.bvh"],
+    );
+    bad_input(
+        &dir,
+        &[&"render", &"nope.bvh", &"--out", &"p.png"],
+        &["nope.bvh"],
+    );
+    bad_input(&dir, &[&"convert", &"nope.txt", &"p.bvh"], &["nope.txt"]);
+    bad_input(
+        &dir,
+        &[
+            &"predict",
+            &"--model",
+            &"nope.safetensors",
+            &"--seed",
+            &walk_seed(),
+            &"--out",
+            &"p.bvh",
+        ],
+        &["nope.safetensors"],
+    );
+    bad_input(&dir, &[&"info", &"nope.safetensors"], &["nope.safetensors"]);
+}
+
+#[test]
+fn malformed_bvh_names_its_line() {
+    let dir = scratch("malformed");
+    std::fs::write(
+        dir.join("bad.bvh"),
+        "HIERARCHY\nROOT Hips\n{\n  OFFSET 0 0 zero\n",
+    )
+    .unwrap();
+    let m = fixture_model();
+    bad_input(
+        &dir,
+        &[
+            &"predict", &"--model", &m, &"--seed", &"bad.bvh", &"--out", &"p.bvh",
+        ],
+        &["bad.bvh:4:", "OFFSET"],
+    );
+    bad_input(
+        &dir,
+        &[&"render", &"bad.bvh", &"--out", &"p.svg"],
+        &["bad.bvh:4:"],
+    );
+    bad_input(&dir, &[&"convert", &"bad.bvh", &"p.txt"], &["bad.bvh:4:"]);
+    // A frame line with a missing value.
+    let mut frames = walk_frames();
+    frames[3] = frames[3].rsplit_once(' ').unwrap().0.to_string();
+    std::fs::write(dir.join("short_line.bvh"), walk_with_frames(&frames)).unwrap();
+    let line = std::fs::read_to_string(dir.join("short_line.bvh"))
+        .unwrap()
+        .lines()
+        .count()
+        - frames.len()
+        + 4;
+    bad_input(
+        &dir,
+        &[
+            &"predict",
+            &"--model",
+            &m,
+            &"--seed",
+            &"short_line.bvh",
+            &"--out",
+            &"p.bvh",
+        ],
+        &[&format!("short_line.bvh:{line}:")],
+    );
+}
+
+#[test]
+fn skeleton_mismatch_says_what_differs() {
+    let dir = scratch("skeleton");
+    std::fs::copy(
+        repo().join("tests/fixtures/bvh/cmu_style_odd_spacing.bvh"),
+        dir.join("cmu.bvh"),
+    )
+    .unwrap();
+    let m = fixture_model();
+    bad_input(
+        &dir,
+        &[
+            &"predict", &"--model", &m, &"--seed", &"cmu.bvh", &"--out", &"p.bvh",
+        ],
+        &[
+            "cmu.bvh",
+            "skeleton does not match",
+            "joints",
+            "first differing joint is #1",
+        ],
+    );
+    // Same joint count, one joint renamed.
+    let text = std::fs::read_to_string(walk_seed())
+        .unwrap()
+        .replace("JOINT LeftForeArm", "JOINT LeftElbow");
+    std::fs::write(dir.join("renamed.bvh"), text).unwrap();
+    bad_input(
+        &dir,
+        &[
+            &"predict",
+            &"--model",
+            &m,
+            &"--seed",
+            &"renamed.bvh",
+            &"--out",
+            &"p.bvh",
+        ],
+        &["renamed.bvh", "#18", "\"LeftElbow\"", "\"LeftForeArm\""],
+    );
+    // An exp-map file of the wrong width.
+    write_npy(dir.join("wide.npy"), &Array2::<f64>::zeros((60, 117))).unwrap();
+    bad_input(
+        &dir,
+        &[
+            &"predict",
+            &"--model",
+            &m,
+            &"--seed",
+            &"wide.npy",
+            &"--out",
+            &"p.bvh",
+        ],
+        &["wide.npy", "117 values per frame", "99"],
+    );
+}
+
+#[test]
+fn nan_and_infinity() {
+    let dir = scratch("nan");
+    let m = fixture_model();
+    let mut seed = Array2::<f64>::zeros((60, 99));
+    seed[[12, 40]] = f64::NAN;
+    write_npy(dir.join("nan.npy"), &seed).unwrap();
+    bad_input(
+        &dir,
+        &[
+            &"predict", &"--model", &m, &"--seed", &"nan.npy", &"--out", &"p.bvh",
+        ],
+        &["nan.npy", "frame 12", "NaN"],
+    );
+    bad_input(
+        &dir,
+        &[&"render", &"nan.npy", &"--out", &"p.png"],
+        &["nan.npy", "NaN"],
+    );
+    seed[[12, 40]] = f64::INFINITY;
+    write_npy(dir.join("inf.npy"), &seed).unwrap();
+    bad_input(
+        &dir,
+        &[
+            &"predict", &"--model", &m, &"--seed", &"inf.npy", &"--out", &"p.npy",
+        ],
+        &["inf.npy", "infinite"],
+    );
+    std::fs::write(
+        dir.join("nan.txt"),
+        format!("{}\n{}\n", ["0"; 99].join(","), ["nan"; 99].join(",")),
+    )
+    .unwrap();
+    bad_input(
+        &dir,
+        &[
+            &"predict", &"--model", &m, &"--seed", &"nan.txt", &"--out", &"p.bvh",
+        ],
+        &["nan.txt:2:", "finite"],
+    );
+    let mut frames = walk_frames();
+    frames[20] = frames[20].replacen(" 0 ", " inf ", 1);
+    std::fs::write(dir.join("inf.bvh"), walk_with_frames(&frames)).unwrap();
+    bad_input(
+        &dir,
+        &[
+            &"predict", &"--model", &m, &"--seed", &"inf.bvh", &"--out", &"p.bvh",
+        ],
+        &["inf.bvh:", "inf"],
+    );
+}
+
+#[test]
+fn too_few_frames_names_the_minimum() {
+    let dir = scratch("short");
+    let m = fixture_model();
+    std::fs::write(dir.join("short.bvh"), walk_with_frames(&walk_frames()[..5])).unwrap();
+    bad_input(
+        &dir,
+        &[
+            &"predict",
+            &"--model",
+            &m,
+            &"--seed",
+            &"short.bvh",
+            &"--out",
+            &"p.bvh",
+        ],
+        &["short.bvh", "5 frames", "at least 10"],
+    );
+    // 15 exp-map frames read as 50 Hz leave 8 at the model's 25 Hz.
+    write_npy(dir.join("short.npy"), &Array2::<f64>::zeros((15, 99))).unwrap();
+    bad_input(
+        &dir,
+        &[
+            &"predict",
+            &"--model",
+            &m,
+            &"--seed",
+            &"short.npy",
+            &"--out",
+            &"p.npy",
+            &"--quiet",
+        ],
+        &["short.npy", "8 frames", "at least 10"],
+    );
+    bad_input(
+        &dir,
+        &[
+            &"render",
+            &"short.bvh",
+            &"--seed-frames",
+            &"6",
+            &"--out",
+            &"p.png",
+        ],
+        &["short.bvh", "--seed-frames 6", "5 frames"],
+    );
+}
+
+#[test]
+fn unknown_action_lists_the_valid_ones() {
+    let dir = scratch("action");
+    let m = fixture_model();
+    bad_input(
+        &dir,
+        &[
+            &"predict",
+            &"--model",
+            &m,
+            &"--seed",
+            &walk_seed(),
+            &"--action",
+            &"walkin",
+            &"--out",
+            &"p.bvh",
+        ],
+        &[
+            "unknown action `walkin`",
+            "valid actions: directions,",
+            "walking,",
+            "walkingtogether",
+        ],
+    );
+    let gru = repo().join("tests/fixtures/parity/gru_d.safetensors");
+    bad_input(
+        &dir,
+        &[
+            &"predict",
+            &"--model",
+            &gru,
+            &"--seed",
+            &walk_seed(),
+            &"--action",
+            &"walking",
+            &"--out",
+            &"p.bvh",
+        ],
+        &["--action", "not action-conditioned"],
+    );
+}
+
+#[test]
+fn weights_that_fail_validation() {
+    let dir = scratch("weights");
+    let bytes = std::fs::read(fixture_model()).unwrap();
+    std::fs::write(dir.join("truncated.safetensors"), &bytes[..3000]).unwrap();
+    // Same length, invalid config: a negative frame rate.
+    let text = String::from_utf8_lossy(&bytes[..4096]).into_owned();
+    assert!(
+        text.contains("\\\"fps\\\": 25"),
+        "fixture header layout changed"
+    );
+    let mut bad = bytes.clone();
+    let at = text.find("\\\"fps\\\": 25").unwrap() + "\\\"fps\\\": ".len();
+    bad[at..at + 2].copy_from_slice(b"-1");
+    std::fs::write(dir.join("negative_fps.safetensors"), &bad).unwrap();
+    for (file, problem) in [
+        ("truncated.safetensors", "not a valid safetensors file"),
+        ("negative_fps.safetensors", "fps -1"),
+    ] {
+        bad_input(
+            &dir,
+            &[
+                &"predict",
+                &"--model",
+                &file,
+                &"--seed",
+                &walk_seed(),
+                &"--out",
+                &"p.bvh",
+            ],
+            &[file, problem],
+        );
+        bad_input(&dir, &[&"info", &file], &[file, problem]);
+    }
+}
+
+#[test]
+fn output_directory_missing_or_not_writable() {
+    let dir = scratch("output");
+    let m = fixture_model();
+    bad_input(
+        &dir,
+        &[
+            &"predict",
+            &"--model",
+            &m,
+            &"--seed",
+            &walk_seed(),
+            &"--out",
+            &"missing/p.bvh",
+        ],
+        &["missing/p.bvh", "does not exist"],
+    );
+    bad_input(
+        &dir,
+        &[&"render", &walk_seed(), &"--out", &"missing/p.gif"],
+        &["missing/p.gif", "does not exist"],
+    );
+    bad_input(
+        &dir,
+        &[&"convert", &walk_seed(), &"missing/p.txt"],
+        &["missing/p.txt"],
+    );
+    // A directory where the output file should go: the rename fails, the temporary file goes.
+    std::fs::create_dir(dir.join("taken.bvh")).unwrap();
+    std::fs::create_dir(dir.join("taken.png")).unwrap();
+    bad_input(
+        &dir,
+        &[
+            &"predict",
+            &"--model",
+            &m,
+            &"--seed",
+            &walk_seed(),
+            &"--out",
+            &"taken.bvh",
+        ],
+        &["taken.bvh"],
+    );
+    bad_input(
+        &dir,
+        &[&"render", &walk_seed(), &"--out", &"taken.png"],
+        &["taken.png", "cannot write"],
+    );
+    // Batch mode needs an existing output directory.
+    bad_input(
+        &dir,
+        &[
+            &"predict",
+            &"--model",
+            &m,
+            &"--seed",
+            &repo().join("examples"),
+            &"--out",
+            &"nowhere",
+        ],
+        &["nowhere", "existing directory"],
+    );
+}

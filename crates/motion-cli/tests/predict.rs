@@ -1,0 +1,318 @@
+//! `motion-cli predict`, driven through the built binary with the small random-weight fixture
+//! model (`tests/fixtures/parity/vgru_d.safetensors`: 15 actions, seed 10 frames, 25 Hz) and the
+//! procedural seed `examples/walk_seed.bvh`. No `../shared` data is needed. The fixture's motion is
+//! meaningless; these tests check shapes, conventions and plumbing.
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use motion_core::formats::bvh::{read_bvh, write_bvh, Bvh};
+use motion_core::formats::expmap_bvh::{bvh_to_expmap, ExpMapTarget};
+use motion_core::formats::h36m_text::{read_expmap_text, write_expmap_text};
+use motion_core::formats::npy::{read_npy_dyn, read_npy_frames};
+use motion_core::kinematics::channel_positions;
+use motion_core::skeleton::Skeleton;
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn fixture_model() -> PathBuf {
+    repo().join("tests/fixtures/parity/vgru_d.safetensors")
+}
+
+fn walk_seed() -> PathBuf {
+    repo().join("examples/walk_seed.bvh")
+}
+
+/// A fresh scratch directory for one test.
+fn scratch(name: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("predict-{name}"));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Runs `motion-cli predict --model FIXTURE ARGS`; returns (exit code, stdout, stderr).
+fn predict(args: &[&dyn AsRef<std::ffi::OsStr>]) -> (i32, String, String) {
+    let output = Command::new(env!("CARGO_BIN_EXE_motion-cli"))
+        .arg("predict")
+        .arg("--model")
+        .arg(fixture_model())
+        .args(args.iter().map(|a| a.as_ref()))
+        .output()
+        .expect("runs motion-cli");
+    (
+        output.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&output.stdout).into_owned(),
+        String::from_utf8_lossy(&output.stderr).into_owned(),
+    )
+}
+
+fn predict_ok(args: &[&dyn AsRef<std::ffi::OsStr>]) -> (String, String) {
+    let (code, stdout, stderr) = predict(args);
+    assert_eq!(code, 0, "motion-cli predict failed: {stderr}");
+    (stdout, stderr)
+}
+
+fn files_in(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
+#[test]
+fn the_example_seed_is_a_walk_on_the_h36m_skeleton() {
+    let bvh = read_bvh(walk_seed()).unwrap();
+    assert_eq!(bvh.frames.nrows(), 75, "3 s at 25 Hz");
+    assert!((bvh.fps() - 25.0).abs() < 1e-9);
+    assert_eq!(ExpMapTarget::detect(&bvh).unwrap(), ExpMapTarget::H36m);
+    let p = channel_positions(&bvh.skeleton, bvh.frames.view()).unwrap();
+    // The root moves forward (+z) at about 0.7 m/s.
+    let speed = (p[[74, 0, 2]] - p[[0, 0, 2]]) / (74.0 / 25.0);
+    assert!((speed - 700.0).abs() < 20.0, "{speed} mm/s");
+    // Feet reach the floor and the head stays about 1.6-1.8 m above it.
+    let floor = p
+        .iter()
+        .skip(1)
+        .step_by(3)
+        .fold(f64::INFINITY, |m, &v| m.min(v));
+    let head = Skeleton::h36m().joint_index("Head").unwrap();
+    let height = p[[0, head, 1]] - floor;
+    assert!(
+        (1400.0..1900.0).contains(&height),
+        "head {height} mm above the floor"
+    );
+}
+
+#[test]
+fn bvh_seed_gives_seed_plus_prediction_that_moves() {
+    let dir = scratch("bvh");
+    let out = dir.join("pred.bvh");
+    let (stdout, _) = predict_ok(&[
+        &"--seed",
+        &walk_seed(),
+        &"--action",
+        &"walking",
+        &"--out",
+        &out,
+        &"--json",
+    ]);
+    let report: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(report["seed_frames"], 10);
+    assert_eq!(report["predicted_frames"], 100);
+    assert_eq!(report["action"], "walking");
+    assert_eq!(files_in(&dir), ["pred.bvh"], "no temporary files left");
+
+    let pred = read_bvh(&out).unwrap();
+    let seed = read_bvh(walk_seed()).unwrap();
+    assert_eq!(pred.frames.nrows(), 110);
+    assert!((pred.frame_time - 0.04).abs() < 1e-12);
+    assert_eq!(ExpMapTarget::detect(&pred).unwrap(), ExpMapTarget::H36m);
+    // The seed part is the seed's last 10 frames, where they were in the input.
+    let p_pred = channel_positions(&pred.skeleton, pred.frames.view()).unwrap();
+    let p_seed = channel_positions(&seed.skeleton, seed.frames.view()).unwrap();
+    for t in 0..10 {
+        for j in 0..32 {
+            for a in 0..3 {
+                let d = (p_pred[[t, j, a]] - p_seed[[65 + t, j, a]]).abs();
+                assert!(d < 1e-6, "frame {t} joint {j}: {d} mm");
+            }
+        }
+    }
+    // Predicted joints move.
+    let wrist = 19;
+    let moved = (10..110)
+        .map(|t| (p_pred[[t, wrist, 1]] - p_pred[[10, wrist, 1]]).abs())
+        .fold(0.0, f64::max);
+    assert!(moved > 1.0, "the left hand moved {moved} mm");
+}
+
+#[test]
+fn samples_prediction_only_and_formats() {
+    let dir = scratch("samples");
+    let bvh = dir.join("walk.bvh");
+    predict_ok(&[
+        &"--seed",
+        &walk_seed(),
+        &"--samples",
+        &"3",
+        &"--frames",
+        &"20",
+        &"--prediction-only",
+        &"--out",
+        &bvh,
+        &"--quiet",
+    ]);
+    assert_eq!(files_in(&dir), ["walk_0.bvh", "walk_1.bvh", "walk_2.bvh"]);
+    let a = read_bvh(dir.join("walk_0.bvh")).unwrap();
+    let b = read_bvh(dir.join("walk_1.bvh")).unwrap();
+    assert_eq!(a.frames.nrows(), 20);
+    assert_ne!(
+        a.frames, b.frames,
+        "VGRU-d samples differ by their plan noise"
+    );
+
+    let npy = dir.join("walk.npy");
+    predict_ok(&[
+        &"--seed",
+        &walk_seed(),
+        &"--samples",
+        &"3",
+        &"--frames",
+        &"20",
+        &"--out",
+        &npy,
+    ]);
+    let stacked = read_npy_dyn(&npy).unwrap();
+    assert_eq!(stacked.shape(), [3, 30, 99]);
+
+    let txt = dir.join("one.txt");
+    predict_ok(&[&"--seed", &walk_seed(), &"--frames", &"20", &"--out", &txt]);
+    let frames = read_expmap_text(&txt).unwrap();
+    assert_eq!(frames.dim(), (30, 99));
+    // The same noise seed gives the same prediction: sample 0 of the stack is that one (up to
+    // float32 rounding: a batch of 3 multiplies matrices, a batch of 1 vectors).
+    let diff = (&frames - &stacked.index_axis(ndarray::Axis(0), 0)).mapv(f64::abs);
+    let worst = diff.iter().fold(0.0f64, |m, &d| m.max(d));
+    assert!(worst < 1e-3, "{worst}");
+}
+
+#[test]
+fn text_and_npy_seeds_at_other_rates_are_resampled() {
+    let dir = scratch("rates");
+    let seed = read_bvh(walk_seed()).unwrap();
+    let expmap = bvh_to_expmap(&seed, ExpMapTarget::H36m)
+        .unwrap()
+        .into_frames();
+    let text = dir.join("walk25.txt");
+    write_expmap_text(&text, expmap.view()).unwrap();
+
+    // Exp-map text read as 25 Hz: used as is; the .npy seed part equals the text's last frames.
+    let out = dir.join("from_text.npy");
+    let (_, stderr) = predict_ok(&[
+        &"--seed",
+        &text,
+        &"--input-fps",
+        &"25",
+        &"--frames",
+        &"5",
+        &"--out",
+        &out,
+    ]);
+    assert!(!stderr.contains("note:"), "{stderr}");
+    let written = read_npy_frames(&out).unwrap();
+    let original = read_expmap_text(&text).unwrap();
+    assert_eq!(written.dim(), (15, 99));
+    assert_eq!(
+        written.slice(ndarray::s![..10, ..]),
+        original.slice(ndarray::s![65.., ..])
+    );
+
+    // Read as 50 Hz (the default for exp-map files): every 2nd frame kept, with a notice.
+    let (_, stderr) = predict_ok(&[&"--seed", &text, &"--frames", &"5", &"--out", &out]);
+    assert!(
+        stderr.contains("every 2th frame") || stderr.contains("every 2"),
+        "{stderr}"
+    );
+
+    // A 100 Hz BVH is resampled by slerp, with a one-line notice; --quiet silences it.
+    let fast = Bvh {
+        frame_time: 0.01,
+        ..seed
+    };
+    let fast_path = dir.join("walk100.bvh");
+    write_bvh(&fast_path, &fast).unwrap();
+    let (_, stderr) = predict_ok(&[&"--seed", &fast_path, &"--frames", &"5", &"--out", &out]);
+    let notices: Vec<&str> = stderr.lines().filter(|l| l.starts_with("note:")).collect();
+    assert_eq!(notices.len(), 1, "{stderr}");
+    assert!(
+        notices[0].contains("100 Hz resampled to the model's 25 Hz"),
+        "{stderr}"
+    );
+    // 75 frames at 100 Hz span 0.74 s: 19 frames at 25 Hz, enough for the fixture's 10.
+    let (_, stderr) = predict_ok(&[
+        &"--seed",
+        &fast_path,
+        &"--frames",
+        &"5",
+        &"--out",
+        &out,
+        &"--quiet",
+    ]);
+    assert!(stderr.is_empty(), "{stderr}");
+    assert_eq!(read_npy_frames(&out).unwrap().nrows(), 15);
+}
+
+#[test]
+fn batch_mode_keeps_going_past_a_bad_file() {
+    let dir = scratch("batch");
+    let seeds = dir.join("seeds");
+    let outs = dir.join("out");
+    std::fs::create_dir_all(&seeds).unwrap();
+    std::fs::create_dir_all(&outs).unwrap();
+    std::fs::copy(walk_seed(), seeds.join("a.bvh")).unwrap();
+    std::fs::copy(walk_seed(), seeds.join("b.bvh")).unwrap();
+    std::fs::write(
+        seeds.join("broken.bvh"),
+        "HIERARCHY\nROOT Hips\n{\n  OFFSET 0 0 zero\n",
+    )
+    .unwrap();
+    std::fs::write(seeds.join("notes.md"), "not a seed").unwrap();
+    let (code, stdout, stderr) = predict(&[
+        &"--seed",
+        &seeds,
+        &"--out",
+        &outs,
+        &"--frames",
+        &"10",
+        &"--json",
+    ]);
+    assert_eq!(code, 2, "{stderr}");
+    assert_eq!(files_in(&outs), ["a.bvh", "b.bvh"]);
+    let report: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(report["succeeded"], 2);
+    assert_eq!(report["failed"], 1);
+    let failed = report["seeds"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|s| s.get("error").is_some())
+        .unwrap();
+    assert!(
+        failed["error"].as_str().unwrap().contains("broken.bvh:4"),
+        "{failed}"
+    );
+
+    // Text summary without --json.
+    let (code, _, stderr) = predict(&[&"--seed", &seeds, &"--out", &outs, &"--frames", &"10"]);
+    assert_eq!(code, 2);
+    assert!(stderr.contains("predicted 2 of 3 seeds"), "{stderr}");
+    assert!(
+        stderr.contains("failed: ") && stderr.contains("broken.bvh"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn output_is_deterministic_for_a_noise_seed() {
+    let dir = scratch("determinism");
+    let (a, b, c) = (dir.join("a.bvh"), dir.join("b.bvh"), dir.join("c.bvh"));
+    for (out, seed) in [(&a, "7"), (&b, "7"), (&c, "8")] {
+        predict_ok(&[
+            &"--seed",
+            &walk_seed(),
+            &"--rng-seed",
+            &seed,
+            &"--frames",
+            &"30",
+            &"--out",
+            out,
+        ]);
+    }
+    let read = |p: &PathBuf| std::fs::read(p).unwrap();
+    assert_eq!(read(&a), read(&b));
+    assert_ne!(read(&a), read(&c));
+}
