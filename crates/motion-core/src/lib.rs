@@ -13,6 +13,27 @@
 //!   keeping the even frames. Dims 0..2 / 3..5 of an H3.6M frame are per-frame root translation /
 //!   rotation **deltas**.
 //! - Frames are stored row-major, `frames x channels`, in `f64` unless a model computes in `f32`.
+//!
+//! ## Example: load weights, seed, step
+//! ```
+//! use std::sync::Arc;
+//! use motion_core::model::{Generator, MotionModel, Noise};
+//! use ndarray::Array2;
+//!
+//! // A small random-weight fixture (15 actions, 99 dims, 10 seed frames at 25 Hz).
+//! let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../tests/fixtures/parity/vgru_d.safetensors");
+//! let model = Arc::new(MotionModel::load(path)?);
+//! let config = model.config();
+//! // Seed: `seed_frames` H3.6M exp-map frames (here a still rest pose).
+//! let seed = Array2::<f64>::zeros((config.seed_frames, config.frame_dims));
+//! let mut generator = Generator::new(Arc::clone(&model)); // one per character, weights shared
+//! generator.start(seed.view(), Some("walking"), Noise::Seed(7))?;
+//! for _ in 0..25 {
+//!     let frame: &[f32] = generator.step()?; // the next full frame, closed loop, no allocation
+//!     assert_eq!(frame.len(), 99);
+//! }
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 #![warn(missing_docs)]
 
 pub mod error;

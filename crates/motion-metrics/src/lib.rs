@@ -5,6 +5,19 @@
 //!
 //! Every metric takes ndarray views of the caller's data, checks shapes and finiteness (typed
 //! [`MetricError`]s, never a panic), and parallelizes over sequences with rayon.
+//!
+//! ## Example: NPSS of a prediction
+//! ```
+//! use motion_metrics::npss;
+//! use ndarray::Array3;
+//!
+//! // 2 sequences x 32 frames x 3 features (Euler angles in practice).
+//! let gt = Array3::from_shape_fn((2, 32, 3), |(n, t, d)| (0.4 * t as f64 + d as f64 + n as f64).sin());
+//! let faster = Array3::from_shape_fn((2, 32, 3), |(n, t, d)| (0.8 * t as f64 + d as f64 + n as f64).sin());
+//! assert!(npss(gt.view(), gt.view())?.abs() < 1e-12); // identical spectra: 0
+//! assert!(npss(gt.view(), faster.view())? > 0.1); // power moved to other frequencies
+//! # Ok::<(), motion_metrics::MetricError>(())
+//! ```
 #![warn(missing_docs)]
 
 pub mod apd;
