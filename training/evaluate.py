@@ -102,15 +102,25 @@ def zero_velocity(seed_frames: np.ndarray, horizon: int) -> np.ndarray:
     return np.repeat(seed_frames[:, -1:, :], horizon, axis=1)
 
 
+def last_second_speed_ratio(gt_full: np.ndarray, pred_full: np.ndarray, frames: int = 25) -> float:
+    """Mean absolute frame-to-frame change of the joint angles (exp-map dims 6..) over the last `frames` predicted
+    frames, prediction / ground truth: ~1 keeps moving like the data, ~0 froze (to the mean pose or a still pose)."""
+    g = np.abs(np.diff(gt_full[:, -frames - 1 :, 6:], axis=1)).mean()
+    p = np.abs(np.diff(pred_full[:, -frames - 1 :, 6:], axis=1)).mean()
+    return float(p / g) if g > 0 else float("nan")
+
+
 def score_windows(gt_full: np.ndarray, pred_full: np.ndarray) -> dict:
     """Scores of one action's windows (full exp-map frames [N, T, D] of the predicted horizon):
-    reference- and paper-variant NPSS over the horizon, and the mean Euler error curve [T]."""
+    reference- and paper-variant NPSS over the horizon, the mean Euler error curve [T] and the last second's
+    speed ratio (prediction / ground truth)."""
     ge, pe = to_euler(gt_full), to_euler(pred_full)
     err = euler_error(ge, pe).mean(axis=0)
     return {
         "npss_ref": npss(ge, pe, "reference"),
         "npss_paper": npss(ge, pe, "paper"),
         "euler": err,
+        "speed_ratio": last_second_speed_ratio(gt_full, pred_full),
     }
 
 
@@ -124,4 +134,5 @@ def summarize(per_action: dict[str, dict]) -> dict:
         "npss_paper": f("npss_paper"),
         "euler_80": float(e[:, 1].mean()),
         "euler_1000": float(e[:, 24].mean()) if e.shape[1] > 24 else float("nan"),
+        "speed_ratio": f("speed_ratio"),
     }

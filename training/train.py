@@ -248,7 +248,12 @@ class Validator:
             per_action[a] = evaluate.score_windows(self.gt_full[idx], pred_full[idx])
         summary = evaluate.summarize(per_action)
         summary["per_action"] = {
-            a: {"npss_ref": v["npss_ref"], "euler_80": float(v["euler"][1]), "euler_1000": float(v["euler"][24])}
+            a: {
+                "npss_ref": v["npss_ref"],
+                "euler_80": float(v["euler"][1]),
+                "euler_1000": float(v["euler"][24]),
+                "speed_ratio": v["speed_ratio"],
+            }
             for a, v in per_action.items()
         }
         return summary
@@ -495,7 +500,7 @@ def fmt_val(v: dict | None) -> str:
         return "n/a"
     s = (
         f"npss_ref {v['npss_ref']:.4f} npss_paper {v['npss_paper']:.4f} "
-        f"euler@80 {v['euler_80']:.4f} euler@1000 {v['euler_1000']:.4f}"
+        f"euler@80 {v['euler_80']:.4f} euler@1000 {v['euler_1000']:.4f} speed {v.get('speed_ratio', float('nan')):.2f}"
     )
     pa = v.get("per_action", {})
     if "walking" in pa:
