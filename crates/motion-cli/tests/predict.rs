@@ -316,3 +316,72 @@ fn output_is_deterministic_for_a_noise_seed() {
     assert_eq!(read(&a), read(&b));
     assert_ne!(read(&a), read(&c));
 }
+
+#[test]
+fn seed_end_and_truth_line_up_with_the_seed_file() {
+    let dir = scratch("truth");
+    let walk = read_bvh(walk_seed()).unwrap();
+    let p_walk = channel_positions(&walk.skeleton, walk.frames.view()).unwrap();
+    let seed = walk_seed();
+    for prediction_only in [false, true] {
+        let (pred, truth) = (dir.join("pred.bvh"), dir.join("truth.bvh"));
+        let mut args: Vec<&dyn AsRef<std::ffi::OsStr>> = vec![
+            &"--seed",
+            &seed,
+            &"--seed-end",
+            &"30",
+            &"--frames",
+            &"20",
+            &"--truth",
+            &truth,
+            &"--out",
+            &pred,
+            &"--quiet",
+        ];
+        if prediction_only {
+            args.push(&"--prediction-only");
+        }
+        predict_ok(&args);
+        let first = if prediction_only { 30 } else { 20 };
+        let t = read_bvh(&truth).unwrap();
+        let p = read_bvh(&pred).unwrap();
+        assert_eq!(t.frames.nrows(), 50 - first);
+        assert_eq!(p.frames.nrows(), 50 - first);
+        let p_truth = channel_positions(&t.skeleton, t.frames.view()).unwrap();
+        let p_pred = channel_positions(&p.skeleton, p.frames.view()).unwrap();
+        // The truth is the seed file's own frames, where they were.
+        for k in 0..t.frames.nrows() {
+            for j in 0..32 {
+                for a in 0..3 {
+                    let d = (p_truth[[k, j, a]] - p_walk[[first + k, j, a]]).abs();
+                    assert!(d < 1e-6, "frame {k} joint {j}: {d} mm");
+                }
+            }
+        }
+        // The prediction continues from there: its first frame's root is near the seed's.
+        let r = 0;
+        let gap = (0..3)
+            .map(|a| (p_pred[[0, r, a]] - p_walk[[first, r, a]]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        assert!(gap < 100.0, "prediction starts {gap} mm from the seed");
+    }
+    // Not enough frames after --seed-end for --truth.
+    let (code, _, stderr) = predict(&[
+        &"--seed",
+        &walk_seed(),
+        &"--seed-end",
+        &"60",
+        &"--frames",
+        &"20",
+        &"--truth",
+        &dir.join("t.bvh"),
+        &"--out",
+        &dir.join("p.bvh"),
+    ]);
+    assert_eq!(code, 2);
+    assert!(
+        stderr.contains("--truth needs 20 frames after the seed window, the file has 15"),
+        "{stderr}"
+    );
+}

@@ -45,6 +45,10 @@ Examples:
   motion-cli predict --seed S5/walking_1.txt.gz --samples 8 --rng-seed 7 --out walks.npy
   motion-cli predict --seed seeds/ --out predictions/ --format bvh
 
+  # 4 s after the first 40 s of an H3.6M take, and the take's real 4 s beside it
+  motion-cli predict --seed S5/walking_1.txt.gz --seed-end 1000 --truth truth.bvh --out pred.bvh
+  motion-cli render pred.bvh --compare truth.bvh --seed-frames 50 --out walking.gif
+
 Bad input (missing or malformed file, skeleton mismatch, NaN, too few frames, unknown action, \
 invalid weights, missing output directory) prints one line naming the file and exits with 2; \
 outputs are written to a temporary file and renamed, so they are never left half-written.";
@@ -77,6 +81,14 @@ pub struct Args {
     /// Write only the predicted frames, not the seed before them.
     #[arg(long)]
     pub prediction_only: bool,
+    /// Predict after the seed's first N frames (at the model's rate) instead of after its end,
+    /// so that the file's later frames can serve as ground truth (see --truth).
+    #[arg(long, value_name = "N")]
+    pub seed_end: Option<usize>,
+    /// Also write the seed file's real continuation (the seed window and the --frames frames
+    /// after it, same format rules as OUT) for `render --compare` or `score`.
+    #[arg(long, value_name = "FILE")]
+    pub truth: Option<PathBuf>,
     /// Output format in batch mode.
     #[arg(long, value_name = "EXT", default_value = "bvh", value_parser = ["bvh", "npy", "txt"])]
     pub format: String,
@@ -101,6 +113,7 @@ struct Job {
     rng_seed: u64,
     prediction_only: bool,
     input_fps: f64,
+    seed_end: Option<usize>,
 }
 
 /// What one prediction produced.
@@ -131,6 +144,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             return Err(UsageError(format!("{}: no such file", args.seed.display())).into());
         }
         check_output(&args.out)?;
+        if let Some(truth) = &args.truth {
+            check_output(truth)?;
+        }
+    } else if args.truth.is_some() {
+        return Err(UsageError("--truth takes one seed file, not a directory".into()).into());
     } else if !args.out.is_dir() {
         return Err(UsageError(format!(
             "{}: with a seed directory, --out must be an existing directory",
@@ -148,6 +166,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         rng_seed: args.rng_seed,
         prediction_only: args.prediction_only,
         input_fps: args.input_fps,
+        seed_end: args.seed_end,
     };
     if !args.quiet
         && !args.json
@@ -162,7 +181,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if batch {
         run_batch(&args, &job)
     } else {
-        let done = predict_one(&job, &args.seed, &args.out)?;
+        let done = predict_one(&job, &args.seed, &args.out, args.truth.as_deref())?;
         if !args.quiet && !args.json {
             done.notices.iter().for_each(|n| eprintln!("{n}"));
         }
@@ -230,49 +249,83 @@ fn choose_action(config: &ModelConfig, action: Option<&str>) -> anyhow::Result<O
     }
 }
 
-/// Predicts from one seed file into `out` (format by extension).
-fn predict_one(job: &Job, seed_path: &Path, out: &Path) -> anyhow::Result<Done> {
+/// Predicts from one seed file into `out` (format by extension); with `truth`, also writes the
+/// file's real frames over the same span there.
+fn predict_one(
+    job: &Job,
+    seed_path: &Path,
+    out: &Path,
+    truth: Option<&Path>,
+) -> anyhow::Result<Done> {
     let format = check_output(out)?;
     let config = job.model.config();
     let seed = load_seed(seed_path, job.target, config.fps, job.input_fps)?;
     let needed = config.seed_frames.max(1);
     let total = seed.frames.nrows();
-    if total < needed {
+    let end = job.seed_end.unwrap_or(total);
+    if end > total {
         return Err(UsageError(format!(
-            "{}: {total} frames at {} Hz, the model needs at least {needed} ({:.2} s)",
+            "{}: --seed-end {end} is past the last frame ({total} frames at {} Hz)",
+            seed_path.display(),
+            config.fps
+        ))
+        .into());
+    }
+    if end < needed {
+        return Err(UsageError(format!(
+            "{}: {end} frames at {} Hz, the model needs at least {needed} ({:.2} s)",
             seed_path.display(),
             config.fps,
             needed as f64 / config.fps
         ))
         .into());
     }
-    let start = total - needed;
-    let predictions = generate(job, &model_input(&seed.frames, start, job.target))?;
-    let window = if format == FileFormat::Bvh {
-        anchored_window(&seed.frames, start, job.target, config.fps)
-    } else {
-        seed.frames.slice(s![start.., ..]).to_owned()
+    let start = end - needed;
+    let truth_end = end + job.frames;
+    if truth.is_some() && truth_end > total {
+        return Err(UsageError(format!(
+            "{}: --truth needs {} frames after the seed window, the file has {} (at {} Hz)",
+            seed_path.display(),
+            job.frames,
+            total - end,
+            config.fps
+        ))
+        .into());
+    }
+    let predictions = generate(job, &model_input(&seed.frames, start, end, job.target))?;
+    // What is written runs from the seed window's start (or, with --prediction-only, from the
+    // first predicted frame) to the last predicted frame, cut from the seed file's frames up to
+    // `end` followed by a continuation (a prediction, or the file's own frames for --truth).
+    let first_written = if job.prediction_only { end } else { start };
+    let written = |continuation: ndarray::ArrayView2<'_, f64>, format: FileFormat| {
+        let anchor = format == FileFormat::Bvh;
+        let history = seed.frames.slice(s![..end, ..]);
+        let whole =
+            ndarray::concatenate(ndarray::Axis(0), &[history, continuation]).expect("same width");
+        clip_window(
+            &whole,
+            first_written,
+            whole.nrows(),
+            job.target,
+            config.fps,
+            anchor,
+        )
     };
     let samples: Vec<Array2<f64>> = predictions
         .outer_iter()
-        .map(|prediction| {
-            if job.prediction_only {
-                prediction.to_owned()
-            } else {
-                ndarray::concatenate(ndarray::Axis(0), &[window.view(), prediction])
-                    .expect("same width")
-            }
-        })
+        .map(|prediction| written(prediction, format))
         .collect();
-    let outputs = write_clips(
-        out,
-        format,
-        &Clips {
-            samples: &samples,
-            fps: config.fps,
-            target: job.target,
-        },
-    )?;
+    let clips = |samples| Clips {
+        samples,
+        fps: config.fps,
+        target: job.target,
+    };
+    let mut outputs = write_clips(out, format, &clips(&samples))?;
+    if let Some(truth) = truth {
+        let format = check_output(truth)?;
+        let real = [written(seed.frames.slice(s![end..truth_end, ..]), format)];
+        outputs.extend(write_clips(truth, format, &clips(&real))?);
+    }
     Ok(Done {
         outputs,
         seed_frames: needed,
@@ -280,11 +333,16 @@ fn predict_one(job: &Job, seed_path: &Path, out: &Path) -> anyhow::Result<Done> 
     })
 }
 
-/// The seed window the model reads. A window that starts at the clip's first frame has that
-/// frame's root "delta" relative to the world origin (the absolute start pose); the model was
-/// trained on frame-to-frame deltas, so that frame gets its successor's delta instead.
-fn model_input(frames: &Array2<f64>, start: usize, target: ExpMapTarget) -> Array2<f64> {
-    let mut window = frames.slice(s![start.., ..]).to_owned();
+/// The seed window `start..end` the model reads. A window that starts at the clip's first frame
+/// has that frame's root "delta" relative to the world origin (the absolute start pose); the
+/// model was trained on frame-to-frame deltas, so that frame gets its successor's delta instead.
+fn model_input(
+    frames: &Array2<f64>,
+    start: usize,
+    end: usize,
+    target: ExpMapTarget,
+) -> Array2<f64> {
+    let mut window = frames.slice(s![start..end, ..]).to_owned();
     if start == 0 && target == ExpMapTarget::H36m && window.nrows() > 1 {
         let next = window.slice(s![1, 0..6]).to_owned();
         window.slice_mut(s![0, 0..6]).assign(&next);
@@ -292,16 +350,19 @@ fn model_input(frames: &Array2<f64>, start: usize, target: ExpMapTarget) -> Arra
     window
 }
 
-/// The seed window for BVH output: its first frame's root delta replaced by the absolute pose it
-/// has in the whole clip, so that the written seed stays where it was in the input.
-fn anchored_window(
+/// Frames `start..end` of the clip. With `anchor` (BVH output), the first frame's root delta is
+/// replaced by the absolute pose it has in the whole clip, so that the written frames stay where
+/// they were in the input.
+fn clip_window(
     frames: &Array2<f64>,
     start: usize,
+    end: usize,
     target: ExpMapTarget,
     fps: f64,
+    anchor: bool,
 ) -> Array2<f64> {
-    let mut window = frames.slice(s![start.., ..]).to_owned();
-    if target == ExpMapTarget::H36m && start > 0 {
+    let mut window = frames.slice(s![start..end, ..]).to_owned();
+    if anchor && target == ExpMapTarget::H36m && start > 0 && end > start {
         let step = ((H36M_SOURCE_FPS / fps).round() as usize).max(1);
         let poses = integrate_root(frames.slice(s![..=start, ..]), step);
         let (d, rd) = delta_between(&RootPose::IDENTITY, &poses[start], 1);
@@ -420,7 +481,7 @@ fn run_batch(args: &Args, job: &Job) -> anyhow::Result<()> {
         .par_iter()
         .zip(&outputs)
         .map(|(seed, out)| {
-            let result = predict_one(job, seed, out);
+            let result = predict_one(job, seed, out, None);
             bar.inc(1);
             result
         })
@@ -506,11 +567,11 @@ mod tests {
         for t in 0..6 {
             frames[[t, 2]] = 10.0; // 10 mm forward per source frame
         }
-        let window = anchored_window(&frames, 3, ExpMapTarget::H36m, 25.0);
+        let window = clip_window(&frames, 3, 6, ExpMapTarget::H36m, 25.0, true);
         // Frame 3 at 25 Hz: 10 (frame 0, once) + 3 steps * 2 source frames * 10 = 70 mm.
         assert!((window[[0, 2]] - 70.0).abs() < 1e-9);
         assert_eq!(window[[1, 2]], 10.0);
-        let input = model_input(&frames, 0, ExpMapTarget::H36m);
+        let input = model_input(&frames, 0, 6, ExpMapTarget::H36m);
         assert_eq!(input[[0, 2]], 10.0);
     }
 }
