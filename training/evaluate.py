@@ -129,6 +129,8 @@ def summarize(per_action: dict[str, dict]) -> dict:
     acts = list(per_action)
     f = lambda key: float(np.nanmean([per_action[a][key] for a in acts]))  # noqa: E731
     e = np.stack([per_action[a]["euler"] for a in acts])
+    if e.shape[1] < 2:
+        e = np.pad(e, ((0, 0), (0, 2 - e.shape[1])), constant_values=np.nan)
     return {
         "npss_ref": f("npss_ref"),
         "npss_paper": f("npss_paper"),

@@ -82,6 +82,8 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--data-dir", default=None, help="H3.6M dataset dir (default $MOTION_DATA_DIR/h3.6m/dataset)")
     g.add_argument("--actions", default="all", help="'all' or comma-separated action labels")
     g.add_argument("--val-per-action", type=int, default=4)
+    g.add_argument("--seed-frames", type=int, default=h36m.SEED_FRAMES, help="seed length S of training windows")
+    g.add_argument("--horizon", type=int, default=h36m.HORIZON, help="predicted frames T of training windows")
     g = p.add_argument_group("optimisation")
     g.add_argument("--iterations", type=int, default=10000)
     g.add_argument("--batch", type=int, default=32)
@@ -137,6 +139,8 @@ def parse_actions(spec: str) -> list[str]:
 def model_config(args, dims_used) -> dict:
     """Weights-schema config for the chosen model and sizes."""
     kw = {
+        "seed_frames": args.seed_frames,
+        "horizon": args.horizon,
         "hidden": args.hidden,
         "residual": args.residual == "true",
         "dims_used": [int(d) for d in dims_used],
@@ -210,15 +214,20 @@ def auto_conditioning_loss(model, frames: torch.Tensor, actions: torch.Tensor, s
 
 
 class Validator:
-    """Fixed S5 validation windows, scored with the protocol's metrics on full frames (eps = 0 for the plan)."""
+    """Fixed S5 validation windows, scored with the protocol's metrics on full frames (eps = 0 for the plan).
 
-    def __init__(self, windows, stats: h36m.NormStats, actions: list[str]):
+    Windows hold the protocol's 50 seed + 100 frames; a model trained with other lengths is seeded with the last
+    `seed_frames` of the 50 and scored on the first `horizon` frames after them."""
+
+    def __init__(self, windows, stats: h36m.NormStats, actions: list[str], seed_frames: int = h36m.SEED_FRAMES,
+                 horizon: int = h36m.HORIZON):
         self.actions = [a for a in actions if any(w.action == a for w in windows)]
         self.windows = [w for w in windows if w.action in self.actions]
         self.stats = stats
         full = np.stack([w.frames for w in self.windows])  # [N, 150, F]
-        self.seed_full = full[:, : h36m.SEED_FRAMES]
-        self.gt_full = full[:, h36m.SEED_FRAMES :]
+        split = h36m.SEED_FRAMES
+        self.seed_full = full[:, split - min(seed_frames, split) : split]
+        self.gt_full = full[:, split : split + horizon]
         self.seed_norm = torch.from_numpy(stats.normalize(self.seed_full).astype(np.float32))
         self.window_actions = [w.action for w in self.windows]
 
@@ -251,7 +260,7 @@ class Validator:
             a: {
                 "npss_ref": v["npss_ref"],
                 "euler_80": float(v["euler"][1]),
-                "euler_1000": float(v["euler"][24]),
+                "euler_1000": float(v["euler"][24]) if len(v["euler"]) > 24 else float("nan"),
                 "speed_ratio": v["speed_ratio"],
             }
             for a, v in per_action.items()
@@ -358,7 +367,7 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
         dataset = h36m.load_training_set(args.data_dir, actions, log=log)
     if val_windows is None:
         val_windows = h36m.validation_windows(args.data_dir, actions, args.val_per_action, log=log)
-    validator = Validator(val_windows, dataset.stats, actions)
+    validator = Validator(val_windows, dataset.stats, actions, args.seed_frames, args.horizon)
     config = model_config(args, dataset.stats.dims_used)
     if resume_state is None:
         torch.manual_seed(args.seed)
@@ -401,7 +410,7 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
     if resume_state is None:
         atomic_save(snapshot(), ckpt_path)  # iteration 0: a rollback target from the start
 
-    seed_frames, horizon = h36m.SEED_FRAMES, h36m.HORIZON
+    seed_frames, horizon = args.seed_frames, args.horizon
     lr_every = max(1, int(round(args.lr_every * args.schedule_scale)))
     history = collections.deque(state["cl_history"], maxlen=100)
     t_last = time.time()

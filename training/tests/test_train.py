@@ -33,6 +33,7 @@ def synthetic_dataset(seed=0, frames=400):
 
 
 SMALL = ["--hidden", "8", "--plan-hidden", "4", "--batch", "2", "--log-every", "1", "--val-every", "2"]
+SMALL += ["--seed-frames", "6", "--horizon", "8"]
 
 
 def run(tmp, extra, ds, quiet=True):
