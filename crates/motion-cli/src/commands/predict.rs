@@ -298,18 +298,14 @@ fn predict_one(
     // `end` followed by a continuation (a prediction, or the file's own frames for --truth).
     let first_written = if job.prediction_only { end } else { start };
     let written = |continuation: ndarray::ArrayView2<'_, f64>, format: FileFormat| {
-        let anchor = format == FileFormat::Bvh;
+        // Only the poses of the history: a continuation's first frame is placed by its own delta.
+        let known = seed.poses.as_deref().map(|p| &p[..end.min(p.len())]);
+        let anchor = (format == FileFormat::Bvh).then_some(known);
         let history = seed.frames.slice(s![..end, ..]);
         let whole =
             ndarray::concatenate(ndarray::Axis(0), &[history, continuation]).expect("same width");
-        clip_window(
-            &whole,
-            first_written,
-            whole.nrows(),
-            job.target,
-            config.fps,
-            anchor,
-        )
+        let stop = whole.nrows();
+        clip_window(&whole, first_written, stop, job.target, config.fps, anchor)
     };
     let samples: Vec<Array2<f64>> = predictions
         .outer_iter()
@@ -352,20 +348,35 @@ fn model_input(
 
 /// Frames `start..end` of the clip. With `anchor` (BVH output), the first frame's root delta is
 /// replaced by the absolute pose it has in the whole clip, so that the written frames stay where
-/// they were in the input.
+/// they were in the input; `poses` (exact absolute poses of the first frames, if known) are
+/// preferred to integrating the deltas.
 fn clip_window(
     frames: &Array2<f64>,
     start: usize,
     end: usize,
     target: ExpMapTarget,
     fps: f64,
-    anchor: bool,
+    anchor: Option<Option<&[RootPose]>>,
 ) -> Array2<f64> {
     let mut window = frames.slice(s![start..end, ..]).to_owned();
-    if anchor && target == ExpMapTarget::H36m && start > 0 && end > start {
+    let Some(poses) = anchor else {
+        return window;
+    };
+    if target == ExpMapTarget::H36m && start > 0 && end > start {
         let step = ((H36M_SOURCE_FPS / fps).round() as usize).max(1);
-        let poses = integrate_root(frames.slice(s![..=start, ..]), step);
-        let (d, rd) = delta_between(&RootPose::IDENTITY, &poses[start], 1);
+        let delta = |t: usize| {
+            let r = frames.row(t);
+            ([r[0], r[1], r[2]], [r[3], r[4], r[5]])
+        };
+        let pose = match poses {
+            Some(p) if start < p.len() => p[start],
+            Some(p) if start == p.len() && start > 0 => {
+                let (d, rd) = delta(start);
+                p[start - 1].advanced(d, rd, step)
+            }
+            _ => integrate_root(frames.slice(s![..=start, ..]), step)[start],
+        };
+        let (d, rd) = delta_between(&RootPose::IDENTITY, &pose, 1);
         for axis in 0..3 {
             window[[0, axis]] = d[axis];
             window[[0, 3 + axis]] = rd[axis];
@@ -567,7 +578,7 @@ mod tests {
         for t in 0..6 {
             frames[[t, 2]] = 10.0; // 10 mm forward per source frame
         }
-        let window = clip_window(&frames, 3, 6, ExpMapTarget::H36m, 25.0, true);
+        let window = clip_window(&frames, 3, 6, ExpMapTarget::H36m, 25.0, Some(None));
         // Frame 3 at 25 Hz: 10 (frame 0, once) + 3 steps * 2 source frames * 10 = 70 mm.
         assert!((window[[0, 2]] - 70.0).abs() < 1e-9);
         assert_eq!(window[[1, 2]], 10.0);

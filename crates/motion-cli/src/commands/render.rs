@@ -17,7 +17,9 @@ use serde_json::json;
 use super::UsageError;
 use paint::Picture;
 use raster::write_atomically;
-use scene::{floor_grid, floor_height, load_track, timeline, Camera};
+use scene::{
+    floor_grid, floor_height, load_track, rotate_track, timeline, upright_rotation, Camera,
+};
 
 /// The long help after the options.
 const LONG_HELP: &str = "\
@@ -72,6 +74,10 @@ pub struct Args {
     /// Animation height in pixels.
     #[arg(long, default_value_t = 400)]
     pub height: usize,
+    /// Keep a motion that leans as a whole as it is (by default it is turned upright, about its
+    /// first root position, with --compare turned along).
+    #[arg(long)]
+    pub no_upright: bool,
     /// Print what was written as JSON on stdout.
     #[arg(long)]
     pub json: bool,
@@ -132,8 +138,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             UsageError("--width and --height must be between 64 and 4096 pixels".into()).into(),
         );
     }
-    let first = load_track(&args.input, args.input_fps, args.sample)?;
-    let second = match &args.compare {
+    let mut first = load_track(&args.input, args.input_fps, args.sample)?;
+    let mut second = match &args.compare {
         Some(path) => Some(load_track(path, args.input_fps, args.sample)?),
         None => None,
     };
@@ -145,6 +151,21 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 first.len()
             ))
             .into());
+        }
+    }
+    if !args.no_upright {
+        if let Some((r, degrees)) = upright_rotation(&first) {
+            let centre = first.root(0);
+            rotate_track(&mut first, &r, centre);
+            if let Some(s) = second.as_mut() {
+                rotate_track(s, &r, centre);
+            }
+            if !args.quiet && !args.json && degrees > 3.0 {
+                eprintln!(
+                    "note: {} leans {degrees:.0}° on average; drawn upright (--no-upright keeps it)",
+                    first.name
+                );
+            }
         }
     }
     let mut tracks = vec![&first];

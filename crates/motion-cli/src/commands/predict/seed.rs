@@ -8,6 +8,8 @@ use motion_core::formats::h36m_text::read_expmap_text;
 use motion_core::formats::npy::read_npy_frames;
 use motion_core::formats::FileFormat;
 use motion_core::motion::{Motion, MotionLayout};
+use motion_core::root::{integrate_root, RootPose};
+use motion_core::skeleton::H36M_SOURCE_FPS;
 use ndarray::{s, Array2};
 use std::sync::Arc;
 
@@ -22,6 +24,10 @@ const SAME_RATE: f64 = 1e-3;
 pub struct Seed {
     /// Exp-map frames (`frames x frame_dims`, root as the target's encoding) at the model's rate.
     pub frames: Array2<f64>,
+    /// The exact absolute root pose of each frame when the frames alone cannot give it: H3.6M
+    /// deltas downsampled from the source rate (integrating the kept deltas twice drifts over a
+    /// long take; these come from integrating every source frame).
+    pub poses: Option<Vec<RootPose>>,
     /// One-line notices for the user (resampling).
     pub notices: Vec<String>,
 }
@@ -39,6 +45,7 @@ pub fn load_seed(
     input_fps: f64,
 ) -> anyhow::Result<Seed> {
     let mut notices = Vec::new();
+    let mut poses = None;
     let frames = match FileFormat::from_path(path)? {
         FileFormat::Bvh => {
             let mut bvh = read_bvh(path)?;
@@ -85,10 +92,30 @@ pub fn load_seed(
                     format!("frame {frame} has a NaN or infinite value"),
                 ));
             }
+            if target == ExpMapTarget::H36m {
+                poses = downsampled_poses(&frames, input_fps, fps);
+            }
             resample_expmap(frames, target, input_fps, fps, path, &mut notices)?
         }
     };
-    Ok(Seed { frames, notices })
+    Ok(Seed {
+        frames,
+        poses,
+        notices,
+    })
+}
+
+/// Exact absolute root poses of H3.6M frames at `from` Hz kept every k-th frame for `to` Hz,
+/// when `from` is a whole multiple k > 1 of `to`.
+fn downsampled_poses(frames: &Array2<f64>, from: f64, to: f64) -> Option<Vec<RootPose>> {
+    let ratio = from / to;
+    let k = ratio.round();
+    if k < 2.0 || (ratio - k).abs() >= SAME_RATE * k {
+        return None;
+    }
+    let step = ((H36M_SOURCE_FPS / from).round() as usize).max(1);
+    let poses = integrate_root(frames.view(), step);
+    Some(poses.into_iter().step_by(k as usize).collect())
 }
 
 /// Exp-map frames at `from` Hz brought to `to` Hz: a whole ratio keeps every k-th frame (as the

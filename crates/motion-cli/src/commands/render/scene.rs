@@ -225,6 +225,56 @@ fn bones(skeleton: &Skeleton, positions: &Array3<f64>) -> Vec<Bone> {
         .collect()
 }
 
+/// The rotation (column convention) that turns the track's average "up" (from the root to the
+/// joint highest above it on average) onto +y, and its angle in degrees; `None` for a motion
+/// that is upright already (under 1°) or lies (over 60°: crawling or lying motions stay as they
+/// are). H3.6M takes start from an unknown root orientation, so some lean as a whole.
+pub fn upright_rotation(track: &Track) -> Option<([[f64; 3]; 3], f64)> {
+    let (frames, joints, _) = track.positions.dim();
+    let mean_offset = |j: usize, a: usize| {
+        (0..frames)
+            .map(|f| track.positions[[f, j, a]] - track.positions[[f, 0, a]])
+            .sum::<f64>()
+            / frames as f64
+    };
+    let top = (1..joints).max_by(|&a, &b| mean_offset(a, 1).total_cmp(&mean_offset(b, 1)))?;
+    let v = [0, 1, 2].map(|a| mean_offset(top, a));
+    let norm = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    if norm < 1e-9 {
+        return None;
+    }
+    let v = v.map(|x| x / norm);
+    let angle = v[1].clamp(-1.0, 1.0).acos();
+    let degrees = angle.to_degrees();
+    if !(1.0..=60.0).contains(&degrees) {
+        return None;
+    }
+    // Axis v x y, normalized; Rodrigues' formula.
+    let axis = [-v[2], 0.0, v[0]];
+    let n = (axis[0] * axis[0] + axis[2] * axis[2]).sqrt();
+    let k = axis.map(|x| x / n);
+    let (s, c) = angle.sin_cos();
+    let mut r = [[0.0; 3]; 3];
+    let skew = [[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]];
+    for i in 0..3 {
+        for j in 0..3 {
+            let kk = k[i] * k[j] - if i == j { 1.0 } else { 0.0 };
+            r[i][j] = if i == j { 1.0 } else { 0.0 } + s * skew[i][j] + (1.0 - c) * kk;
+        }
+    }
+    Some((r, degrees))
+}
+
+/// Rotates every position of `track` by `r` about the point `centre`.
+pub fn rotate_track(track: &mut Track, r: &[[f64; 3]; 3], centre: [f64; 3]) {
+    for mut p in track.positions.rows_mut() {
+        let d = [p[0] - centre[0], p[1] - centre[1], p[2] - centre[2]];
+        for i in 0..3 {
+            p[i] = centre[i] + r[i][0] * d[0] + r[i][1] * d[1] + r[i][2] * d[2];
+        }
+    }
+}
+
 /// An orthographic camera: world point -> (right, up, depth) in mm.
 #[derive(Debug, Clone, Copy)]
 pub struct Camera {
@@ -386,6 +436,33 @@ mod tests {
         // The basis is orthonormal.
         let (a, b, c) = cam.project([0.3, -0.4, 0.5]);
         assert!(((a * a + b * b + c * c) - 0.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_leaning_figure_is_turned_upright() {
+        // A two-joint "figure": root and a head 1 m away, leaning 20° towards +x.
+        let lean = 20f64.to_radians();
+        let positions = Array3::from_shape_fn((3, 2, 3), |(f, j, a)| {
+            let base = [f as f64 * 100.0, 900.0, 0.0][a];
+            let head = [1000.0 * lean.sin(), 1000.0 * lean.cos(), 0.0][a];
+            base + if j == 1 { head } else { 0.0 }
+        });
+        let mut track = Track {
+            name: "t".into(),
+            bones: Vec::new(),
+            positions,
+            fps: 25.0,
+        };
+        let (r, degrees) = upright_rotation(&track).unwrap();
+        assert!((degrees - 20.0).abs() < 1e-9);
+        let centre = track.root(0);
+        rotate_track(&mut track, &r, centre);
+        for f in 0..3 {
+            let dx = track.positions[[f, 1, 0]] - track.positions[[f, 0, 0]];
+            let dy = track.positions[[f, 1, 1]] - track.positions[[f, 0, 1]];
+            assert!(dx.abs() < 1e-9 && (dy - 1000.0).abs() < 1e-9);
+        }
+        assert!(upright_rotation(&track).is_none());
     }
 
     #[test]
