@@ -933,3 +933,15 @@ fn euler_channels_stay_continuous_through_gimbal_and_wrap() {
         }
     }
 }
+
+#[test]
+fn absurd_frame_time_is_refused_not_looped_over() {
+    let mut bvh = expmap_to_bvh(&h36m_motion(synthetic_h36m(3), 50.0)).unwrap();
+    bvh.frame_time = 1e300;
+    let text = to_bvh_string(&bvh).unwrap();
+    let bvh = parse_bvh(&text, "slow.bvh").unwrap();
+    let error = bvh_to_expmap(&bvh, ExpMapTarget::H36m)
+        .unwrap_err()
+        .to_string();
+    assert!(error.contains("too low for H3.6M root deltas"), "{error}");
+}

@@ -91,12 +91,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         ))
         .into());
     }
-    if !(args.input_fps.is_finite() && args.input_fps > 0.0) {
-        return Err(UsageError(format!(
-            "--input-fps must be positive, got {}",
-            args.input_fps
-        ))
-        .into());
+    // H3.6M root deltas are per 50 Hz source frame: below 1 fps one frame would span more than 50.
+    for (flag, rate) in [("--input-fps", Some(args.input_fps)), ("--fps", args.fps)] {
+        if let Some(rate) = rate.filter(|r| !(r.is_finite() && *r >= 1.0)) {
+            return Err(UsageError(format!(
+                "{flag} must be at least 1 (frames per second), got {rate}"
+            ))
+            .into());
+        }
     }
 
     let mut loaded = load(&args.input, in_format, args.input_fps)?;

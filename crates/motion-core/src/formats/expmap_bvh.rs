@@ -97,6 +97,13 @@ pub enum ConvertError {
         /// Its joint count (End Sites excluded).
         joints: usize,
     },
+    /// The frame rate is too low for H3.6M root deltas (one step spanning more than
+    /// [`MAX_ROOT_STEP`] source frames).
+    #[error("{fps} fps is too low for H3.6M root deltas (at least 1 fps: deltas are per 50 Hz source frame)")]
+    FrameRate {
+        /// The rejected rate.
+        fps: f64,
+    },
     /// The values of a frame are not finite.
     #[error("frame {frame} has a non-finite value")]
     NonFinite {
@@ -162,15 +169,19 @@ fn joint_channels(skeleton: &Skeleton, j: usize) -> Result<JointChannels, Conver
     })
 }
 
+/// The longest root step (source frames per frame) the conversions accept: 1 fps for H3.6M.
+pub const MAX_ROOT_STEP: usize = 50;
+
 /// Source frames per frame for H3.6M root deltas at this frame time: `round(50 Hz · frame_time)`,
-/// at least 1 (1 at 50 Hz, 2 at 25 Hz).
-pub fn root_step_for_frame_time(frame_time: f64) -> usize {
+/// at least 1 (1 at 50 Hz, 2 at 25 Hz); an error above [`MAX_ROOT_STEP`].
+pub fn root_step_for_frame_time(frame_time: f64) -> Result<usize, ConvertError> {
     let step = (H36M_SOURCE_FPS * frame_time).round();
-    if step.is_finite() && step >= 1.0 {
-        step as usize
-    } else {
-        1
+    if !(step.is_finite() && step <= MAX_ROOT_STEP as f64) {
+        return Err(ConvertError::FrameRate {
+            fps: 1.0 / frame_time,
+        });
     }
+    Ok((step as usize).max(1))
 }
 
 /// Converts an exp-map motion (H3.6M with root deltas, CMU with an absolute root) to BVH on the
@@ -193,7 +204,9 @@ pub fn expmap_to_bvh(motion: &Motion) -> Result<Bvh, ConvertError> {
         return Err(ConvertError::NonFinite { frame });
     }
     let poses: Vec<RootPose> = match root {
-        RootEncoding::Deltas => integrate_root(source, motion.root_step()),
+        RootEncoding::Deltas => {
+            integrate_root(source, root_step_for_frame_time(motion.frame_time())?)
+        }
         RootEncoding::Absolute => source
             .rows()
             .into_iter()
@@ -447,7 +460,7 @@ pub fn bvh_to_expmap(bvh: &Bvh, target: ExpMapTarget) -> Result<Motion, ConvertE
     }
     match target.root() {
         RootEncoding::Deltas => {
-            let deltas = closed_loop_deltas(&poses, root_step_for_frame_time(bvh.frame_time));
+            let deltas = closed_loop_deltas(&poses, root_step_for_frame_time(bvh.frame_time)?);
             frames.slice_mut(ndarray::s![.., 0..6]).assign(&deltas);
         }
         RootEncoding::Absolute => {
