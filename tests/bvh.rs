@@ -8,7 +8,9 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use motion::core::formats::bvh::{parse_bvh, read_bvh, to_bvh_string, write_bvh, Bvh};
-use motion::core::formats::expmap_bvh::{bvh_to_expmap, expmap_to_bvh, ExpMapTarget};
+use motion::core::formats::expmap_bvh::{
+    bvh_to_expmap, expmap_to_bvh, offset_difference, ExpMapTarget,
+};
 use motion::core::formats::h36m_text::{downsample_protocol, parse_expmap_text};
 use motion::core::kinematics::{channel_positions, expmap_positions};
 use motion::core::motion::{Motion, MotionLayout, RootEncoding};
@@ -675,6 +677,7 @@ fn h36m_to_bvh_fk_equals_expmap_fk_and_round_trips() {
         let read = parse_bvh(&text, "h36m.bvh").unwrap();
         assert_eq!(read, bvh);
         assert_eq!(ExpMapTarget::detect(&read), Ok(ExpMapTarget::H36m));
+        assert_eq!(offset_difference(&read, ExpMapTarget::H36m), 0.0);
         let back = bvh_to_expmap(&read, ExpMapTarget::H36m).unwrap();
         assert_eq!(
             back.layout(),

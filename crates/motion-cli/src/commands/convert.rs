@@ -5,7 +5,9 @@ use std::sync::Arc;
 
 use anyhow::Context;
 use motion_core::formats::bvh::{read_bvh, write_bvh, Bvh};
-use motion_core::formats::expmap_bvh::{bvh_to_expmap, expmap_to_bvh, ExpMapTarget};
+use motion_core::formats::expmap_bvh::{
+    bvh_to_expmap, expmap_to_bvh, offset_difference, ExpMapTarget,
+};
 use motion_core::formats::h36m_text::{read_expmap_text, write_expmap_text};
 use motion_core::formats::npy::{read_npy_frames, write_npy};
 use motion_core::formats::FileFormat;
@@ -132,6 +134,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                         UsageError(format!("{}: {e}", args.input.display()))
                     };
                     let target = ExpMapTarget::detect(&bvh).map_err(bad)?;
+                    let difference = offset_difference(&bvh, target);
+                    if difference > 1e-6 {
+                        eprintln!(
+                            "warning: {}: joint offsets differ from the built-in {} skeleton by up to {difference}; exp-map frames keep only rotations and the root motion (in the BVH's units)",
+                            args.input.display(),
+                            target.name()
+                        );
+                    }
                     bvh_to_expmap(&bvh, target).map_err(bad)?.into_frames()
                 }
             };
