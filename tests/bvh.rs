@@ -948,3 +948,17 @@ fn absurd_frame_time_is_refused_not_looped_over() {
         .to_string();
     assert!(error.contains("too low for H3.6M root deltas"), "{error}");
 }
+
+#[test]
+fn bvh_is_a_motion_in_the_channels_layout() {
+    let bvh = parse_bvh(SMALL, "small.bvh").unwrap();
+    let motion = bvh.to_motion().unwrap();
+    assert_eq!(motion.layout(), MotionLayout::Channels);
+    assert_eq!(motion.len(), 2);
+    assert!((motion.fps() - 1.0 / 0.0333333).abs() < 1e-9);
+    let fk = channel_positions(&bvh.skeleton, bvh.frames.view()).unwrap();
+    assert_eq!(motion.positions(), fk);
+    let back = Bvh::from_motion(&motion).unwrap();
+    assert_eq!((back.skeleton, back.frames), (bvh.skeleton, bvh.frames));
+    assert!(Bvh::from_motion(&h36m_motion(synthetic_h36m(2), 50.0)).is_none());
+}

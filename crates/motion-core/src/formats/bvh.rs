@@ -17,10 +17,12 @@
 //! The writer uses the standard layout (tabs, one frame per line) and Rust's shortest
 //! round-trip representation of each number, so a written file reads back to the same values.
 use std::path::Path;
+use std::sync::Arc;
 
 use ndarray::Array2;
 
-use crate::error::FormatError;
+use crate::error::{FormatError, MotionError};
+use crate::motion::{Motion, MotionLayout};
 use crate::skeleton::Skeleton;
 
 mod parse;
@@ -43,6 +45,26 @@ impl Bvh {
     /// Frames per second (`1 / frame_time`).
     pub fn fps(&self) -> f64 {
         1.0 / self.frame_time
+    }
+
+    /// The motion in the [`MotionLayout::Channels`] layout (values as in the file).
+    pub fn to_motion(&self) -> Result<Motion, MotionError> {
+        Motion::new(
+            Arc::new(self.skeleton.clone()),
+            MotionLayout::Channels,
+            self.frames.clone(),
+            self.fps(),
+        )
+    }
+
+    /// A BVH of a motion in the [`MotionLayout::Channels`] layout (`None` for exp-map motions:
+    /// convert those with [`crate::formats::expmap_bvh::expmap_to_bvh`]).
+    pub fn from_motion(motion: &Motion) -> Option<Bvh> {
+        (motion.layout() == MotionLayout::Channels).then(|| Bvh {
+            skeleton: (**motion.skeleton()).clone(),
+            frames: motion.frames().to_owned(),
+            frame_time: motion.frame_time(),
+        })
     }
 }
 
