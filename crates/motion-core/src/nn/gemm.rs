@@ -128,6 +128,10 @@ impl MatMul {
 }
 
 /// `y = W x` or `y += W x` for a row-major `W [y.len(), inputs]`.
+///
+/// On x86-64 with AVX2 and FMA (detected at run time) the same kernel is compiled for those
+/// features and uses fused multiply-adds; elsewhere it is portable code the compiler vectorizes
+/// for the baseline target. Either way the result for a given machine is deterministic.
 pub fn gemv(x: &[f32], w: &[f32], inputs: usize, y: &mut [f32], accumulate: bool) {
     debug_assert_eq!(x.len(), inputs);
     if inputs == 0 {
@@ -136,32 +140,40 @@ pub fn gemv(x: &[f32], w: &[f32], inputs: usize, y: &mut [f32], accumulate: bool
         }
         return;
     }
-    for (yo, row) in y.iter_mut().zip(w.chunks_exact(inputs)) {
-        let d = dot(row, x);
-        *yo = if accumulate { *yo + d } else { d };
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+        {
+            // SAFETY: the CPU supports the features `gemv_avx2_fma` is compiled for.
+            unsafe { gemv_avx2_fma(x, w, inputs, y, accumulate) };
+            return;
+        }
+    }
+    gemv_kernel::<false>(x, w, inputs, y, accumulate);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn gemv_avx2_fma(x: &[f32], w: &[f32], inputs: usize, y: &mut [f32], accumulate: bool) {
+    gemv_kernel::<true>(x, w, inputs, y, accumulate);
+}
+
+/// Lanes per accumulator row: 16 f32 = two AVX registers, enough independent sums to hide the
+/// add latency.
+const LANES: usize = 16;
+
+#[inline(always)]
+fn madd<const FMA: bool>(a: f32, b: f32, acc: f32) -> f32 {
+    if FMA {
+        a.mul_add(b, acc)
+    } else {
+        acc + a * b
     }
 }
 
-/// Dot product with 16 independent accumulators (vectorizes without `-C target-cpu`).
-#[inline]
-pub fn dot(a: &[f32], b: &[f32]) -> f32 {
-    const LANES: usize = 16;
-    let n = a.len().min(b.len());
-    let (a, b) = (&a[..n], &b[..n]);
-    let mut acc = [0.0f32; LANES];
-    let ca = a.chunks_exact(LANES);
-    let cb = b.chunks_exact(LANES);
-    let (ra, rb) = (ca.remainder(), cb.remainder());
-    for (xa, xb) in ca.zip(cb) {
-        for k in 0..LANES {
-            acc[k] += xa[k] * xb[k];
-        }
-    }
-    let mut tail = 0.0f32;
-    for (p, q) in ra.iter().zip(rb) {
-        tail += p * q;
-    }
-    // Pairwise reduction keeps the rounding error small and the order fixed (determinism).
+/// Pairwise sum of the lanes (fixed order, so results are deterministic).
+#[inline(always)]
+fn reduce(mut acc: [f32; LANES]) -> f32 {
     let mut width = LANES / 2;
     while width > 0 {
         for k in 0..width {
@@ -169,7 +181,65 @@ pub fn dot(a: &[f32], b: &[f32]) -> f32 {
         }
         width /= 2;
     }
-    acc[0] + tail
+    acc[0]
+}
+
+/// Four rows at a time, so each load of `x` serves four dot products.
+#[inline(always)]
+fn gemv_kernel<const FMA: bool>(
+    x: &[f32],
+    w: &[f32],
+    inputs: usize,
+    y: &mut [f32],
+    accumulate: bool,
+) {
+    let rows = y.len();
+    let w = &w[..rows * inputs];
+    let full = inputs / LANES * LANES;
+    let (x_body, x_tail) = x.split_at(full);
+    let mut o = 0;
+    while o + 4 <= rows {
+        let r = |k: usize| &w[(o + k) * inputs..(o + k + 1) * inputs];
+        let (r0, r1, r2, r3) = (r(0), r(1), r(2), r(3));
+        let mut acc = [[0.0f32; LANES]; 4];
+        for ((((xc, c0), c1), c2), c3) in x_body
+            .chunks_exact(LANES)
+            .zip(r0.chunks_exact(LANES))
+            .zip(r1.chunks_exact(LANES))
+            .zip(r2.chunks_exact(LANES))
+            .zip(r3.chunks_exact(LANES))
+        {
+            for k in 0..LANES {
+                acc[0][k] = madd::<FMA>(c0[k], xc[k], acc[0][k]);
+                acc[1][k] = madd::<FMA>(c1[k], xc[k], acc[1][k]);
+                acc[2][k] = madd::<FMA>(c2[k], xc[k], acc[2][k]);
+                acc[3][k] = madd::<FMA>(c3[k], xc[k], acc[3][k]);
+            }
+        }
+        for (j, row) in [r0, r1, r2, r3].iter().enumerate() {
+            let mut d = reduce(acc[j]);
+            for (a, b) in row[full..].iter().zip(x_tail) {
+                d = madd::<FMA>(*a, *b, d);
+            }
+            y[o + j] = if accumulate { y[o + j] + d } else { d };
+        }
+        o += 4;
+    }
+    while o < rows {
+        let row = &w[o * inputs..(o + 1) * inputs];
+        let mut acc = [0.0f32; LANES];
+        for (xc, c) in x_body.chunks_exact(LANES).zip(row.chunks_exact(LANES)) {
+            for k in 0..LANES {
+                acc[k] = madd::<FMA>(c[k], xc[k], acc[k]);
+            }
+        }
+        let mut d = reduce(acc);
+        for (a, b) in row[full..].iter().zip(x_tail) {
+            d = madd::<FMA>(*a, *b, d);
+        }
+        y[o] = if accumulate { y[o] + d } else { d };
+        o += 1;
+    }
 }
 
 #[cfg(test)]
@@ -210,6 +280,26 @@ mod tests {
             MatMul::dense(b, i, o).run(&x, &w, &mut y, true);
             for (p, q) in y.iter().zip(&expect) {
                 assert!((p - 2.0 * q).abs() < 2e-4);
+            }
+        }
+    }
+
+    #[test]
+    fn portable_and_fused_kernels_match_naive() {
+        for &(i, o) in &[(37, 11), (216, 9), (16, 4), (5, 3)] {
+            let x = data(i, 5);
+            let w = data(o * i, 6);
+            let expect = naive(&x, &w, 1, i, o);
+            for fused in [false, true] {
+                let mut y = vec![0.0; o];
+                if fused {
+                    gemv_kernel::<true>(&x, &w, i, &mut y, false);
+                } else {
+                    gemv_kernel::<false>(&x, &w, i, &mut y, false);
+                }
+                for (p, q) in y.iter().zip(&expect) {
+                    assert!((p - q).abs() < 1e-4, "fused {fused}: {p} vs {q}");
+                }
             }
         }
     }
