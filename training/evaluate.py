@@ -6,6 +6,8 @@ variant with which the published numbers were computed). Used to choose checkpoi
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
 #: float32 epsilon, as in the evaluation code's expmap2rotmat.
@@ -138,3 +140,53 @@ def summarize(per_action: dict[str, dict]) -> dict:
         "euler_1000": float(e[:, 24].mean()) if e.shape[1] > 24 else float("nan"),
         "speed_ratio": f("speed_ratio"),
     }
+
+
+def main(argv=None) -> int:
+    """`python -m training.evaluate --weights FILE [--actions a,b|all]`: score a weights file on the S5 validation
+    windows (never the test windows) next to zero-velocity, one line per action."""
+    import argparse
+    import json
+    import sys
+
+    from . import data as h36m
+    from .export import load_weights
+    from .train import Validator, fmt_val
+
+    p = argparse.ArgumentParser(prog="python -m training.evaluate", description=main.__doc__)
+    p.add_argument("--weights", required=True)
+    p.add_argument("--data-dir", default=None)
+    p.add_argument("--val-per-action", type=int, default=4)
+    p.add_argument("--json", action="store_true")
+    args = p.parse_args(argv)
+    try:
+        model = load_weights(args.weights)
+    except (OSError, ValueError) as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    actions = model.actions or list(h36m.ACTIONS)
+    stats = h36m.NormStats(
+        mean=model.norm.mean.double().numpy(), std=model.norm.std.double().numpy(),
+        dims_used=np.array(model.dims_used, dtype=np.int64),
+    )
+    data_dir = Path(args.data_dir) if args.data_dir else None
+    windows = h36m.validation_windows(data_dir, actions, args.val_per_action, log=lambda m: None)
+    v = Validator(windows, stats, actions, int(model.config["seed_frames"]), int(model.config["horizon"]))
+    res, base = v(model), v.baseline()
+    if args.json:
+        print(json.dumps({"model": res, "zero_velocity": base}))
+        return 0
+    print(f"model:         {fmt_val(res)}")
+    print(f"zero-velocity: {fmt_val(base)}")
+    print("action             npss_ref (zero-vel)   euler@80 (zero-vel)   euler@1000 (zero-vel)   speed ratio")
+    for a, m in res["per_action"].items():
+        b = base["per_action"][a]
+        print(
+            f"{a:16s}  {m['npss_ref']:8.4f} ({b['npss_ref']:.4f})   {m['euler_80']:8.4f} ({b['euler_80']:.4f})"
+            f"   {m['euler_1000']:8.4f} ({b['euler_1000']:.4f})     {m['speed_ratio']:.2f}"
+        )
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
