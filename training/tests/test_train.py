@@ -110,3 +110,23 @@ def test_blow_up_rolls_back_and_halves_lr(tmp_path, monkeypatch):
 def test_explicit_args_detects_given_flags():
     assert train.explicit_args(["--run-dir", "x", "--iterations", "5", "--resume"]) == {"run_dir", "iterations", "resume"}
     assert isinstance(train.build_parser().parse_args([]), argparse.Namespace)
+
+
+def test_evaluate_cli_scores_an_exported_file(tmp_path, capsys):
+    import json
+    import sys
+
+    from training import evaluate
+
+    if not (data.default_dataset_dir() / "S5").is_dir():
+        print("SKIPPED: H3.6M data not found (set MOTION_DATA_DIR)", file=sys.stderr)
+        pytest.skip("H3.6M data not found")
+    ds = synthetic_dataset(3)
+    run(tmp_path / "e", ["--iterations", "1"], ds)
+    out = tmp_path / "e.safetensors"
+    assert train.main(["--export", str(out), "--from", str(tmp_path / "e" / "last.pt"), "--dtype", "float32"]) == 0
+    capsys.readouterr()
+    assert evaluate.main(["--weights", str(out), "--json", "--val-per-action", "1"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert set(res) == {"model", "zero_velocity"} and len(res["model"]["per_action"]) == 13
+    assert evaluate.main(["--weights", str(tmp_path / "missing.safetensors")]) == 2
