@@ -180,3 +180,91 @@ pub fn select_actions(
     }
     Ok(selection)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use motion_core::model::{Architecture, ModelConfig};
+
+    fn small_model(architecture: Architecture, actions: &[&str]) -> MotionModel {
+        let mut config = ModelConfig::paper(architecture);
+        config.hidden = 4;
+        if architecture == Architecture::VgruD {
+            config.plan_hidden = Some(2);
+        }
+        config.actions = actions.iter().map(|a| a.to_string()).collect();
+        MotionModel::random(&config, 7).unwrap()
+    }
+
+    /// A dataset directory whose S5 holds (empty) files for walking and eating only.
+    fn dataset(name: &str) -> PathBuf {
+        let dir =
+            std::env::temp_dir().join(format!("eval-selection-{name}-{}", std::process::id()));
+        let s5 = dir.join("S5");
+        std::fs::create_dir_all(&s5).unwrap();
+        for file in ["walking_1", "walking_2", "eating_1", "eating_2"] {
+            std::fs::write(s5.join(format!("{file}.txt.gz")), b"").unwrap();
+        }
+        dir
+    }
+
+    fn strings(list: &[&str]) -> Vec<String> {
+        list.iter().map(|s| s.to_string()).collect()
+    }
+
+    #[test]
+    fn a_single_action_model_is_held_to_its_action() {
+        let dir = dataset("single");
+        let model = small_model(Architecture::VgruD, &["walking"]);
+        let err = select_actions(&strings(&["eating"]), &model, &dir, false).unwrap_err();
+        assert!(err.0.contains("trained on `walking` only") && err.0.contains("--any-action"));
+        let all = select_actions(&strings(&["all"]), &model, &dir, false).unwrap();
+        assert_eq!(all.planned.len(), 1);
+        assert_eq!(all.planned[0].action, "walking");
+        assert_eq!(all.skipped.len(), 14);
+        // --any-action: eating is run, conditioned on the model's only label.
+        let any = select_actions(&strings(&["eating"]), &model, &dir, true).unwrap();
+        assert_eq!(any.planned[0].label.as_deref(), Some("walking"));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn multi_action_and_unconditioned_models() {
+        let dir = dataset("multi");
+        let multi = small_model(Architecture::VgruD, &ACTIONS);
+        let s = select_actions(
+            &strings(&["walking", "eating", "smoking"]),
+            &multi,
+            &dir,
+            false,
+        )
+        .unwrap();
+        let planned: Vec<_> = s
+            .planned
+            .iter()
+            .map(|p| (p.action, p.label.clone()))
+            .collect();
+        assert_eq!(
+            planned,
+            [
+                ("walking", Some("walking".to_string())),
+                ("eating", Some("eating".to_string()))
+            ]
+        );
+        assert_eq!(s.skipped.len(), 1);
+        assert!(
+            s.skipped[0].1.contains("smoking_1.txt.gz"),
+            "{:?}",
+            s.skipped
+        );
+        // An unconditioned model without provenance: any action, no label.
+        let grud = small_model(Architecture::GruD, &[]);
+        let s = select_actions(&strings(&["eating"]), &grud, &dir, false).unwrap();
+        assert_eq!(s.planned[0].label, None);
+        let err = select_actions(&strings(&["Jogging"]), &grud, &dir, false).unwrap_err();
+        assert!(err
+            .0
+            .starts_with("unknown action `Jogging`; valid actions: all, directions"));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
