@@ -362,3 +362,59 @@ fn parameter_counts_at_paper_size() {
         vgru.parameter_count()
     );
 }
+
+// ---- shipped weights on real data -----------------------------------------------------------------
+
+/// The shipped multi-action VGRU-d continues a real walking clip for 250 frames (10 s, past two
+/// re-planned blocks) with finite angles of a plausible size. Skips visibly without the data.
+#[test]
+fn shipped_weights_continue_real_motion() {
+    let weights =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("weights/vgru_d_multi.safetensors");
+    if !weights.exists() {
+        eprintln!(
+            "SKIPPED: shipped_weights_continue_real_motion: {} not found",
+            weights.display()
+        );
+        return;
+    }
+    let data_dir = std::env::var_os("MOTION_DATA_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data"));
+    let clip = data_dir.join("h3.6m/dataset/S5/walking_1.txt.gz");
+    if !clip.exists() {
+        eprintln!(
+            "SKIPPED: shipped_weights_continue_real_motion: {} not found (set MOTION_DATA_DIR)",
+            clip.display()
+        );
+        return;
+    }
+    let frames = motion::core::formats::h36m_text::read_expmap_text(&clip).unwrap();
+    let frames = motion::core::formats::h36m_text::downsample_protocol(frames.view());
+    let model = Arc::new(MotionModel::load(&weights).unwrap());
+    let seed_len = model.config().seed_frames;
+    let mut g = Generator::new(Arc::clone(&model));
+    let action = model
+        .config()
+        .actions
+        .iter()
+        .find(|a| *a == "walking")
+        .cloned();
+    g.start(
+        frames.slice(ndarray::s![100..100 + seed_len, ..]),
+        action.as_deref(),
+        Noise::Seed(11),
+    )
+    .unwrap();
+    let generated = g.generate(250).unwrap();
+    let used = &model.config().dims_used;
+    let worst = generated
+        .rows()
+        .into_iter()
+        .flat_map(|r| used.iter().map(move |&d| r[d].abs()))
+        .fold(0.0f32, f32::max);
+    assert!(
+        worst.is_finite() && worst < 50.0,
+        "largest generated value {worst}"
+    );
+}

@@ -146,15 +146,46 @@ fn text_summary(model: &MotionModel) -> String {
         line("provenance", "(none recorded)".into());
     } else {
         let _ = writeln!(s, "provenance");
+        let width = model
+            .provenance()
+            .keys()
+            .map(String::len)
+            .max()
+            .unwrap_or(0);
         for (key, value) in model.provenance() {
-            let shown = match value {
-                serde_json::Value::String(text) => text.clone(),
-                other => other.to_string(),
-            };
-            let _ = writeln!(s, "  {key:<13} {shown}");
+            let _ = writeln!(s, "  {key:<width$}  {}", brief(value));
         }
     }
     s
+}
+
+/// A one-line rendering of a provenance value: strings bare, numbers rounded to 4 decimals,
+/// arrays of scalars joined, objects as their scalar fields plus a count of nested entries
+/// (`--json` prints everything).
+fn brief(value: &serde_json::Value) -> String {
+    use serde_json::Value;
+    match value {
+        Value::String(text) => text.clone(),
+        Value::Number(n) => match (n.as_i64(), n.as_f64()) {
+            (Some(i), _) => i.to_string(),
+            (None, Some(f)) => format!("{f:.4}"),
+            _ => n.to_string(),
+        },
+        Value::Array(items) if items.iter().all(|v| !v.is_object() && !v.is_array()) => {
+            items.iter().map(brief).collect::<Vec<_>>().join(", ")
+        }
+        Value::Array(items) => format!("[{} entries]", items.len()),
+        Value::Object(map) => map
+            .iter()
+            .map(|(k, v)| match v {
+                Value::Object(inner) => format!("{k}: {{{} entries}}", inner.len()),
+                Value::Array(inner) => format!("{k}: [{} entries]", inner.len()),
+                _ => format!("{k}={}", brief(v)),
+            })
+            .collect::<Vec<_>>()
+            .join(", "),
+        other => other.to_string(),
+    }
 }
 
 fn json_summary(model: &MotionModel) -> anyhow::Result<String> {
