@@ -75,7 +75,7 @@ pub struct Args {
     #[arg(long, default_value_t = 400)]
     pub height: usize,
     /// Keep a motion that leans as a whole as it is (by default it is turned upright, about its
-    /// first root position, with --compare turned along).
+    /// first root position, with --compare turned along; with --seed-frames the seed decides).
     #[arg(long)]
     pub no_upright: bool,
     /// Print what was written as JSON on stdout.
@@ -154,13 +154,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
     }
     if !args.no_upright {
-        if let Some((r, degrees)) = upright_rotation(&first) {
+        // Judged on the seed when there is one: a prediction's lean is for the viewer to see.
+        let judged = args.seed_frames.filter(|&n| n > 0).unwrap_or(first.len());
+        if let Some((r, degrees)) = upright_rotation(&first, judged) {
             let centre = first.root(0);
             rotate_track(&mut first, &r, centre);
             if let Some(s) = second.as_mut() {
                 rotate_track(s, &r, centre);
             }
-            if !args.quiet && !args.json && degrees > 3.0 {
+            if !args.quiet && !args.json {
                 eprintln!(
                     "note: {} leans {degrees:.0}° on average; drawn upright (--no-upright keeps it)",
                     first.name

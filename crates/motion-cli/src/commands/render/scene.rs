@@ -225,12 +225,16 @@ fn bones(skeleton: &Skeleton, positions: &Array3<f64>) -> Vec<Bone> {
         .collect()
 }
 
-/// The rotation (column convention) that turns the track's average "up" (from the root to the
-/// joint highest above it on average) onto +y, and its angle in degrees; `None` for a motion
-/// that is upright already (under 1°) or lies (over 60°: crawling or lying motions stay as they
-/// are). H3.6M takes start from an unknown root orientation, so some lean as a whole.
-pub fn upright_rotation(track: &Track) -> Option<([[f64; 3]; 3], f64)> {
-    let (frames, joints, _) = track.positions.dim();
+/// Leans below this are a posture, not a tilted recording: left as they are.
+pub const UPRIGHT_MIN_DEGREES: f64 = 8.0;
+
+/// The rotation (column convention) that turns the average "up" of the track's first `frames`
+/// frames (from the root to the joint highest above it on average) onto +y, and its angle in degrees; `None` for a motion
+/// that is upright already (under [`UPRIGHT_MIN_DEGREES`]: people lean a little) or lies (over
+/// 60°: crawling or lying motions stay as they are). H3.6M takes start from an unknown root orientation, so some lean as a whole.
+pub fn upright_rotation(track: &Track, frames: usize) -> Option<([[f64; 3]; 3], f64)> {
+    let (all, joints, _) = track.positions.dim();
+    let frames = frames.clamp(1, all);
     let mean_offset = |j: usize, a: usize| {
         (0..frames)
             .map(|f| track.positions[[f, j, a]] - track.positions[[f, 0, a]])
@@ -246,7 +250,7 @@ pub fn upright_rotation(track: &Track) -> Option<([[f64; 3]; 3], f64)> {
     let v = v.map(|x| x / norm);
     let angle = v[1].clamp(-1.0, 1.0).acos();
     let degrees = angle.to_degrees();
-    if !(1.0..=60.0).contains(&degrees) {
+    if !(UPRIGHT_MIN_DEGREES..=60.0).contains(&degrees) {
         return None;
     }
     // Axis v x y, normalized; Rodrigues' formula.
@@ -453,7 +457,7 @@ mod tests {
             positions,
             fps: 25.0,
         };
-        let (r, degrees) = upright_rotation(&track).unwrap();
+        let (r, degrees) = upright_rotation(&track, 3).unwrap();
         assert!((degrees - 20.0).abs() < 1e-9);
         let centre = track.root(0);
         rotate_track(&mut track, &r, centre);
@@ -462,7 +466,7 @@ mod tests {
             let dy = track.positions[[f, 1, 1]] - track.positions[[f, 0, 1]];
             assert!(dx.abs() < 1e-9 && (dy - 1000.0).abs() < 1e-9);
         }
-        assert!(upright_rotation(&track).is_none());
+        assert!(upright_rotation(&track, 3).is_none());
     }
 
     #[test]
