@@ -5,6 +5,23 @@
 //! - [`MotionModel`]: a loaded predictor (shared, immutable); [`vgru`] and [`grud`] its networks.
 //! - [`Generator`] (one character) and [`BatchGenerator`] (many in lockstep): closed-loop frames.
 //! - [`random`]: schema-conformant files with random weights (benchmarks, tests).
+//!
+//! ```no_run
+//! use motion_core::model::{Generator, MotionModel, Noise};
+//! use std::sync::Arc;
+//!
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! let model = Arc::new(MotionModel::load("weights/vgru_d_multi.safetensors")?);
+//! let seed = ndarray::Array2::<f32>::zeros((50, model.config().frame_dims)); // 50 full frames
+//! let mut character = Generator::new(Arc::clone(&model)); // one per character
+//! character.start(seed.view(), Some("walking"), Noise::Seed(42))?;
+//! for _ in 0..100 {
+//!     let frame: &[f32] = character.step()?; // next full frame (99 values), no allocation
+//!     # let _ = frame;
+//! }
+//! # Ok(())
+//! # }
+//! ```
 pub mod batch;
 pub mod config;
 pub mod generate_error;
