@@ -132,6 +132,16 @@ fn missing_file() {
         &["nope.safetensors"],
     );
     bad_input(&dir, &[&"info", &"nope.safetensors"], &["nope.safetensors"]);
+    bad_input(
+        &dir,
+        &[&"score", &"--gt", &"gt.npy", &"--pred", &"nope.npy"],
+        &["nope.npy"],
+    );
+    bad_input(
+        &dir,
+        &[&"eval", &"--model", &m, &"--data", &"no_data_here"],
+        &["no_data_here", "does not exist"],
+    );
 }
 
 #[test]
@@ -377,6 +387,29 @@ fn unknown_action_lists_the_valid_ones() {
         ],
         &["--action", "not action-conditioned"],
     );
+    // eval, on the real data (it checks the data directory first).
+    let data = std::env::var_os("MOTION_DATA_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| repo().join("../shared/data"));
+    if data.join("h3.6m/dataset/S5").is_dir() {
+        bad_input(
+            &dir,
+            &[
+                &"eval",
+                &"--model",
+                &m,
+                &"--data",
+                &data,
+                &"--actions",
+                &"walkin",
+            ],
+            &["unknown action `walkin`", "walking"],
+        );
+    } else {
+        eprintln!(
+            "SKIPPED: eval's unknown-action check needs the H3.6M data (set MOTION_DATA_DIR)"
+        );
+    }
 }
 
 #[test]
