@@ -28,11 +28,13 @@ fn published_pairs(pairs: &[(&str, Option<f64>)]) -> String {
 }
 
 fn row(out: &mut String, label: &str, model: &Value, baseline: &Value, published: &str) {
-    out.push_str(&format!(
-        "  {label:<28} {:>8} {:>9}   {published}\n",
+    let line = format!(
+        "  {label:<28} {:>8} {:>9}   {published}",
         cell(model),
         cell(baseline)
-    ));
+    );
+    out.push_str(line.trim_end());
+    out.push('\n');
 }
 
 fn action_block(out: &mut String, a: &Value) {
