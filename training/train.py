@@ -32,7 +32,7 @@ import torch
 
 from . import data as h36m
 from . import evaluate
-from .features import DerivativeHistory, derivative_features
+from .features import DerivativeHistory
 from .models import build_model, make_config, parameter_count
 
 CHECKPOINT = "last.pt"
