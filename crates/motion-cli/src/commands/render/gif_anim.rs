@@ -39,6 +39,9 @@ fn quantize(canvas: &Canvas, palette: &[Rgb], cache: &mut HashMap<[u8; 3], u8>) 
         .chunks_exact(3)
         .map(|p| {
             let key = [p[0], p[1], p[2]];
+            if key == [BACKGROUND.0, BACKGROUND.1, BACKGROUND.2] {
+                return 0; // most pixels; palette entry 0 is the background
+            }
             *cache.entry(key).or_insert_with(|| {
                 let d = |c: &Rgb| {
                     let e = |a: u8, b: u8| (a as i32 - b as i32).pow(2);
@@ -82,9 +85,11 @@ pub fn animate(
         let mut cache = HashMap::new();
         let duration = times.last().copied().unwrap_or(0.0).max(1e-9);
         let boundary = picture.seed_frames.map(|n| n as f64 / fps);
+        let mut background = Canvas::new(width, height, BACKGROUND);
+        picture.paint_grid(&mut background, &viewport);
         for &t in times.iter().step_by(every) {
-            let mut canvas = Canvas::new(width, height, BACKGROUND);
-            picture.paint(&mut canvas, &viewport, t, 3.0);
+            let mut canvas = background.clone();
+            picture.paint_bones(&mut canvas, &viewport, t, 3.0);
             let label = match boundary {
                 Some(_) if picture.is_seed(t) => format!("{t:.2}S SEED"),
                 Some(_) => format!("{t:.2}S PREDICTION"),

@@ -25,13 +25,25 @@ impl Picture<'_> {
 
     /// Paints the moment `t` (s) through `viewport`, with bones `width` pixels wide.
     pub fn paint(&self, canvas: &mut Canvas, viewport: &Viewport, t: f64, width: f64) {
-        let to_px = |p: [f64; 3]| {
-            let (u, v, _) = self.camera.project(p);
-            viewport.to_pixels((u, v))
-        };
+        self.paint_grid(canvas, viewport);
+        self.paint_bones(canvas, viewport, t, width);
+    }
+
+    /// Paints the floor grid (the same in every frame of a fixed camera).
+    pub fn paint_grid(&self, canvas: &mut Canvas, viewport: &Viewport) {
         for &(a, b) in &self.grid {
-            canvas.line(to_px(a), to_px(b), 1.0, GRID);
+            canvas.line(self.to_px(viewport, a), self.to_px(viewport, b), 1.0, GRID);
         }
+    }
+
+    fn to_px(&self, viewport: &Viewport, p: [f64; 3]) -> (f64, f64) {
+        let (u, v, _) = self.camera.project(p);
+        viewport.to_pixels((u, v))
+    }
+
+    /// Paints every motion's bones at moment `t` (s), far ones first.
+    pub fn paint_bones(&self, canvas: &mut Canvas, viewport: &Viewport, t: f64, width: f64) {
+        let to_px = |p: [f64; 3]| self.to_px(viewport, p);
         let seed = self.is_seed(t);
         // (depth, from, to, colour) of every bone of every motion, painted far to near.
         let mut strokes = Vec::new();
