@@ -36,17 +36,17 @@
 //! ```
 #![warn(missing_docs)]
 
+pub mod derivatives;
 pub mod error;
+pub mod formats;
+pub mod kinematics;
+pub mod model;
+pub mod motion;
+pub mod nn;
+pub mod protocol;
+pub mod root;
 pub mod rotation;
 pub mod skeleton;
-pub mod motion;
-pub mod kinematics;
-pub mod root;
-pub mod derivatives;
-pub mod formats;
-pub mod nn;
-pub mod model;
-pub mod protocol;
 
 pub use error::{FormatError, MotionError, SkeletonError};
 pub use motion::{Motion, MotionLayout, RootEncoding};

@@ -40,5 +40,9 @@ pub fn exit_code(err: &anyhow::Error) -> u8 {
             || c.is::<motion_core::model::WeightsError>()
             || c.is::<std::io::Error>()
     });
-    if is_input { 2 } else { 1 }
+    if is_input {
+        2
+    } else {
+        1
+    }
 }
