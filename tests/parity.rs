@@ -380,3 +380,17 @@ fn missing_file_and_garbage_are_errors() {
         "{msg}"
     );
 }
+
+#[test]
+fn zero_std_on_a_used_dim_is_rejected() {
+    let (_dir, path) = edited("gru_d.safetensors", |(t, _)| {
+        let entry = t.iter_mut().find(|(n, _, _)| n == "norm.std").unwrap();
+        entry.2[6] = 0.0; // dim 6 is used
+    });
+    let (err, msg) = load_error(&path);
+    assert!(matches!(err, WeightsError::InvalidTensor { .. }), "{msg}");
+    assert!(
+        msg.contains("norm.std") && msg.contains("edited.safetensors"),
+        "{msg}"
+    );
+}

@@ -23,9 +23,9 @@ impl Normalization {
         let mean = store.tensor("norm.mean", &[frame_dims])?;
         let std = store.tensor("norm.std", &[frame_dims])?;
         if let Some(&d) = dims_used.iter().find(|&&d| std[d] == 0.0) {
-            return Err(WeightsError::BadConfig {
+            return Err(WeightsError::InvalidTensor {
                 path: store.path().to_path_buf(),
-                key: "norm.std".into(),
+                tensor: "norm.std".into(),
                 problem: format!("std of used dim {d} is 0"),
             });
         }

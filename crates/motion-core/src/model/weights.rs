@@ -94,6 +94,16 @@ pub enum WeightsError {
         /// The stored shape.
         found: Vec<usize>,
     },
+    /// A tensor's values are unusable for the model (e.g. a zero normalization std).
+    #[error("{}: tensor `{tensor}`: {problem}", path.display())]
+    InvalidTensor {
+        /// The weights file.
+        path: PathBuf,
+        /// The state-dict name of the tensor.
+        tensor: String,
+        /// What is wrong.
+        problem: String,
+    },
     /// A tensor holds NaN or an infinity.
     #[error("{}: tensor `{tensor}` holds a non-finite value ({value}) at flat index {index}", path.display())]
     NonFinite {
