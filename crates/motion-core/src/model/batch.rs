@@ -3,7 +3,9 @@
 //! Every step is the same sequence for all rows: derivative features of the current normalized
 //! frame, one recurrent step, the decoder, optional residual, un-normalization. The per-step work
 //! is matrix-matrix products over the batch (see [`crate::nn::gemm`]); all buffers are sized in
-//! [`BatchGenerator::new`], so a step allocates nothing of its own.
+//! [`BatchGenerator::new`], so a step allocates nothing of its own. At batch 1 the products are
+//! GEMVs and a step touches no heap at all (tested); at larger batches `matrixmultiply` allocates
+//! its packing buffers and rayon its task records inside each product.
 //!
 //! The fed-back frame is the model's normalized output itself (as in `training/models.py`), not
 //! a re-normalized copy of the full frame it returns.
