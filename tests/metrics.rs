@@ -1,7 +1,7 @@
 //! Library-level tests of the metrics: identities, hand-computed cases (derivations written out),
 //! NPSS against a naive O(T²) DFT, and both exact nearest-neighbour indexes against naive search.
 use motion::metrics::ndms::index::{nearest_naive, NearestIndex};
-use motion::metrics::ndms::{similarity, word};
+use motion::metrics::ndms::{similarity, word, WordFrame};
 use motion::metrics::{
     apd, apd_batch, euler_error, euler_error_at_horizons, npss, npss_reference, npss_windows,
     MetricError, NdmsConfig, NdmsDatabase, NnMethod, SpectrumPower,
@@ -281,6 +281,7 @@ fn word_normalization_by_hand() {
         right_hip: 1,
         vertical_axis: 1,
         words_per_bin: 10,
+        frame: WordFrame::Heading,
     };
     let positions = Array3::from_shape_vec(
         (2, 2, 3),
@@ -415,4 +416,44 @@ fn both_exact_indexes_agree_with_naive_search() {
         let index = NearestIndex::build(method, words.clone(), dim);
         assert_eq!(index.nearest_batch(&queries), expected, "{method:?}");
     }
+}
+
+#[test]
+fn body_frame_words_are_invariant_to_rigid_transforms() {
+    // The same motion in two world frames that differ by a rotation (tilt and heading) and a
+    // translation, as FK of root deltas integrated from two different start frames: identical words.
+    let mut rng = SplitMix(77);
+    let motion = moving_positions(&mut rng, 12, 32);
+    let (a, b) = (0.3f64, -0.2f64);
+    let rx = [
+        [1.0, 0.0, 0.0],
+        [0.0, a.cos(), -a.sin()],
+        [0.0, a.sin(), a.cos()],
+    ];
+    let ry = [
+        [b.cos(), 0.0, b.sin()],
+        [0.0, 1.0, 0.0],
+        [-b.sin(), 0.0, b.cos()],
+    ];
+    let moved = Array3::from_shape_fn((12, 32, 3), |(t, j, c)| {
+        let p = [motion[[t, j, 0]], motion[[t, j, 1]], motion[[t, j, 2]]];
+        let q: Vec<f64> = (0..3)
+            .map(|i| (0..3).map(|k| ry[i][k] * p[k]).sum())
+            .collect();
+        (0..3).map(|k| rx[c][k] * q[k]).sum::<f64>() + [100.0, -50.0, 700.0][c]
+    });
+    let config = NdmsConfig::h36m_body_frame();
+    let (mut w1, mut w2) = (vec![0.0; config.word_len()], vec![0.0; config.word_len()]);
+    for start in [0, 4] {
+        word::normalize_word(motion.view(), start, &config, &mut w1);
+        word::normalize_word(moved.view(), start, &config, &mut w2);
+        for (x, y) in w1.iter().zip(&w2) {
+            assert!(close(*x, *y, 1e-9), "{x} {y}");
+        }
+    }
+    // The heading recipe is not invariant to a tilt (it assumes gravity-aligned positions).
+    let heading = NdmsConfig::h36m();
+    word::normalize_word(motion.view(), 0, &heading, &mut w1);
+    word::normalize_word(moved.view(), 0, &heading, &mut w2);
+    assert!(w1.iter().zip(&w2).any(|(x, y)| (x - y).abs() > 1.0));
 }

@@ -22,9 +22,9 @@ use motion_core::formats::npy::read_npy_dyn;
 use motion_core::formats::FileFormat;
 use motion_core::kinematics::expmap_positions;
 use motion_core::protocol::expmap_batch_to_euler_protocol;
-use motion_core::skeleton::{CMU_FRAME_DIMS, H36M_FRAME_DIMS};
+use motion_core::skeleton::{CMU_FRAME_DIMS, H36M_FRAME_DIMS, H36M_JOINT_COUNT};
 use motion_core::{RootEncoding, Skeleton};
-use motion_metrics::ndms::{NdmsConfig, NdmsDatabase, NnMethod};
+use motion_metrics::ndms::{NdmsConfig, NdmsDatabase, NnMethod, WordFrame};
 use motion_metrics::npss::{Npss, SpectrumPower, NPSS_WINDOWS_25HZ};
 use motion_metrics::{
     apd_batch, euler_error, euler_error_at_horizons, MetricError, EULER_HORIZONS_MS,
@@ -73,8 +73,8 @@ pub struct Args {
     /// How to read the numbers (default: expmap for 99- and 117-dim data, raw otherwise).
     #[arg(long, value_enum)]
     pub input_space: Option<InputSpace>,
-    /// NDMS nearest-neighbour search (both exact).
-    #[arg(long, value_enum, default_value = "brute-force")]
+    /// NDMS nearest-neighbour search (both exact; the kd-tree is faster on motion words).
+    #[arg(long, value_enum, default_value = "pca-kd-tree")]
     pub nn: NnChoice,
     /// Print one JSON object instead of a table.
     #[arg(long)]
@@ -584,7 +584,21 @@ fn score_ndms(
     seed: Option<&Batch>,
     method: NnMethod,
 ) -> Result<Value> {
-    let config = NdmsConfig::h36m();
+    // FK of integrated root deltas lives in the tilted pelvis frame of wherever integration
+    // started (the file for --db, the seed for a forecast): only a rigid per-word frame makes the
+    // same motion give the same word. Raw positions are taken as gravity-aligned (metrics.md).
+    let config = if pred.joints.is_none() {
+        NdmsConfig::h36m_body_frame()
+    } else {
+        NdmsConfig::h36m()
+    };
+    if pred.joints.is_none_or(|j| j != H36M_JOINT_COUNT) && pred.data.dim().3 != H36M_FRAME_DIMS {
+        return Err(usage(format!(
+            "NDMS: {} is not on the 32-joint H3.6M skeleton (99-dim exp-map or 32 x 3 positions); \
+             the NDMS joints of other skeletons are not known",
+            pred.what
+        )));
+    }
     let mut references = Vec::new();
     for path in expand(db_paths)? {
         let array = read_any(&path, true)?;
@@ -675,6 +689,10 @@ fn score_ndms(
         "first_word_end": report.first_word_end,
         "exact": report.exact,
         "database_words": database.len(),
+        "word_frame": match config.frame {
+            WordFrame::Heading => "heading (metrics.md recipe)",
+            WordFrame::Body { .. } => "body (rigid, first frame's hips and shoulders)",
+        },
         "nearest_neighbour": match method { NnMethod::BruteForce => "brute-force", NnMethod::PcaKdTree => "pca-kd-tree" },
     }))
 }

@@ -11,6 +11,29 @@ pub mod similarity;
 pub mod word;
 
 use motion_core::skeleton::{H36M_LEFT_HIP, H36M_NDMS_JOINTS, H36M_RIGHT_HIP};
+
+/// H3.6M left shoulder joint (LeftArm), for [`WordFrame::Body`].
+const H36M_LEFT_SHOULDER: usize = 17;
+/// H3.6M right shoulder joint (RightArm), for [`WordFrame::Body`].
+const H36M_RIGHT_SHOULDER: usize = 25;
+
+/// The frame each motion word is expressed in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum WordFrame {
+    /// `metrics.md`'s recipe for gravity-aligned positions: centre = first frame's hip midpoint
+    /// with vertical 0, rotation about the vertical only (heading).
+    Heading,
+    /// A rigid body frame from the first frame: origin at the hip midpoint, x along left→right hip,
+    /// vertical along the hip→shoulder midpoint direction (orthogonalized). Invariant to any rigid
+    /// transform of the sequence, as needed for FK of integrated root deltas (H3.6M), whose world
+    /// frame is the tilted pelvis frame wherever integration started.
+    Body {
+        /// Left shoulder joint.
+        left_shoulder: usize,
+        /// Right shoulder joint.
+        right_shoulder: usize,
+    },
+}
 use ndarray::{Array3, ArrayView3, Axis};
 use rayon::prelude::*;
 
@@ -32,11 +55,14 @@ pub struct NdmsConfig {
     pub vertical_axis: usize,
     /// Words per reporting bin (10 = 0.4 s at 25 Hz, as paper 003 Tables 2-3).
     pub words_per_bin: usize,
+    /// The frame words are expressed in.
+    pub frame: WordFrame,
 }
 
 impl NdmsConfig {
     /// Paper 003's setting on the 32-joint H3.6M skeleton: κ = 8, the 12 joints (wrists, elbows,
-    /// shoulders, hips, knees, ankles), hips LeftUpLeg / RightUpLeg, y up, 0.4 s bins.
+    /// shoulders, hips, knees, ankles), hips LeftUpLeg / RightUpLeg, y up, 0.4 s bins, the
+    /// heading-only recipe of `metrics.md` (for gravity-aligned positions).
     pub fn h36m() -> Self {
         Self {
             kappa: 8,
@@ -45,6 +71,19 @@ impl NdmsConfig {
             right_hip: H36M_RIGHT_HIP,
             vertical_axis: 1,
             words_per_bin: 10,
+            frame: WordFrame::Heading,
+        }
+    }
+
+    /// [`NdmsConfig::h36m`] with the rigid [`WordFrame::Body`], for positions from FK of
+    /// integrated root deltas.
+    pub fn h36m_body_frame() -> Self {
+        Self {
+            frame: WordFrame::Body {
+                left_shoulder: H36M_LEFT_SHOULDER,
+                right_shoulder: H36M_RIGHT_SHOULDER,
+            },
+            ..Self::h36m()
         }
     }
 

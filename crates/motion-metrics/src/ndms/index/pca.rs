@@ -6,9 +6,9 @@
 //! from a fixed number of subspace iterations, re-orthonormalized by modified Gram-Schmidt.
 
 /// Rows used to estimate the covariance.
-pub const MAX_SAMPLE_ROWS: usize = 8192;
+pub const MAX_SAMPLE_ROWS: usize = 4096;
 /// Subspace iterations on the covariance.
-const ITERATIONS: usize = 60;
+const ITERATIONS: usize = 40;
 
 /// The mean row and `k` orthonormal directions (row-major `k x dim`) of `rows` (`dim` per row).
 pub fn principal_basis(rows: &[f64], dim: usize, k: usize) -> (Vec<f64>, Vec<f64>) {
