@@ -357,3 +357,31 @@ fn ndms_on_s5_walking_scores_ground_truth_1_and_zero_velocity_lower() {
         "{means:?}"
     );
 }
+
+#[test]
+fn bvh_input_scores_like_its_exp_map_source() {
+    use motion_core::formats::bvh::write_bvh;
+    use motion_core::formats::expmap_bvh::expmap_to_bvh;
+    let dir = Scratch::new("bvh");
+    // 25 Hz H3.6M exp-map frames with moderate angles and a moving root.
+    let frames = Array2::from_shape_fn((40, 99), |(t, d)| match d {
+        0..=2 => 5.0 + d as f64,
+        3..=5 => 0.01,
+        _ => 0.4 * (0.2 * t as f64 + d as f64).sin(),
+    });
+    let motion = motion_core::Motion::h36m(frames.clone(), 25.0).unwrap();
+    let bvh = dir.path("walk.bvh");
+    write_bvh(&bvh, &expmap_to_bvh(&motion).unwrap()).unwrap();
+    let npy = dir.path("walk.npy");
+    write_npy(&npy, &frames.insert_axis(Axis(0))).unwrap();
+    // BVH vs its own source: the Euler sequences agree up to the text round trip.
+    let report = json_of(&score(&["--gt", p(&npy), "--pred", p(&bvh), "--json"]));
+    assert!(report["npss"].as_f64().unwrap() < 1e-6, "{report}");
+    let worst = report["euler_error"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .fold(0.0, f64::max);
+    assert!(worst < 1e-4, "{worst}");
+}
