@@ -122,8 +122,8 @@ pub enum MotionError {
         /// Channels the data has.
         found: usize,
     },
-    /// The frame rate is not finite and positive.
-    #[error("frame rate must be finite and positive, got {fps}")]
+    /// The frame rate is not finite or below 1 frame per second.
+    #[error("frame rate must be finite and at least 1 frame per second, got {fps}")]
     BadFps {
         /// The rejected frame rate, formatted.
         fps: String,

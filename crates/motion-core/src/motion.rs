@@ -50,7 +50,9 @@ pub struct Motion {
 }
 
 impl Motion {
-    /// A motion; checks that the frame width fits the layout and that `fps` is finite and > 0.
+    /// A motion; checks that the frame width fits the layout and that `fps` is finite and at
+    /// least 1 (slower rates are not motion capture, and would make [`Motion::root_step`] integrate
+    /// an unbounded number of source frames per frame).
     pub fn new(
         skeleton: Arc<Skeleton>,
         layout: MotionLayout,
@@ -64,7 +66,7 @@ impl Motion {
                 found: frames.ncols(),
             });
         }
-        if !(fps.is_finite() && fps > 0.0) {
+        if !(fps.is_finite() && fps >= 1.0) {
             return Err(MotionError::BadFps {
                 fps: fps.to_string(),
             });
@@ -191,6 +193,11 @@ mod tests {
             Err(MotionError::BadFps { .. })
         ));
         assert!(Motion::h36m(Array2::zeros((3, 99)), f64::NAN).is_err());
+        // A tiny rate would make root integration loop once per source frame without bound.
+        assert!(matches!(
+            Motion::h36m(Array2::zeros((3, 99)), 1e-300),
+            Err(MotionError::BadFps { .. })
+        ));
         let bvh = Motion::new(
             Arc::new(Skeleton::h36m()),
             MotionLayout::Channels,
