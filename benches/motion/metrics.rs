@@ -107,7 +107,8 @@ fn bench_ndms_pair(
     database: &[ArrayView3<'_, f64>],
     queries: &[ArrayView3<'_, f64>],
 ) {
-    let config = NdmsConfig::h36m();
+    // The word frame `motion-cli score` uses for FK positions of H3.6M exp-maps.
+    let config = NdmsConfig::h36m_body_frame();
     let mut words = Vec::new();
     for s in database {
         append_all_words(*s, &config, &mut words);

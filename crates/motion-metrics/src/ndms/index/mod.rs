@@ -60,10 +60,12 @@ pub fn nearest_naive(words: &[f64], dim: usize, query: &[f64]) -> Neighbour {
 
 /// Which exact nearest-neighbour strategy to use.
 ///
-/// The default is the kd-tree: on real motion words (H3.6M S5, `benches/motion/metrics.rs`) it
-/// answered 800 queries 3.5x (2,747 words) to 6x (30,609 words) faster than brute force, because
-/// motion words are nearly low-rank. On high-rank data (independent random signals) the
-/// projection prunes little and brute force is faster.
+/// The default is the kd-tree: on real motion words (H3.6M S5 in the body word frame,
+/// `benches/motion/metrics.rs`) it answered 800 queries 3.2x (2,747 words: 20 ms vs 64 ms) to
+/// 12x (30,609 words: 52 ms vs 656 ms) faster than brute force, because motion words are nearly
+/// low-rank; its build costs more (49 ms and 287 ms vs 1 ms and 73 ms). On high-rank data
+/// (independent random signals) the projection prunes little and brute force is faster
+/// (20,000 words, 100 queries: 52 ms vs 440 ms).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum NnMethod {
     /// Blocked brute force as matrix products with exact re-checks.
