@@ -385,3 +385,52 @@ fn bvh_input_scores_like_its_exp_map_source() {
         .fold(0.0, f64::max);
     assert!(worst < 1e-4, "{worst}");
 }
+
+#[test]
+fn raw_positions_of_another_joint_order_are_named_by_a_bvh_skeleton() {
+    use motion_core::formats::bvh::write_bvh;
+    use motion_core::formats::expmap_bvh::expmap_to_bvh;
+    use motion_core::kinematics::channel_positions;
+    let dir = Scratch::new("skeleton");
+    let frames = Array2::from_shape_fn((40, 99), |(t, d)| match d {
+        0..=2 => 5.0 + d as f64,
+        3..=5 => 0.01,
+        _ => 0.4 * (0.2 * t as f64 + d as f64).sin(),
+    });
+    let bvh = expmap_to_bvh(&motion_core::Motion::h36m(frames, 25.0).unwrap()).unwrap();
+    let bvh_path = dir.path("skeleton.bvh");
+    write_bvh(&bvh_path, &bvh).unwrap();
+    // Positions in the BVH's joint order (End Sites included), y up.
+    let positions = channel_positions(&bvh.skeleton, bvh.frames.view()).unwrap();
+    let db = dir.path("db.npy");
+    write_npy(&db, &positions).unwrap();
+    let pred = dir.path("pred.npy");
+    write_npy(
+        &pred,
+        &positions
+            .slice(ndarray::s![10..30, .., ..])
+            .to_owned()
+            .insert_axis(Axis(0)),
+    )
+    .unwrap();
+    let args = [
+        "--pred",
+        p(&pred),
+        "--db",
+        p(&db),
+        "--input-space",
+        "raw",
+        "--json",
+    ];
+    if positions.dim().1 != 32 {
+        // Without names the joints of this layout are unknown.
+        assert_usage_error(&score(&args), "--skeleton");
+    }
+    let mut named = args.to_vec();
+    named.extend(["--skeleton", p(&bvh_path)]);
+    let report = json_of(&score(&named));
+    assert!(
+        (report["ndms"]["mean"].as_f64().unwrap() - 1.0).abs() < 1e-9,
+        "{report}"
+    );
+}

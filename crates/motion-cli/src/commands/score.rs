@@ -76,6 +76,11 @@ pub struct Args {
     /// NDMS nearest-neighbour search (both exact; the kd-tree is faster on motion words).
     #[arg(long, value_enum, default_value = "pca-kd-tree")]
     pub nn: NnChoice,
+    /// A BVH whose hierarchy names the joints of raw positions (N x T x J x 3) that are not on the
+    /// 32-joint H3.6M skeleton: NDMS finds its joints by the H3.6M names (LeftHand, RightHand,
+    /// LeftForeArm, ..., LeftUpLeg, RightUpLeg, LeftLeg, RightLeg, LeftFoot, RightFoot).
+    #[arg(long, value_name = "FILE.bvh")]
+    pub skeleton: Option<PathBuf>,
     /// Print one JSON object instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -210,7 +215,13 @@ pub fn run(args: Args) -> Result<()> {
         };
         report.insert(
             "ndms".into(),
-            score_ndms(&args.db, &pred, seed.as_ref(), method)?,
+            score_ndms(
+                &args.db,
+                &pred,
+                seed.as_ref(),
+                method,
+                args.skeleton.as_deref(),
+            )?,
         );
     }
     if metrics.contains(&Metric::Apd) {
@@ -578,27 +589,62 @@ fn sample_positions(batch: &Batch, space: InputSpace) -> Result<Array4<f64>> {
     Ok(out.expect("at least one sample"))
 }
 
+/// The NDMS configuration for the predictions' joints.
+///
+/// FK of integrated root deltas lives in the tilted pelvis frame of wherever integration started
+/// (the file for --db, the seed for a forecast): only a rigid per-word frame makes the same motion
+/// give the same word. Raw positions are taken as gravity-aligned (metrics.md's recipe).
+fn ndms_config(pred: &Batch, skeleton: Option<&Path>) -> Result<NdmsConfig> {
+    match (pred.joints, skeleton) {
+        (None, _) if pred.data.dim().3 == H36M_FRAME_DIMS => Ok(NdmsConfig::h36m_body_frame()),
+        (Some(H36M_JOINT_COUNT), None) => Ok(NdmsConfig::h36m()),
+        (Some(joints), Some(path)) => {
+            let named = read_bvh(path)?.skeleton;
+            let lookup = |j: usize| {
+                let name = &Skeleton::h36m().joint(j).name.clone();
+                named.joint_index(name).ok_or_else(|| {
+                    usage(format!(
+                        "{}: no joint named {name:?} (an NDMS joint)",
+                        path.display()
+                    ))
+                })
+            };
+            if named.len() != joints {
+                return Err(usage(format!(
+                    "{}: {} joints but the positions of {} have {joints}",
+                    path.display(),
+                    named.len(),
+                    pred.what
+                )));
+            }
+            let h36m = NdmsConfig::h36m();
+            Ok(NdmsConfig {
+                joints: h36m
+                    .joints
+                    .iter()
+                    .map(|&j| lookup(j))
+                    .collect::<Result<_>>()?,
+                left_hip: lookup(h36m.left_hip)?,
+                right_hip: lookup(h36m.right_hip)?,
+                ..h36m
+            })
+        }
+        _ => Err(usage(format!(
+            "NDMS: {} is not on the 32-joint H3.6M skeleton (99-dim exp-map or 32 x 3 positions); \
+             name the joints of raw positions with --skeleton FILE.bvh",
+            pred.what
+        ))),
+    }
+}
+
 fn score_ndms(
     db_paths: &[PathBuf],
     pred: &Batch,
     seed: Option<&Batch>,
     method: NnMethod,
+    skeleton: Option<&Path>,
 ) -> Result<Value> {
-    // FK of integrated root deltas lives in the tilted pelvis frame of wherever integration
-    // started (the file for --db, the seed for a forecast): only a rigid per-word frame makes the
-    // same motion give the same word. Raw positions are taken as gravity-aligned (metrics.md).
-    let config = if pred.joints.is_none() {
-        NdmsConfig::h36m_body_frame()
-    } else {
-        NdmsConfig::h36m()
-    };
-    if pred.joints.is_none_or(|j| j != H36M_JOINT_COUNT) && pred.data.dim().3 != H36M_FRAME_DIMS {
-        return Err(usage(format!(
-            "NDMS: {} is not on the 32-joint H3.6M skeleton (99-dim exp-map or 32 x 3 positions); \
-             the NDMS joints of other skeletons are not known",
-            pred.what
-        )));
-    }
+    let config = ndms_config(pred, skeleton)?;
     let mut references = Vec::new();
     for path in expand(db_paths)? {
         let array = read_any(&path, true)?;
