@@ -274,3 +274,32 @@ pub fn npss_windows(
 ) -> Result<Vec<WindowScore>, MetricError> {
     Npss::new().score_windows(gt, pred, power, &NPSS_WINDOWS_25HZ)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ndarray::Array3;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+
+        /// 0 <= NPSS <= T - 1 (each EMD of cumulative spectra is at most T - 1), NPSS(x, x) = 0.
+        #[test]
+        fn npss_is_bounded(
+            frames in 2usize..40,
+            values in proptest::collection::vec(-10.0f64..10.0, 2 * 40 * 3 * 2),
+        ) {
+            let len = 2 * frames * 3;
+            let gt = Array3::from_shape_vec((2, frames, 3), values[..len].to_vec()).unwrap();
+            let pred = Array3::from_shape_vec((2, frames, 3), values[len..2 * len].to_vec()).unwrap();
+            for power in [SpectrumPower::Modulus, SpectrumPower::RealPart] {
+                let mut npss = Npss::new();
+                if let Ok(v) = npss.score(gt.view(), pred.view(), power) {
+                    prop_assert!(v >= 0.0 && v <= (frames - 1) as f64 + 1e-9, "{v}");
+                    prop_assert_eq!(npss.score(gt.view(), gt.view(), power).unwrap(), 0.0);
+                }
+            }
+        }
+    }
+}

@@ -47,3 +47,24 @@ pub fn ndms(a: &[f64], b: &[f64], kappa: usize) -> f64 {
     }
     total / (kappa - 1) as f64
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(128))]
+
+        /// NDMS is symmetric and in [0, 1].
+        #[test]
+        fn ndms_is_symmetric_and_bounded(
+            a in proptest::collection::vec(-100.0f64..100.0, 8 * 2 * 3),
+            b in proptest::collection::vec(-100.0f64..100.0, 8 * 2 * 3),
+        ) {
+            let ab = ndms(&a, &b, 8);
+            prop_assert!((0.0..=1.0).contains(&ab), "{ab}");
+            prop_assert_eq!(ab, ndms(&b, &a, 8));
+        }
+    }
+}
