@@ -56,7 +56,8 @@ pub struct Args {
     /// Ground truth: .npy (N x T x D), exp-map text (.txt/.txt.gz) or BVH files, or folders of them.
     #[arg(long, num_args = 1..)]
     pub gt: Vec<PathBuf>,
-    /// Predictions, as --gt; for APD samples N x S x T x D (.npy).
+    /// Predictions, as --gt; for APD samples N x S x T x D (.npy). Used at their own frame rate:
+    /// NDMS words are κ = 8 frames at 25 Hz, so give 25 Hz frames.
     #[arg(long, required = true, num_args = 1..)]
     pub pred: Vec<PathBuf>,
     /// Comma list of npss, npss-reference, euler, ndms, apd, or all (= every metric the inputs allow).
@@ -70,7 +71,9 @@ pub struct Args {
     /// frames so that the first word straddles the seam.
     #[arg(long, num_args = 1..)]
     pub seed: Vec<PathBuf>,
-    /// How to read the numbers (default: expmap for 99- and 117-dim data, raw otherwise).
+    /// How to read the numbers (default: expmap for 99- and 117-dim data, raw otherwise). NDMS
+    /// words of H3.6M exp-maps use a rigid body frame (FK of integrated root deltas is tilted);
+    /// raw positions (4-D, N x T x J x 3) are taken as gravity-aligned, y up (metrics.md's recipe).
     #[arg(long, value_enum)]
     pub input_space: Option<InputSpace>,
     /// NDMS nearest-neighbour search (both exact; the kd-tree is faster on motion words).
