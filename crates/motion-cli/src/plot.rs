@@ -69,23 +69,39 @@ pub struct Chart {
 /// Writes `charts` in a grid of `columns` panels to `path`: `.svg` or `.png`, through a
 /// temporary file and a rename.
 pub fn write_charts(path: &Path, charts: &[Chart], columns: usize) -> anyhow::Result<()> {
+    let bytes = match check_extension(path)? {
+        PlotFormat::Svg => charts_svg(charts, columns).into_bytes(),
+        PlotFormat::Png => charts_png(charts, columns)?,
+    };
+    write_atomically(path, &bytes)
+        .map_err(|e| UsageError(format!("{}: cannot write: {e}", path.display())).into())
+}
+
+/// The image formats a plot can be written in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PlotFormat {
+    /// Scalable vector graphics.
+    Svg,
+    /// A PNG raster.
+    Png,
+}
+
+/// The plot format named by `path`'s extension, or a usage error; commands call it before long
+/// work so that a bad `--plot` name fails at once.
+pub fn check_extension(path: &Path) -> anyhow::Result<PlotFormat> {
     let ext = path
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
-    let bytes = match ext.as_str() {
-        "svg" => charts_svg(charts, columns).into_bytes(),
-        "png" => charts_png(charts, columns)?,
-        _ => {
-            return Err(UsageError(format!(
-                "{}: unknown plot format (expected .svg or .png)",
-                path.display()
-            ))
-            .into())
-        }
-    };
-    write_atomically(path, &bytes)
-        .map_err(|e| UsageError(format!("{}: cannot write: {e}", path.display())).into())
+    match ext.as_str() {
+        "svg" => Ok(PlotFormat::Svg),
+        "png" => Ok(PlotFormat::Png),
+        _ => Err(UsageError(format!(
+            "{}: unknown plot format (expected .svg or .png)",
+            path.display()
+        ))
+        .into()),
+    }
 }
 
 /// The charts as an SVG document.

@@ -265,3 +265,47 @@ fn a_bad_model_file_exits_2_naming_it() {
     assert_eq!(code, 2, "{stderr}");
     assert!(stderr.contains("not-weights.safetensors"), "{stderr}");
 }
+
+#[test]
+fn plot_draws_every_action_and_a_bad_extension_fails_before_work() {
+    let data = data_dir();
+    if !data.join("h3.6m/dataset/S5/walking_1.txt.gz").is_file() {
+        eprintln!("SKIPPED: eval --plot needs the H3.6M data (set MOTION_DATA_DIR)");
+        return;
+    }
+    let dir = scratch("plot");
+    let svg = dir.join("walking.svg");
+    let (code, _, stderr) = eval(&[
+        &"--data",
+        &data,
+        &"--model",
+        &fixture_model(),
+        &"--actions",
+        &"walking",
+        &"--horizon",
+        &"25",
+        &"--plot",
+        &svg,
+    ]);
+    assert_eq!(code, 0, "stderr: {stderr}");
+    let text = std::fs::read_to_string(&svg).unwrap();
+    for title in ["walking: Euler error", "walking: NPSS", "walking: NDMS"] {
+        assert!(
+            text.to_lowercase().contains(&title.to_lowercase()),
+            "{title} missing"
+        );
+    }
+
+    let bad = dir.join("walking.jpg");
+    let (code, _, stderr) = eval(&[
+        &"--data",
+        &data,
+        &"--model",
+        &fixture_model(),
+        &"--plot",
+        &bad,
+    ]);
+    assert_eq!(code, 2, "stderr: {stderr}");
+    assert!(stderr.contains("walking.jpg") && stderr.contains(".svg or .png"));
+    assert!(!bad.exists());
+}

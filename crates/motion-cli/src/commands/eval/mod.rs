@@ -8,6 +8,7 @@
 //! - [`report`]: the human-readable table;
 //! - [`npy_stream`]: `--save-predictions` written piece by piece.
 pub mod npy_stream;
+mod plots;
 pub mod published;
 pub mod report;
 pub mod scoring;
@@ -99,6 +100,10 @@ pub struct Args {
     /// Print one JSON object instead of tables.
     #[arg(long)]
     pub json: bool,
+    /// Also draw metric vs horizon per action (Euler error, NPSS windows, NDMS bins; the
+    /// zero-velocity baseline dashed) to FILE.svg or FILE.png.
+    #[arg(long, value_name = "FILE.svg|FILE.png")]
+    pub plot: Option<PathBuf>,
 }
 
 /// Runs the command.
@@ -112,6 +117,9 @@ pub fn run(args: Args) -> Result<()> {
     }
     if args.samples == 0 {
         return Err(UsageError("--samples must be at least 1".into()).into());
+    }
+    if let Some(plot) = &args.plot {
+        crate::plot::check_extension(plot)?;
     }
     // Cheap checks first: the data and the actions, before the model is built.
     let dataset = selection::resolve_dataset(args.data.as_deref())?;
@@ -192,6 +200,9 @@ pub fn run(args: Args) -> Result<()> {
         }
         _ => None,
     };
+    if let Some(plot) = &args.plot {
+        crate::plot::write_charts(plot, &plots::charts(&results), 3)?;
+    }
     let report = full_report(&args, &model, &dataset, &selection, results, saved);
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
