@@ -52,7 +52,9 @@ Per action it reports, for the model and the zero-velocity baseline (the last se
 repeated): the Euler error at 80-1000 ms; NPSS with the paper's |DFT|² and with the published \
 code's Re(DFT)² (the variant the papers' tables were computed with) over the whole horizon and \
 0-1 s, 1-2 s, 2-4 s; NDMS (database: every motion word of the action's S5 files, exact nearest \
-neighbour; queries include the last 7 seed frames; mean and 0.4 s bins); APD with 2+ samples; \
+neighbour; queries include the last 7 seed frames; every word is put in the rigid body frame of \
+its first frame (hips and shoulders), because positions integrated from H3.6M's root deltas carry an \
+arbitrary tilt of the starting frame; mean and 0.4 s bins); APD with 2+ samples; \
 and the mean joint speed of the last second vs the ground truth (to catch freezing). Beside them: \
 paper 000 Tables 4-7 and paper 003 Tables 1-2.
 

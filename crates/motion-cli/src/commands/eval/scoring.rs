@@ -94,9 +94,9 @@ impl ActionTruth {
         }
         let position_views: Vec<_> = positions.iter().map(|p| p.view()).collect();
         let database = NdmsDatabase::from_sequences(
-            NdmsConfig::h36m(),
+            NdmsConfig::h36m_body_frame(),
             &position_views,
-            motion_metrics::NnMethod::BruteForce,
+            motion_metrics::NnMethod::default(),
         )?;
         let mut speeds = Vec::new();
         for w in &windows {
