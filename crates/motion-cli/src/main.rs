@@ -31,6 +31,8 @@ enum Command {
     Predict(commands::predict::Args),
     /// Draw a skeleton animation or contact sheet (SVG, GIF or PNG), optionally beside a second motion.
     Render(commands::render::Args),
+    /// Time closed-loop generation steps per batch size (µs/step, character-steps/s, peak RSS).
+    Bench(commands::bench::Args),
 }
 
 fn main() -> ExitCode {
@@ -42,6 +44,7 @@ fn main() -> ExitCode {
         Command::Eval(args) => commands::eval::run(args),
         Command::Predict(args) => commands::predict::run(args),
         Command::Render(args) => commands::render::run(args),
+        Command::Bench(args) => commands::bench::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,4 +1,5 @@
 //! One module per subcommand; each exposes `Args` (clap) and `run(Args) -> anyhow::Result<()>`.
+pub mod bench;
 pub mod convert;
 pub mod eval;
 pub mod info;

@@ -1,0 +1,262 @@
+//! `motion-cli bench [--model W | --arch gru-d|vgru-d --hidden 512] [--batch 1,16,256] [--steps N] [--json]`:
+//! times closed-loop generation steps (derivative features, recurrent step, decoder,
+//! un-normalization) per batch size and reports µs per step, character-steps per second and the
+//! peak resident memory of the process.
+//!
+//! Only steps are timed: seeding happens outside the clock. The VGRU-d plan GRU runs once per plan
+//! block, not per frame; by default each timed segment stays inside the plan computed at seeding
+//! (like an exported one-step graph that takes the guide as input), `--with-plan` times a long
+//! run that re-plans as generation does.
+//!
+//! The reported time is the median over steps timed one by one (robust to a busy machine); the
+//! mean is reported too.
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Instant;
+
+use motion_core::model::{Architecture, BatchGenerator, ModelConfig, MotionModel, Noise};
+use ndarray::Array3;
+
+use super::UsageError;
+
+/// Seed frames given to each generator before timing.
+const SEED_FRAMES: usize = 10;
+/// Untimed steps after seeding (caches, page faults, rayon threads).
+const WARM_UP_STEPS: usize = 3;
+
+/// Architectures `--arch` accepts.
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ArchArg {
+    /// Stacked GRU layers with derivative inputs (paper size: 2 x 512).
+    #[value(name = "gru-d")]
+    GruD,
+    /// Plan GRU + body GRU with derivative inputs (paper size: 512).
+    #[value(name = "vgru-d")]
+    VgruD,
+}
+
+impl ArchArg {
+    fn architecture(self) -> Architecture {
+        match self {
+            ArchArg::GruD => Architecture::GruD,
+            ArchArg::VgruD => Architecture::VgruD,
+        }
+    }
+}
+
+/// Arguments of `motion-cli bench`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// A motion-weights file to time (default: random weights of the paper's sizes).
+    #[arg(long, conflicts_with_all = ["arch", "hidden"])]
+    pub model: Option<PathBuf>,
+    /// Architecture of the random model; repeat or comma-separate for several (default: both).
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub arch: Vec<ArchArg>,
+    /// Units per GRU layer of the random model (paper: 512).
+    #[arg(long, default_value_t = 512)]
+    pub hidden: usize,
+    /// Batch sizes (characters generated in lockstep), comma-separated.
+    #[arg(long, value_delimiter = ',', default_values_t = [1usize, 16, 256])]
+    pub batch: Vec<usize>,
+    /// Timed closed-loop steps per batch size.
+    #[arg(long, default_value_t = 200)]
+    pub steps: usize,
+    /// VGRU-d: time one long run that re-plans every plan block (default: stay within a plan).
+    #[arg(long)]
+    pub with_plan: bool,
+    /// Seed of the random weights.
+    #[arg(long, default_value_t = 42)]
+    pub seed: u64,
+    /// Print one JSON object instead of a table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// The timing of one model at one batch size.
+#[derive(Debug, Clone)]
+struct Measurement {
+    arch: &'static str,
+    hidden: usize,
+    batch: usize,
+    steps: usize,
+    median_us: f64,
+    mean_us: f64,
+}
+
+impl Measurement {
+    fn char_steps_per_s(&self) -> f64 {
+        self.batch as f64 * 1e6 / self.median_us
+    }
+}
+
+/// Runs the command.
+pub fn run(args: Args) -> anyhow::Result<()> {
+    if args.steps == 0 {
+        return Err(UsageError("--steps must be at least 1".into()).into());
+    }
+    if args.batch.is_empty() || args.batch.contains(&0) {
+        return Err(UsageError("--batch needs sizes of at least 1, e.g. 1,16,256".into()).into());
+    }
+    if args.hidden == 0 {
+        return Err(UsageError("--hidden must be at least 1".into()).into());
+    }
+    let models = models(&args)?;
+    let mut results = Vec::new();
+    for model in &models {
+        for &batch in &args.batch {
+            results.push(measure(model, batch, args.steps, args.with_plan)?);
+        }
+    }
+    let peak = peak_rss_mb();
+    if args.json {
+        println!("{}", json_report(&results, peak));
+    } else {
+        print!("{}", text_report(&results, peak));
+    }
+    Ok(())
+}
+
+/// The models to time: the file given, or random paper-size models of each architecture asked.
+fn models(args: &Args) -> anyhow::Result<Vec<Arc<MotionModel>>> {
+    if let Some(path) = &args.model {
+        return Ok(vec![crate::model_source::load_model(Some(path))?]);
+    }
+    let arches = if args.arch.is_empty() {
+        vec![ArchArg::GruD, ArchArg::VgruD]
+    } else {
+        args.arch.clone()
+    };
+    arches
+        .into_iter()
+        .map(|arch| {
+            let mut config = ModelConfig::paper(arch.architecture());
+            config.hidden = args.hidden;
+            if config.plan_hidden.is_some() {
+                config.plan_hidden = Some(args.hidden);
+            }
+            Ok(Arc::new(MotionModel::random(&config, args.seed)?))
+        })
+        .collect()
+}
+
+/// A generator for `batch` characters whose plan covers `steps` steps past the seed, seeded
+/// with a smooth synthetic motion.
+fn seeded(
+    model: &Arc<MotionModel>,
+    batch: usize,
+    plan_horizon: usize,
+) -> anyhow::Result<BatchGenerator> {
+    let cfg = model.config();
+    let mut generator = BatchGenerator::new(Arc::clone(model), batch);
+    generator.set_plan_horizon(plan_horizon.max(1))?;
+    let seeds = Array3::from_shape_fn((batch, SEED_FRAMES, cfg.frame_dims), |(b, t, d)| {
+        0.1 * ((b * 7 + t * 3 + d) as f32 * 0.37).sin()
+    });
+    let action: Vec<&str> = cfg
+        .actions
+        .first()
+        .map(String::as_str)
+        .into_iter()
+        .collect();
+    let noise: Vec<Noise> = (0..batch as u64).map(Noise::Seed).collect();
+    generator.start(seeds.view(), &action, &noise)?;
+    Ok(generator)
+}
+
+/// Times `steps` closed-loop steps at `batch`, each step on its own clock.
+fn measure(
+    model: &Arc<MotionModel>,
+    batch: usize,
+    steps: usize,
+    with_plan: bool,
+) -> anyhow::Result<Measurement> {
+    let cfg = model.config();
+    // Within-plan segments: the plan computed at seeding covers seed + horizon steps; re-seed
+    // (untimed) before it runs out. Plan buffers grow with the horizon, so keep it the model's.
+    let horizon = cfg.horizon.max(WARM_UP_STEPS + 2);
+    let segment = if with_plan || cfg.architecture == Architecture::GruD {
+        steps
+    } else {
+        horizon - WARM_UP_STEPS - 1
+    };
+    let mut times = Vec::with_capacity(steps);
+    while times.len() < steps {
+        let mut generator = seeded(model, batch, horizon)?;
+        for _ in 0..WARM_UP_STEPS {
+            std::hint::black_box(generator.step()?[[0, 0]]);
+        }
+        let n = segment.min(steps - times.len());
+        for _ in 0..n {
+            let start = Instant::now();
+            std::hint::black_box(generator.step()?[[0, 0]]);
+            times.push(start.elapsed().as_secs_f64() * 1e6);
+        }
+    }
+    let mean_us = times.iter().sum::<f64>() / times.len() as f64;
+    times.sort_by(f64::total_cmp);
+    let mid = times.len() / 2;
+    let median_us = if times.len() % 2 == 1 {
+        times[mid]
+    } else {
+        0.5 * (times[mid - 1] + times[mid])
+    };
+    Ok(Measurement {
+        arch: cfg.architecture.name(),
+        hidden: cfg.hidden,
+        batch,
+        steps,
+        median_us,
+        mean_us,
+    })
+}
+
+/// Peak resident set size of this process in MB (`VmHWM` of /proc/self/status; Linux only).
+fn peak_rss_mb() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb / 1024.0)
+}
+
+fn json_report(results: &[Measurement], peak: Option<f64>) -> String {
+    let rows: Vec<serde_json::Value> = results
+        .iter()
+        .map(|m| {
+            serde_json::json!({
+                "arch": m.arch,
+                "hidden": m.hidden,
+                "batch": m.batch,
+                "steps": m.steps,
+                "us_per_step": m.median_us,
+                "mean_us_per_step": m.mean_us,
+                "char_steps_per_s": m.char_steps_per_s(),
+            })
+        })
+        .collect();
+    serde_json::json!({ "results": rows, "peak_rss_mb": peak }).to_string()
+}
+
+fn text_report(results: &[Measurement], peak: Option<f64>) -> String {
+    let mut s = format!(
+        "{:<8} {:>6} {:>6} {:>6} {:>12} {:>12} {:>16}\n",
+        "arch", "hidden", "batch", "steps", "µs/step", "mean µs", "char-steps/s"
+    );
+    for m in results {
+        s.push_str(&format!(
+            "{:<8} {:>6} {:>6} {:>6} {:>12.1} {:>12.1} {:>16.0}\n",
+            m.arch,
+            m.hidden,
+            m.batch,
+            m.steps,
+            m.median_us,
+            m.mean_us,
+            m.char_steps_per_s()
+        ));
+    }
+    match peak {
+        Some(mb) => s.push_str(&format!("peak RSS {mb:.1} MB\n")),
+        None => s.push_str("peak RSS unknown (no /proc/self/status)\n"),
+    }
+    s
+}

@@ -1,0 +1,109 @@
+//! `motion-cli bench`, driven through the built binary with tiny step counts: checks the JSON
+//! structure and the usage errors only (speed is measured, never asserted, in tests).
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// Runs `motion-cli bench ARGS`; returns (exit code, stdout, stderr).
+fn bench(args: &[&str]) -> (i32, String, String) {
+    let output = Command::new(env!("CARGO_BIN_EXE_motion-cli"))
+        .arg("bench")
+        .args(args)
+        .output()
+        .expect("motion-cli runs");
+    (
+        output.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&output.stdout).into_owned(),
+        String::from_utf8_lossy(&output.stderr).into_owned(),
+    )
+}
+
+/// Checks one `results` row and returns (arch, hidden, batch).
+fn check_row(row: &serde_json::Value) -> (String, u64, u64) {
+    let us = row["us_per_step"]
+        .as_f64()
+        .expect("us_per_step is a number");
+    let rate = row["char_steps_per_s"]
+        .as_f64()
+        .expect("char_steps_per_s is a number");
+    assert!(us > 0.0 && rate > 0.0, "{row}");
+    (
+        row["arch"].as_str().expect("arch is a string").to_string(),
+        row["hidden"].as_u64().expect("hidden is an integer"),
+        row["batch"].as_u64().expect("batch is an integer"),
+    )
+}
+
+#[test]
+fn json_has_one_row_per_architecture_and_batch() {
+    let (code, out, err) = bench(&["--hidden", "16", "--batch", "1,3", "--steps", "2", "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let report: serde_json::Value = serde_json::from_str(&out).expect("stdout is JSON");
+    let rows: Vec<_> = report["results"]
+        .as_array()
+        .expect("results is an array")
+        .iter()
+        .map(check_row)
+        .collect();
+    let expected: Vec<(String, u64, u64)> =
+        [("gru-d", 1), ("gru-d", 3), ("vgru-d", 1), ("vgru-d", 3)]
+            .iter()
+            .map(|&(a, b)| (a.to_string(), 16, b))
+            .collect();
+    assert_eq!(rows, expected);
+    let peak = report["peak_rss_mb"]
+        .as_f64()
+        .expect("peak_rss_mb is a number");
+    assert!(peak > 0.0);
+}
+
+#[test]
+fn model_file_and_replanning_run() {
+    let model = repo().join("tests/fixtures/parity/vgru_d.safetensors");
+    let model = model.to_str().expect("utf-8 path");
+    let (code, out, err) = bench(&[
+        "--model",
+        model,
+        "--batch",
+        "2",
+        "--steps",
+        "3",
+        "--with-plan",
+        "--json",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let report: serde_json::Value = serde_json::from_str(&out).expect("stdout is JSON");
+    let rows = report["results"].as_array().expect("results is an array");
+    assert_eq!(rows.len(), 1);
+    assert_eq!(check_row(&rows[0]).0, "vgru-d");
+}
+
+#[test]
+fn text_table_names_the_columns() {
+    let (code, out, err) = bench(&[
+        "--arch", "gru-d", "--hidden", "8", "--batch", "1", "--steps", "1",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.contains("µs/step") && out.contains("char-steps/s"),
+        "{out}"
+    );
+    assert!(out.contains("peak RSS"), "{out}");
+}
+
+#[test]
+fn bad_input_exits_2() {
+    for args in [
+        &["--steps", "0"][..],
+        &["--batch", "0"][..],
+        &["--arch", "lstm"][..],
+        &["--model", "/nonexistent/w.safetensors", "--steps", "1"][..],
+    ] {
+        let (code, _, err) = bench(args);
+        assert_eq!(code, 2, "{args:?}: {err}");
+        assert!(!err.is_empty());
+    }
+}
