@@ -1,0 +1,208 @@
+"""Closed-loop generation step: motion-cli (Rust) vs ONNX Runtime vs PyTorch eager, same weights.
+
+For each architecture (GRU-d 2x512, VGRU-d 512) the script builds a paper-size model with the
+training init (or loads ``--model FILE``), saves it with ``training.export.save_weights`` (the file
+``motion-cli bench --model`` times), exports one closed-loop step to ONNX (step_graph.py: inputs
+frame + derivative history + state [+ guide], outputs next frame + full frame + new history + new
+state), checks ONNX Runtime against PyTorch (1e-5), then times the three engines in one run,
+alternating their order every repetition. Each repetition times ``--steps`` closed-loop steps one
+by one (outputs fed back as inputs) and keeps the median step; the table shows the median over
+repetitions.
+
+Run from the repository root (release binary built first):
+
+    cargo build --release -p motion-cli
+    training/.venv/bin/python benches/compare/compare_inference.py [--threads 2] [--reps 7]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+import onnxruntime as ort
+import torch
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from step_graph import REPO, ClosedLoopStep, export_onnx, paper_model  # noqa: E402
+
+from training.export import load_weights, save_weights  # noqa: E402
+
+ARCHES = ("gru-d", "vgru-d")
+
+
+def median_step_us(step_fn, state: dict, steps: int) -> float:
+    """Runs ``steps`` closed-loop steps from ``state`` (feeding outputs back); median µs per step."""
+    times = []
+    for _ in range(steps):
+        start = time.perf_counter()
+        state = step_fn(state)
+        times.append((time.perf_counter() - start) * 1e6)
+    return statistics.median(times)
+
+
+def torch_runner(step: ClosedLoopStep, inputs: dict[str, torch.Tensor]):
+    """A closure that times PyTorch eager (no_grad)."""
+
+    def one(state):
+        with torch.no_grad():
+            y, _full, history, h = step(**state)
+        nxt = dict(state)
+        nxt.update(x=y, history=history, h=h)
+        return nxt
+
+    def run(steps: int) -> float:
+        for _ in range(3):  # warm-up
+            inputs_warm = one(inputs)
+            del inputs_warm
+        return median_step_us(one, dict(inputs), steps)
+
+    return run
+
+
+def ort_runner(session: ort.InferenceSession, inputs: dict[str, np.ndarray]):
+    """A closure that times ONNX Runtime, outputs fed back as numpy inputs."""
+
+    def one(state):
+        y, _full, history, h = session.run(None, state)
+        nxt = dict(state)
+        nxt.update(x=y, history=history, h=h)
+        return nxt
+
+    def run(steps: int) -> float:
+        one(inputs)
+        one(inputs)
+        return median_step_us(one, dict(inputs), steps)
+
+    return run
+
+
+def ours_runner(cli: str, weights: str, batch: int, threads: int):
+    """A closure that times ``motion-cli bench --model WEIGHTS`` (its median µs per step)."""
+    env = dict(os.environ, RAYON_NUM_THREADS=str(threads))
+
+    def run(steps: int) -> float:
+        out = subprocess.run(
+            [cli, "bench", "--model", weights, "--batch", str(batch), "--steps", str(steps), "--json"],
+            check=True,
+            capture_output=True,
+            text=True,
+            env=env,
+        ).stdout
+        return json.loads(out)["results"][0]["us_per_step"]
+
+    return run
+
+
+def parity(step: ClosedLoopStep, session: ort.InferenceSession, batch: int) -> float:
+    """Max |ORT - PyTorch| over all outputs of 5 chained steps."""
+    state = step.initial_inputs(batch, seed=1)
+    worst = 0.0
+    for _ in range(5):
+        with torch.no_grad():
+            ref = step(**state)
+        got = session.run(None, {k: v.numpy() for k, v in state.items()})
+        worst = max(worst, max(float(np.abs(r.numpy() - g).max()) for r, g in zip(ref, got)))
+        state = dict(state, x=ref[0], history=ref[2], h=ref[3])
+    return worst
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--model", action="append", default=[], help="weights file(s) to use instead of random ones")
+    parser.add_argument("--arch", default="gru-d,vgru-d", help="random models to build (comma-separated)")
+    parser.add_argument("--batch", default="1,256", help="batch sizes (comma-separated)")
+    parser.add_argument("--threads", type=int, default=2, help="intra-op threads (ORT, torch, rayon)")
+    parser.add_argument("--reps", type=int, default=5, help="repetitions per engine (alternating)")
+    parser.add_argument("--steps", type=int, default=300, help="timed steps per repetition at batch 1")
+    parser.add_argument("--large-steps", type=int, default=30, help="timed steps per repetition at batch >= 64")
+    parser.add_argument("--cli", default=os.path.join(REPO, "target", "release", "motion-cli"))
+    parser.add_argument("--json", help="also write the results to this JSON file")
+    args = parser.parse_args()
+
+    if not os.path.exists(args.cli):
+        print(f"error: {args.cli} not found; run `cargo build --release -p motion-cli` first", file=sys.stderr)
+        return 2
+    torch.set_num_threads(args.threads)
+    options = ort.SessionOptions()
+    options.intra_op_num_threads = args.threads
+    options.inter_op_num_threads = 1
+    options.graph_optimization_level = ort.GraphOptimizationLevel.ORT_ENABLE_ALL
+    batches = [int(b) for b in args.batch.split(",")]
+
+    rows = []
+    with tempfile.TemporaryDirectory(prefix="motion-compare-") as tmp:
+        models = []
+        for path in args.model:
+            models.append((load_weights(path), path))
+        if not args.model:
+            for arch in args.arch.split(","):
+                model = paper_model(arch)
+                path = os.path.join(tmp, f"{arch}.safetensors")
+                save_weights(model, path, {"data": "random", "iterations": 0, "seed": 42})
+                models.append((model, path))
+        for model, weights in models:
+            arch = model.config["architecture"]
+            step = ClosedLoopStep(model).eval()
+            onnx_path = os.path.join(tmp, f"{arch}.onnx")
+            export_onnx(step, onnx_path, batch=2)
+            session = ort.InferenceSession(onnx_path, options, providers=["CPUExecutionProvider"])
+            for batch in batches:
+                err = parity(step, session, batch)
+                inputs = step.initial_inputs(batch)
+                engines = {
+                    "ours": ours_runner(args.cli, weights, batch, args.threads),
+                    "onnxruntime": ort_runner(session, {k: v.numpy() for k, v in inputs.items()}),
+                    "pytorch": torch_runner(step, inputs),
+                }
+                steps = args.steps if batch < 64 else args.large_steps
+                times = {name: [] for name in engines}
+                order = list(engines)
+                for rep in range(args.reps):
+                    for name in order[rep % 3 :] + order[: rep % 3]:
+                        times[name].append(engines[name](steps))
+                med = {name: statistics.median(t) for name, t in times.items()}
+                row = {
+                    "arch": arch,
+                    "hidden": model.hidden_size,
+                    "batch": batch,
+                    "us_per_step": med,
+                    "char_steps_per_s": {n: batch * 1e6 / t for n, t in med.items()},
+                    "ours_over_ort": med["ours"] / med["onnxruntime"],
+                    "pytorch_over_ours": med["pytorch"] / med["ours"],
+                    "ort_vs_pytorch_max_abs": err,
+                    "all_reps_us": times,
+                }
+                rows.append(row)
+                print_row(row, header=len(rows) == 1)
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump({"threads": args.threads, "reps": args.reps, "results": rows}, f, indent=1)
+    return 0
+
+
+def print_row(row: dict, header: bool) -> None:
+    if header:
+        print(
+            f"{'model':<14} {'batch':>5} {'ours µs':>10} {'ORT µs':>10} {'torch µs':>10} "
+            f"{'ours/ORT':>9} {'torch/ours':>10} {'ours char-steps/s':>18} {'ORT-torch':>9}"
+        )
+    t = row["us_per_step"]
+    name = f"{row['arch']} {row['hidden']}"
+    print(
+        f"{name:<14} {row['batch']:>5} {t['ours']:>10.1f} {t['onnxruntime']:>10.1f} {t['pytorch']:>10.1f} "
+        f"{row['ours_over_ort']:>9.2f} {row['pytorch_over_ours']:>10.2f} "
+        f"{row['char_steps_per_s']['ours']:>18.0f} {row['ort_vs_pytorch_max_abs']:>9.1e}",
+        flush=True,
+    )
+
+
+if __name__ == "__main__":
+    sys.exit(main())
