@@ -5,7 +5,9 @@ training init (or loads ``--model FILE``), saves it with ``training.export.save_
 ``motion-cli bench --model`` times), exports one closed-loop step to ONNX (step_graph.py: inputs
 frame + derivative history + state [+ guide], outputs next frame + full frame + new history + new
 state), checks ONNX Runtime against PyTorch (1e-5), then times the three engines in one run,
-alternating their order every repetition. Each repetition times ``--steps`` closed-loop steps one
+alternating their order every repetition. ONNX Runtime and PyTorch are also timed with one
+thread: on a shared 2-core machine their second thread often waits for a busy core, and the ratio
+columns compare against each competitor's better thread count. Each repetition times ``--steps`` closed-loop steps one
 by one (outputs fed back as inputs) and keeps the median step; the table shows the median over
 repetitions.
 
@@ -48,8 +50,8 @@ def median_step_us(step_fn, state: dict, steps: int) -> float:
     return statistics.median(times)
 
 
-def torch_runner(step: ClosedLoopStep, inputs: dict[str, torch.Tensor]):
-    """A closure that times PyTorch eager (no_grad)."""
+def torch_runner(step: ClosedLoopStep, inputs: dict[str, torch.Tensor], threads: int):
+    """A closure that times PyTorch eager (no_grad) with ``threads`` intra-op threads."""
 
     def one(state):
         with torch.no_grad():
@@ -59,9 +61,9 @@ def torch_runner(step: ClosedLoopStep, inputs: dict[str, torch.Tensor]):
         return nxt
 
     def run(steps: int) -> float:
+        torch.set_num_threads(threads)
         for _ in range(3):  # warm-up
-            inputs_warm = one(inputs)
-            del inputs_warm
+            one(inputs)
         return median_step_us(one, dict(inputs), steps)
 
     return run
@@ -101,6 +103,15 @@ def ours_runner(cli: str, weights: str, batch: int, threads: int):
     return run
 
 
+def session_for(onnx_path: str, threads: int) -> ort.InferenceSession:
+    """A CPU session with ``threads`` intra-op threads and every graph optimization."""
+    options = ort.SessionOptions()
+    options.intra_op_num_threads = threads
+    options.inter_op_num_threads = 1
+    options.graph_optimization_level = ort.GraphOptimizationLevel.ORT_ENABLE_ALL
+    return ort.InferenceSession(onnx_path, options, providers=["CPUExecutionProvider"])
+
+
 def parity(step: ClosedLoopStep, session: ort.InferenceSession, batch: int) -> float:
     """Max |ORT - PyTorch| over all outputs of 5 chained steps."""
     state = step.initial_inputs(batch, seed=1)
@@ -131,10 +142,6 @@ def main() -> int:
         print(f"error: {args.cli} not found; run `cargo build --release -p motion-cli` first", file=sys.stderr)
         return 2
     torch.set_num_threads(args.threads)
-    options = ort.SessionOptions()
-    options.intra_op_num_threads = args.threads
-    options.inter_op_num_threads = 1
-    options.graph_optimization_level = ort.GraphOptimizationLevel.ORT_ENABLE_ALL
     batches = [int(b) for b in args.batch.split(",")]
 
     rows = []
@@ -153,30 +160,38 @@ def main() -> int:
             step = ClosedLoopStep(model).eval()
             onnx_path = os.path.join(tmp, f"{arch}.onnx")
             export_onnx(step, onnx_path, batch=2)
-            session = ort.InferenceSession(onnx_path, options, providers=["CPUExecutionProvider"])
+            sessions = {n: session_for(onnx_path, n) for n in {args.threads, 1}}
             for batch in batches:
-                err = parity(step, session, batch)
+                err = parity(step, sessions[args.threads], batch)
                 inputs = step.initial_inputs(batch)
+                feeds = {k: v.numpy() for k, v in inputs.items()}
                 engines = {
                     "ours": ours_runner(args.cli, weights, batch, args.threads),
-                    "onnxruntime": ort_runner(session, {k: v.numpy() for k, v in inputs.items()}),
-                    "pytorch": torch_runner(step, inputs),
+                    "onnxruntime": ort_runner(sessions[args.threads], feeds),
+                    "pytorch": torch_runner(step, inputs, args.threads),
                 }
+                if args.threads != 1:
+                    engines["onnxruntime-1t"] = ort_runner(sessions[1], feeds)
+                    engines["pytorch-1t"] = torch_runner(step, inputs, 1)
                 steps = args.steps if batch < 64 else args.large_steps
                 times = {name: [] for name in engines}
                 order = list(engines)
                 for rep in range(args.reps):
-                    for name in order[rep % 3 :] + order[: rep % 3]:
+                    k = rep % len(order)
+                    for name in order[k:] + order[:k]:
                         times[name].append(engines[name](steps))
                 med = {name: statistics.median(t) for name, t in times.items()}
+                # Each competitor at its better thread count on this (shared) machine.
+                best_ort = min(v for n, v in med.items() if n.startswith("onnxruntime"))
+                best_torch = min(v for n, v in med.items() if n.startswith("pytorch"))
                 row = {
                     "arch": arch,
                     "hidden": model.hidden_size,
                     "batch": batch,
                     "us_per_step": med,
                     "char_steps_per_s": {n: batch * 1e6 / t for n, t in med.items()},
-                    "ours_over_ort": med["ours"] / med["onnxruntime"],
-                    "pytorch_over_ours": med["pytorch"] / med["ours"],
+                    "ours_over_ort": med["ours"] / best_ort,
+                    "pytorch_over_ours": best_torch / med["ours"],
                     "ort_vs_pytorch_max_abs": err,
                     "all_reps_us": times,
                 }
@@ -191,13 +206,16 @@ def main() -> int:
 def print_row(row: dict, header: bool) -> None:
     if header:
         print(
-            f"{'model':<14} {'batch':>5} {'ours µs':>10} {'ORT µs':>10} {'torch µs':>10} "
-            f"{'ours/ORT':>9} {'torch/ours':>10} {'ours char-steps/s':>18} {'ORT-torch':>9}"
+            f"{'model':<14} {'batch':>5} {'ours µs':>10} {'ORT µs':>10} {'ORT-1t µs':>10} {'torch µs':>10} "
+            f"{'torch-1t µs':>11} {'ours/ORT':>9} {'torch/ours':>10} {'ours char-steps/s':>18} {'ORT-torch':>9}"
         )
-    t = row["us_per_step"]
+    t = dict(row["us_per_step"])
+    for n in ("onnxruntime-1t", "pytorch-1t"):
+        t.setdefault(n, float("nan"))
     name = f"{row['arch']} {row['hidden']}"
     print(
-        f"{name:<14} {row['batch']:>5} {t['ours']:>10.1f} {t['onnxruntime']:>10.1f} {t['pytorch']:>10.1f} "
+        f"{name:<14} {row['batch']:>5} {t['ours']:>10.1f} {t['onnxruntime']:>10.1f} {t['onnxruntime-1t']:>10.1f} "
+        f"{t['pytorch']:>10.1f} {t['pytorch-1t']:>11.1f} "
         f"{row['ours_over_ort']:>9.2f} {row['pytorch_over_ours']:>10.2f} "
         f"{row['char_steps_per_s']['ours']:>18.0f} {row['ort_vs_pytorch_max_abs']:>9.1e}",
         flush=True,

@@ -10,12 +10,17 @@
 //!
 //! The reported time is the median over steps timed one by one (robust to a busy machine); the
 //! mean is reported too.
+//!
+//! `--npss GT.npy PRED.npy` times NPSS instead (both spectra, files loaded outside the clock):
+//! the median of `--reps` evaluations, for the comparison scripts in `benches/compare/`.
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
 
+use motion_core::formats::npy::read_npy_as;
 use motion_core::model::{Architecture, BatchGenerator, ModelConfig, MotionModel, Noise};
-use ndarray::Array3;
+use motion_metrics::npss::{Npss, SpectrumPower};
+use ndarray::{Array3, Ix3};
 
 use super::UsageError;
 
@@ -68,6 +73,12 @@ pub struct Args {
     /// Seed of the random weights.
     #[arg(long, default_value_t = 42)]
     pub seed: u64,
+    /// Time NPSS on these two .npy files (ground truth, prediction; N x T x D) instead of a model.
+    #[arg(long, num_args = 2, value_names = ["GT.npy", "PRED.npy"], conflicts_with_all = ["model", "arch"])]
+    pub npss: Vec<PathBuf>,
+    /// Repetitions of the `--npss` evaluation (the median is reported).
+    #[arg(long, default_value_t = 5)]
+    pub reps: usize,
     /// Print one JSON object instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -100,6 +111,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     if args.hidden == 0 {
         return Err(UsageError("--hidden must be at least 1".into()).into());
+    }
+    if !args.npss.is_empty() {
+        return run_npss(&args);
     }
     let models = models(&args)?;
     let mut results = Vec::new();
@@ -209,6 +223,58 @@ fn measure(
         median_us,
         mean_us,
     })
+}
+
+/// `--npss GT PRED`: median seconds of `--reps` NPSS evaluations per spectrum.
+fn run_npss(args: &Args) -> anyhow::Result<()> {
+    if args.reps == 0 {
+        return Err(UsageError("--reps must be at least 1".into()).into());
+    }
+    let gt = read_npy_as::<Ix3>(&args.npss[0])?;
+    let pred = read_npy_as::<Ix3>(&args.npss[1])?;
+    let mut npss = Npss::new();
+    let mut rows = Vec::new();
+    for (name, power) in [
+        ("npss", SpectrumPower::Modulus),
+        ("npss-reference", SpectrumPower::RealPart),
+    ] {
+        let mut value = 0.0;
+        let mut times = Vec::with_capacity(args.reps);
+        for _ in 0..args.reps {
+            let start = Instant::now();
+            value = npss
+                .score(gt.view(), pred.view(), power)
+                .map_err(|e| UsageError(format!("NPSS: {e}")))?;
+            times.push(start.elapsed().as_secs_f64() * 1e3);
+        }
+        times.sort_by(f64::total_cmp);
+        rows.push((name, value, times[times.len() / 2], times[0]));
+    }
+    let peak = peak_rss_mb();
+    if args.json {
+        let results: Vec<serde_json::Value> = rows
+            .iter()
+            .map(|&(metric, value, median_ms, min_ms)| {
+                serde_json::json!({
+                    "metric": metric, "value": value, "median_ms": median_ms, "min_ms": min_ms,
+                    "reps": args.reps, "shape": gt.shape(),
+                })
+            })
+            .collect();
+        println!(
+            "{}",
+            serde_json::json!({ "npss": results, "peak_rss_mb": peak })
+        );
+    } else {
+        println!(
+            "{:<16} {:>14} {:>12} {:>12}",
+            "metric", "value", "median ms", "min ms"
+        );
+        for (metric, value, median_ms, min_ms) in rows {
+            println!("{metric:<16} {value:>14.9} {median_ms:>12.2} {min_ms:>12.2}");
+        }
+    }
+    Ok(())
 }
 
 /// Peak resident set size of this process in MB (`VmHWM` of /proc/self/status; Linux only).
