@@ -101,9 +101,39 @@ fn bad_input_exits_2() {
         &["--batch", "0"][..],
         &["--arch", "lstm"][..],
         &["--model", "/nonexistent/w.safetensors", "--steps", "1"][..],
+        &["--npss", "/nonexistent/gt.npy", "/nonexistent/pred.npy"][..],
     ] {
         let (code, _, err) = bench(args);
         assert_eq!(code, 2, "{args:?}: {err}");
         assert!(!err.is_empty());
     }
+}
+
+#[test]
+fn npss_timing_reports_both_spectra() {
+    use motion_core::formats::npy::write_npy;
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("bench-npss");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let gt = ndarray::Array3::from_shape_fn((3, 8, 2), |(i, t, d)| ((i + 2 * t + d) as f64).sin());
+    let pred = gt.mapv(|v| 0.9 * v + 0.05);
+    let (gt_path, pred_path) = (dir.join("gt.npy"), dir.join("pred.npy"));
+    write_npy(&gt_path, &gt).unwrap();
+    write_npy(&pred_path, &pred).unwrap();
+    let (code, out, err) = bench(&[
+        "--npss",
+        gt_path.to_str().unwrap(),
+        pred_path.to_str().unwrap(),
+        "--reps",
+        "2",
+        "--json",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let report: serde_json::Value = serde_json::from_str(&out).expect("stdout is JSON");
+    let rows = report["npss"].as_array().expect("npss is an array");
+    let metrics: Vec<&str> = rows.iter().map(|r| r["metric"].as_str().unwrap()).collect();
+    assert_eq!(metrics, ["npss", "npss-reference"]);
+    let expected = motion_metrics::npss::npss(gt.view(), pred.view()).unwrap();
+    assert!((rows[0]["value"].as_f64().unwrap() - expected).abs() < 1e-12);
+    assert!(rows[0]["median_ms"].as_f64().unwrap() >= 0.0);
 }
