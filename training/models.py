@@ -19,26 +19,12 @@ import torch
 from torch import nn
 from torch.nn import functional as F
 
+from .data import ACTIONS
 from .features import DERIVATIVE_PADDING, DerivativeHistory, derivative_features, normalize, unnormalize
 from .layers import BIAS_INIT, BodyGRUCell, GRUCell, orthogonal_blocks_
 
-H36M_ACTIONS = [
-    "directions",
-    "discussion",
-    "eating",
-    "greeting",
-    "phoning",
-    "posing",
-    "purchases",
-    "sitting",
-    "sittingdown",
-    "smoking",
-    "takingphoto",
-    "waiting",
-    "walking",
-    "walkingdog",
-    "walkingtogether",
-]
+# The one-hot order of multi-action models: the action list of the data pipeline.
+H36M_ACTIONS = list(ACTIONS)
 
 ARCHITECTURES = ("vgru-d", "gru-d")
 
