@@ -22,6 +22,8 @@ use std::path::Path;
 
 use anyhow::Context;
 
+use serde_json::Value;
+
 use crate::commands::render::raster::{write_atomically, Anchor, Canvas, Rgb};
 use crate::commands::UsageError;
 
@@ -452,6 +454,57 @@ fn escape(text: &str) -> String {
     text.replace('&', "&amp;")
         .replace('<', "&lt;")
         .replace('>', "&gt;")
+}
+
+/// Milliseconds per predicted frame at the protocol's 25 Hz.
+const MS_PER_FRAME: f64 = 40.0;
+/// Length of one NDMS bin (10 words at 25 Hz).
+const NDMS_BIN_MS: f64 = 400.0;
+
+/// A JSON array of per-frame values at 25 Hz as `(ms, value)`: frame `i` (0-based) ends at
+/// `(i + 1) * 40` ms.
+pub fn per_frame_points(values: &Value) -> Vec<(f64, f64)> {
+    numbers(values)
+        .enumerate()
+        .map(|(i, v)| ((i + 1) as f64 * MS_PER_FRAME, v))
+        .collect()
+}
+
+/// A JSON object of window values labelled `"A-B s"` as `(ms at the window centre, value)`.
+pub fn window_points(windows: &Value) -> Vec<(f64, f64)> {
+    let Some(windows) = windows.as_object() else {
+        return Vec::new();
+    };
+    let mut points: Vec<(f64, f64)> = windows
+        .iter()
+        .filter_map(|(label, value)| Some((window_centre_ms(label)?, value.as_f64()?)))
+        .collect();
+    points.sort_by(|a, b| a.0.total_cmp(&b.0));
+    points
+}
+
+fn window_centre_ms(label: &str) -> Option<f64> {
+    let span = label.trim_end_matches('s').trim();
+    let (start, end) = span.split_once('-')?;
+    let start: f64 = start.trim().parse().ok()?;
+    let end: f64 = end.trim().parse().ok()?;
+    Some((start + end) * 500.0)
+}
+
+/// A JSON array of NDMS 0.4 s bin means as `(ms at the bin's end, value)`.
+pub fn bin_points(bins: &Value) -> Vec<(f64, f64)> {
+    numbers(bins)
+        .enumerate()
+        .map(|(i, v)| ((i + 1) as f64 * NDMS_BIN_MS, v))
+        .collect()
+}
+
+fn numbers(value: &Value) -> impl Iterator<Item = f64> + '_ {
+    value
+        .as_array()
+        .into_iter()
+        .flatten()
+        .map(|v| v.as_f64().unwrap_or(f64::NAN))
 }
 
 #[cfg(test)]

@@ -434,3 +434,40 @@ fn raw_positions_of_another_joint_order_are_named_by_a_bvh_skeleton() {
         "{report}"
     );
 }
+
+#[test]
+fn plot_draws_the_per_horizon_results() {
+    let dir = Scratch::new("plot");
+    let gt = Array3::from_shape_fn((2, 100, 99), |(i, t, d)| {
+        0.01 * ((i + 1) * (d + 1)) as f64 * (0.2 * t as f64).sin()
+    });
+    let pred = gt.mapv(|v| 0.9 * v);
+    let (gt_path, pred_path) = (dir.path("gt.npy"), dir.path("pred.npy"));
+    write_npy(&gt_path, &gt).unwrap();
+    write_npy(&pred_path, &pred).unwrap();
+    let svg = dir.path("scores.svg");
+    let output = score(&[
+        "--gt",
+        p(&gt_path),
+        "--pred",
+        p(&pred_path),
+        "--plot",
+        p(&svg),
+    ]);
+    assert!(output.status.success(), "{output:?}");
+    let text = std::fs::read_to_string(&svg).unwrap();
+    assert!(text.contains("Euler error") && text.contains("NPSS per window"));
+
+    // A plot format we don't write fails before any work, and leaves nothing behind.
+    let bad = dir.path("scores.jpg");
+    let output = score(&[
+        "--gt",
+        p(&gt_path),
+        "--pred",
+        p(&pred_path),
+        "--plot",
+        p(&bad),
+    ]);
+    assert_usage_error(&output, "scores.jpg");
+    assert!(!bad.exists());
+}

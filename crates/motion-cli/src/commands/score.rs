@@ -15,6 +15,7 @@ use ndarray::{
 };
 use serde_json::{json, Map, Value};
 
+use crate::plot::{bin_points, per_frame_points, window_points, Chart, Series};
 use motion_core::formats::bvh::read_bvh;
 use motion_core::formats::expmap_bvh::{bvh_to_expmap, ExpMapTarget};
 use motion_core::formats::h36m_text::{downsample_protocol, read_expmap_text};
@@ -87,6 +88,10 @@ pub struct Args {
     /// Print one JSON object instead of a table.
     #[arg(long)]
     pub json: bool,
+    /// Also draw the per-horizon results (Euler error per frame, NPSS windows, NDMS 0.4 s bins;
+    /// 25 Hz time axis) to FILE.svg or FILE.png.
+    #[arg(long, value_name = "FILE.svg|FILE.png")]
+    pub plot: Option<PathBuf>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -138,6 +143,9 @@ fn metric_error(what: &str, err: MetricError) -> anyhow::Error {
 
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
+    if let Some(plot) = &args.plot {
+        crate::plot::check_extension(plot)?;
+    }
     let requested = parse_metrics(&args.metric)?;
     let pred_raw = load_group(&args.pred, "--pred")?;
     let space = args.input_space.unwrap_or_else(|| default_space(&pred_raw));
@@ -239,6 +247,17 @@ pub fn run(args: Args) -> Result<()> {
     }
 
     let report = Value::Object(report);
+    if let Some(plot) = &args.plot {
+        let charts = charts(&report);
+        if charts.is_empty() {
+            return Err(UsageError(format!(
+                "{}: nothing to plot (--plot draws euler, npss and ndms results)",
+                plot.display()
+            ))
+            .into());
+        }
+        crate::plot::write_charts(plot, &charts, 3)?;
+    }
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
@@ -747,6 +766,47 @@ fn score_ndms(
 }
 
 // ---------- output ----------
+
+/// One chart per per-horizon result the report holds.
+fn charts(report: &Value) -> Vec<Chart> {
+    let mut charts = Vec::new();
+    if report.get("euler_error").is_some() {
+        charts.push(Chart {
+            title: "Euler error".into(),
+            x_label: "horizon (ms)".into(),
+            y_label: "Euler error (rad)".into(),
+            series: vec![Series::new(
+                "prediction",
+                per_frame_points(&report["euler_error"]),
+            )],
+        });
+    }
+    if let Some(windows) = report.get("npss_windows") {
+        let series = [
+            ("npss", "paper |DFT|^2"),
+            ("npss_reference", "reference Re(DFT)^2"),
+        ]
+        .iter()
+        .filter(|(key, _)| windows.get(key).is_some())
+        .map(|(key, name)| Series::new(*name, window_points(&windows[key])))
+        .collect();
+        charts.push(Chart {
+            title: "NPSS per window".into(),
+            x_label: "window centre (ms)".into(),
+            y_label: "NPSS".into(),
+            series,
+        });
+    }
+    if let Some(bins) = report.get("ndms").and_then(|n| n.get("bins")) {
+        charts.push(Chart {
+            title: "NDMS per 0.4 s".into(),
+            x_label: "bin end (ms)".into(),
+            y_label: "NDMS".into(),
+            series: vec![Series::new("prediction", bin_points(bins))],
+        });
+    }
+    charts
+}
 
 fn human_table(report: &Value) -> String {
     let mut out = String::new();

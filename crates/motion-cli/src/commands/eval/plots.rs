@@ -2,12 +2,7 @@
 //! the model as solid lines and the zero-velocity baseline dashed beside it.
 use serde_json::Value;
 
-use crate::plot::{Chart, Series};
-
-/// Milliseconds per predicted frame at the protocol's 25 Hz.
-const MS_PER_FRAME: f64 = 40.0;
-/// Words per NDMS bin (0.4 s at 25 Hz).
-const NDMS_BIN_MS: f64 = 400.0;
+use crate::plot::{bin_points, per_frame_points, window_points, Chart, Series};
 
 /// Three charts per evaluated action, built from the per-action JSON results of `eval`.
 pub fn charts(results: &[Value]) -> Vec<Chart> {
@@ -42,48 +37,16 @@ pub fn charts(results: &[Value]) -> Vec<Chart> {
     charts
 }
 
-/// Predicted frame `i` (0-based) ends at `(i + 1) * 40` ms.
 fn euler_points(scores: &Value) -> Vec<(f64, f64)> {
-    numbers(&scores["euler_error_per_frame"])
-        .enumerate()
-        .map(|(i, v)| ((i + 1) as f64 * MS_PER_FRAME, v))
-        .collect()
+    per_frame_points(&scores["euler_error_per_frame"])
 }
 
-/// NPSS windows are labelled `"A-B s"`; each is drawn at its centre.
 fn npss_window_points(scores: &Value) -> Vec<(f64, f64)> {
-    let Some(windows) = scores["npss_reference"]["windows"].as_object() else {
-        return Vec::new();
-    };
-    let mut points: Vec<(f64, f64)> = windows
-        .iter()
-        .filter_map(|(label, value)| Some((window_centre_ms(label)?, value.as_f64()?)))
-        .collect();
-    points.sort_by(|a, b| a.0.total_cmp(&b.0));
-    points
-}
-
-fn window_centre_ms(label: &str) -> Option<f64> {
-    let span = label.trim_end_matches('s').trim();
-    let (start, end) = span.split_once('-')?;
-    let start: f64 = start.trim().parse().ok()?;
-    let end: f64 = end.trim().parse().ok()?;
-    Some((start + end) * 500.0)
+    window_points(&scores["npss_reference"]["windows"])
 }
 
 fn ndms_bin_points(scores: &Value) -> Vec<(f64, f64)> {
-    numbers(&scores["ndms"]["bins"])
-        .enumerate()
-        .map(|(i, v)| ((i + 1) as f64 * NDMS_BIN_MS, v))
-        .collect()
-}
-
-fn numbers(value: &Value) -> impl Iterator<Item = f64> + '_ {
-    value
-        .as_array()
-        .into_iter()
-        .flatten()
-        .map(|v| v.as_f64().unwrap_or(f64::NAN))
+    bin_points(&scores["ndms"]["bins"])
 }
 
 #[cfg(test)]
