@@ -9,7 +9,7 @@ bpy.ops.wm.read_factory_settings(use_empty=True)
 bpy.ops.import_anim.bvh(filepath=path, global_scale=0.001, use_fps_scale=False, update_scene_fps=True, update_scene_duration=True)
 arm = [o for o in bpy.context.scene.objects if o.type == 'ARMATURE'][0]
 scene = bpy.context.scene
-scene.frame_set(scene.frame_start); a = arm.pose.bones[0].head.copy() + arm.location
+scene.frame_set(scene.frame_start)
 root0 = (arm.matrix_world @ arm.pose.bones['Hips'].head).copy()
 scene.frame_set(int(arm.animation_data.action.frame_range[1]))
 root1 = (arm.matrix_world @ arm.pose.bones['Hips'].head).copy()
