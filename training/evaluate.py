@@ -142,40 +142,73 @@ def summarize(per_action: dict[str, dict]) -> dict:
     }
 
 
+def load_model(path: str):
+    """A model from an exported weights file (.safetensors) or a training checkpoint (.pt)."""
+    if path.endswith(".pt"):
+        from .train import build_model, load_checkpoint
+
+        ck = load_checkpoint(Path(path))
+        model = build_model(ck["config"])
+        model.load_state_dict(ck["model"])
+        model.eval()
+        return model
+    from .export import load_weights
+
+    return load_weights(path)
+
+
 def main(argv=None) -> int:
-    """`python -m training.evaluate --weights FILE [--actions a,b|all]`: score a weights file on the S5 validation
-    windows (never the test windows) next to zero-velocity, one line per action."""
+    """`python -m training.evaluate --weights FILE [FILE ...] [--val-per-action N]`: score weights files or training
+    checkpoints (.pt) on the S5 validation windows (never the test windows) next to zero-velocity. One file: one line
+    per action. Several files (a checkpoint sweep): one line per file, all on the same windows, and the file with the
+    lowest mean reference NPSS named as the pick."""
     import argparse
     import json
     import sys
 
     from . import data as h36m
-    from .export import load_weights
     from .train import Validator, fmt_val
 
     p = argparse.ArgumentParser(prog="python -m training.evaluate", description=main.__doc__)
-    p.add_argument("--weights", required=True)
+    p.add_argument("--weights", required=True, nargs="+", help=".safetensors weights or .pt checkpoints")
     p.add_argument("--data-dir", default=None)
     p.add_argument("--val-per-action", type=int, default=4)
     p.add_argument("--json", action="store_true")
     args = p.parse_args(argv)
-    try:
-        model = load_weights(args.weights)
-    except (OSError, ValueError) as e:
-        print(f"error: {e}", file=sys.stderr)
-        return 2
-    actions = model.actions or list(h36m.ACTIONS)
+    models = []
+    for path in args.weights:
+        try:
+            models.append(load_model(path))
+        except (OSError, ValueError, KeyError, RuntimeError) as e:
+            print(f"error: {path}: {e}", file=sys.stderr)
+            return 2
+    first = models[0]
+    actions = first.actions or list(h36m.ACTIONS)
     stats = h36m.NormStats(
-        mean=model.norm.mean.double().numpy(), std=model.norm.std.double().numpy(),
-        dims_used=np.array(model.dims_used, dtype=np.int64),
+        mean=first.norm.mean.double().numpy(), std=first.norm.std.double().numpy(),
+        dims_used=np.array(first.dims_used, dtype=np.int64),
     )
     data_dir = Path(args.data_dir) if args.data_dir else None
     windows = h36m.validation_windows(data_dir, actions, args.val_per_action, log=lambda m: None)
-    v = Validator(windows, stats, actions, int(model.config["seed_frames"]), int(model.config["horizon"]))
-    res, base = v(model), v.baseline()
+    v = Validator(windows, stats, actions, int(first.config["seed_frames"]), int(first.config["horizon"]))
+    base = v.baseline()
+    results = [v(m) for m in models]
     if args.json:
-        print(json.dumps({"model": res, "zero_velocity": base}))
+        out = {"zero_velocity": base, "windows": len(v.windows)}
+        if len(models) == 1:
+            out["model"] = results[0]
+        else:
+            out["models"] = dict(zip(args.weights, results))
+        print(json.dumps(out))
         return 0
+    if len(models) > 1:
+        print(f"{len(v.windows)} validation windows; zero-velocity: {fmt_val(base)}")
+        for path, res in zip(args.weights, results):
+            print(f"{path}: {fmt_val(res)}")
+        best = min(range(len(models)), key=lambda i: results[i]["npss_ref"])
+        print(f"pick (lowest mean reference NPSS): {args.weights[best]}")
+        return 0
+    res = results[0]
     print(f"model:         {fmt_val(res)}")
     print(f"zero-velocity: {fmt_val(base)}")
     print("action             npss_ref (zero-vel)   euler@80 (zero-vel)   euler@1000 (zero-vel)   speed ratio")

@@ -128,5 +128,13 @@ def test_evaluate_cli_scores_an_exported_file(tmp_path, capsys):
     capsys.readouterr()
     assert evaluate.main(["--weights", str(out), "--json", "--val-per-action", "1"]) == 0
     res = json.loads(capsys.readouterr().out)
-    assert set(res) == {"model", "zero_velocity"} and len(res["model"]["per_action"]) == 13
+    assert set(res) == {"model", "zero_velocity", "windows"} and len(res["model"]["per_action"]) == 13
     assert evaluate.main(["--weights", str(tmp_path / "missing.safetensors")]) == 2
+    # a checkpoint sweep: the checkpoint and its f32 export score the same on the same windows
+    ckpt = str(tmp_path / "e" / "last.pt")
+    capsys.readouterr()
+    assert evaluate.main(["--weights", str(out), ckpt, "--json", "--val-per-action", "1"]) == 0
+    sweep = json.loads(capsys.readouterr().out)["models"]
+    assert abs(sweep[str(out)]["npss_ref"] - sweep[ckpt]["npss_ref"]) < 1e-9
+    assert evaluate.main(["--weights", str(out), ckpt, "--val-per-action", "1"]) == 0
+    assert "pick (lowest mean reference NPSS)" in capsys.readouterr().out
