@@ -11,6 +11,7 @@ pub mod gru;
 pub mod linear;
 pub mod lstm;
 pub mod mlp;
+pub mod sgemm_avx512;
 
 pub use body_gru::{BodyGruCell, BodyGruConfig};
 pub use gru::{GruCell, GruConfig, GruConvention, GruScratch};

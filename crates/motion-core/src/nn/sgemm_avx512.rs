@@ -1,0 +1,602 @@
+//! `Y = X Wᵀ` for large batches over a weight packed once at load into column panels, with an
+//! AVX-512F register-tile kernel.
+//!
+//! `W [out, in]` (the PyTorch layout) is repacked by [`PanelMatrix::pack`] into panels of
+//! [`PANEL_WIDTH`] output columns; inside a panel the weights are stored input-major
+//! (`panel[k * PANEL_WIDTH + j] = W[panel_start + j, k]`, zero-padded past the last output), which
+//! is exactly the order the kernel streams them, so a call never re-packs the weight (the cost
+//! that makes `matrixmultiply` slow at every batch size > 1).
+//!
+//! A call ([`gemm_panels`]) copies blocks of `X` rows into a small per-thread buffer, interleaved by
+//! [`TILE_ROWS`] rows, then runs a `TILE_ROWS x PANEL_WIDTH` tile of accumulators over every
+//! panel (the Goto/BLIS loop order: a panel slice of `KC` inputs stays in L1 while all row tiles
+//! of the block pass over it; the packed row block stays in L2). The buffer is a thread-local
+//! `Vec` that only grows, so steady-state calls do not allocate. Large products are split by rows
+//! over the rayon pool.
+//!
+//! Without AVX-512F (or off x86-64) [`available`] is false and [`gemm_panels`] still computes the
+//! right numbers with portable loops over the same layout, only slowly; callers should use
+//! their own fallback then.
+use std::cell::RefCell;
+
+/// Output columns per panel: two 16-lane AVX-512 registers.
+pub const PANEL_WIDTH: usize = 32;
+/// Rows of `X` per register tile (`TILE_ROWS x PANEL_WIDTH` accumulators = 24 of 32 zmm).
+pub const TILE_ROWS: usize = 12;
+/// Inputs per pass (the depth of the panel slice kept in L1: 256 x 32 x 4 B = 32 KiB).
+const KC_MAX: usize = 256;
+/// Rows of `X` per packed block (288 x 256 x 4 B = 288 KiB, well inside L2).
+const MC_MAX: usize = 288;
+/// Below this many multiply-adds a product is not split across threads.
+const PARALLEL_MIN_WORK: usize = 1 << 21;
+/// Minimum rows per thread when splitting.
+const PARALLEL_MIN_ROWS: usize = 2 * TILE_ROWS;
+
+/// One cache line of packed weights (keeps every panel row 64-byte aligned for the loads).
+#[derive(Debug, Clone, Copy)]
+#[repr(C, align(64))]
+struct Line([f32; 16]);
+
+/// A weight `W [outputs, inputs]` packed into column panels for [`gemm_panels`].
+#[derive(Debug, Clone)]
+pub struct PanelMatrix {
+    outputs: usize,
+    inputs: usize,
+    lines: Vec<Line>,
+}
+
+impl PanelMatrix {
+    /// Packs a row-major `W [outputs, inputs]` (PyTorch layout). Panics if `w` is shorter than
+    /// `outputs * inputs` (a programming error).
+    pub fn pack(w: &[f32], outputs: usize, inputs: usize) -> Self {
+        assert!(w.len() >= outputs * inputs, "weight too short");
+        let panels = outputs.div_ceil(PANEL_WIDTH);
+        let lines_per_panel = inputs * PANEL_WIDTH / 16;
+        let mut lines = vec![Line([0.0; 16]); panels * lines_per_panel];
+        if inputs > 0 {
+            let data = lines_as_floats_mut(&mut lines);
+            for (p, panel) in data
+                .chunks_exact_mut(inputs * PANEL_WIDTH)
+                .enumerate()
+                .take(panels)
+            {
+                let first = p * PANEL_WIDTH;
+                let width = PANEL_WIDTH.min(outputs - first);
+                for j in 0..width {
+                    let row = &w[(first + j) * inputs..(first + j + 1) * inputs];
+                    for (k, &v) in row.iter().enumerate() {
+                        panel[k * PANEL_WIDTH + j] = v;
+                    }
+                }
+            }
+        }
+        Self {
+            outputs,
+            inputs,
+            lines,
+        }
+    }
+
+    /// Columns of `Y` (rows of `W`).
+    pub fn outputs(&self) -> usize {
+        self.outputs
+    }
+
+    /// Columns of `X` (columns of `W`).
+    pub fn inputs(&self) -> usize {
+        self.inputs
+    }
+
+    /// Bytes held by the packed weight (including the zero padding of the last panel).
+    pub fn size_bytes(&self) -> usize {
+        self.lines.len() * std::mem::size_of::<Line>()
+    }
+
+    fn panels(&self) -> usize {
+        self.outputs.div_ceil(PANEL_WIDTH)
+    }
+
+    fn data(&self) -> &[f32] {
+        lines_as_floats(&self.lines)
+    }
+}
+
+fn lines_as_floats(lines: &[Line]) -> &[f32] {
+    // SAFETY: `Line` is `repr(C)` around `[f32; 16]` with no padding (64 bytes = 16 x 4), so the
+    // slice is `16 * len` initialized, properly aligned f32 values.
+    unsafe { std::slice::from_raw_parts(lines.as_ptr().cast::<f32>(), lines.len() * 16) }
+}
+
+fn lines_as_floats_mut(lines: &mut [Line]) -> &mut [f32] {
+    // SAFETY: as in `lines_as_floats`; the borrow is exclusive.
+    unsafe { std::slice::from_raw_parts_mut(lines.as_mut_ptr().cast::<f32>(), lines.len() * 16) }
+}
+
+/// True when this CPU runs the AVX-512F kernel (detected at run time).
+pub fn available() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::arch::is_x86_feature_detected!("avx512f")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
+/// `Y = X Wᵀ` (`accumulate = false`) or `Y += X Wᵀ` (`accumulate = true`) for `batch` rows of
+/// `X [batch, w.inputs()]` (row stride `x_stride`) into `Y [batch, w.outputs()]` (row stride
+/// `y_stride`). Columns of `Y` past `w.outputs()` are not touched.
+///
+/// Splits over the current rayon pool's threads when the product is large. Panics if a slice is
+/// too short for the layout or if rows of `Y` would overlap (`y_stride < outputs`), both
+/// programming errors.
+pub fn gemm_panels(
+    batch: usize,
+    x: &[f32],
+    x_stride: usize,
+    w: &PanelMatrix,
+    y: &mut [f32],
+    y_stride: usize,
+    accumulate: bool,
+) {
+    let (inputs, outputs) = (w.inputs, w.outputs);
+    if batch == 0 || outputs == 0 {
+        return;
+    }
+    assert!(
+        x.len() >= (batch - 1) * x_stride + inputs,
+        "input too short"
+    );
+    assert!(
+        y.len() >= (batch - 1) * y_stride + outputs,
+        "output too short"
+    );
+    assert!(batch == 1 || y_stride >= outputs, "output rows overlap");
+    let work = batch * inputs * outputs;
+    let threads = rayon::current_num_threads();
+    if threads > 1 && work >= PARALLEL_MIN_WORK && batch >= 2 * PARALLEL_MIN_ROWS {
+        // Row blocks that are whole tiles (except the last), one per thread.
+        let rows = batch
+            .div_ceil(threads)
+            .next_multiple_of(TILE_ROWS)
+            .max(PARALLEL_MIN_ROWS);
+        rayon::scope(|s| {
+            let mut y_rest = &mut y[..];
+            let mut start = 0;
+            while start < batch {
+                let n = rows.min(batch - start);
+                let y_len = if start + n == batch {
+                    y_rest.len()
+                } else {
+                    n * y_stride
+                };
+                let (y_chunk, rest) = y_rest.split_at_mut(y_len);
+                y_rest = rest;
+                let x_chunk = &x[start * x_stride..];
+                s.spawn(move |_| serial(n, x_chunk, x_stride, w, y_chunk, y_stride, accumulate));
+                start += n;
+            }
+        });
+    } else {
+        serial(batch, x, x_stride, w, y, y_stride, accumulate);
+    }
+}
+
+thread_local! {
+    /// Packed `X` rows of the current block (grows to the largest block seen, then reused).
+    static PACKED_ROWS: RefCell<Vec<f32>> = const { RefCell::new(Vec::new()) };
+}
+
+/// Splits `total` into the fewest near-equal parts of at most `max`, each rounded up to `align`.
+fn block_len(total: usize, max: usize, align: usize) -> usize {
+    let parts = total.div_ceil(max);
+    total.div_ceil(parts).next_multiple_of(align).min(total)
+}
+
+/// The product on one thread (slices already checked by the caller).
+fn serial(
+    batch: usize,
+    x: &[f32],
+    x_stride: usize,
+    w: &PanelMatrix,
+    y: &mut [f32],
+    y_stride: usize,
+    accumulate: bool,
+) {
+    let (inputs, outputs) = (w.inputs, w.outputs);
+    if inputs == 0 {
+        if !accumulate {
+            for b in 0..batch {
+                y[b * y_stride..b * y_stride + outputs].fill(0.0);
+            }
+        }
+        return;
+    }
+    #[cfg(target_arch = "x86_64")]
+    {
+        if available() {
+            let kc = block_len(inputs, KC_MAX, 1);
+            let mc = block_len(batch, MC_MAX, TILE_ROWS);
+            PACKED_ROWS.with(|buf| {
+                let mut buf = buf.borrow_mut();
+                let need = mc * kc;
+                if buf.len() < need {
+                    buf.resize(need, 0.0);
+                }
+                // SAFETY: the CPU has AVX-512F, and the caller checked that every row of `x` and
+                // `y` the layout addresses lies inside the slices (`y` exclusively borrowed).
+                unsafe {
+                    avx512::blocked(
+                        batch, x, x_stride, w, y, y_stride, accumulate, kc, mc, &mut buf,
+                    )
+                };
+            });
+            return;
+        }
+    }
+    portable(batch, x, x_stride, w, y, y_stride, accumulate);
+}
+
+/// Plain loops over the packed layout (machines without AVX-512F; also a layout check in tests).
+fn portable(
+    batch: usize,
+    x: &[f32],
+    x_stride: usize,
+    w: &PanelMatrix,
+    y: &mut [f32],
+    y_stride: usize,
+    accumulate: bool,
+) {
+    let (inputs, outputs) = (w.inputs, w.outputs);
+    let data = w.data();
+    for b in 0..batch {
+        let xr = &x[b * x_stride..b * x_stride + inputs];
+        for p in 0..w.panels() {
+            let panel = &data[p * inputs * PANEL_WIDTH..(p + 1) * inputs * PANEL_WIDTH];
+            let mut acc = [0.0f32; PANEL_WIDTH];
+            for (k, &xv) in xr.iter().enumerate() {
+                for (a, &wv) in acc
+                    .iter_mut()
+                    .zip(&panel[k * PANEL_WIDTH..(k + 1) * PANEL_WIDTH])
+                {
+                    *a += xv * wv;
+                }
+            }
+            let first = p * PANEL_WIDTH;
+            let width = PANEL_WIDTH.min(outputs - first);
+            let yr = &mut y[b * y_stride + first..b * y_stride + first + width];
+            for (o, a) in yr.iter_mut().zip(acc) {
+                *o = if accumulate { *o + a } else { a };
+            }
+        }
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+mod avx512 {
+    use super::{PanelMatrix, PANEL_WIDTH, TILE_ROWS};
+    use std::arch::x86_64::*;
+
+    /// Registers per panel row.
+    const VECS: usize = PANEL_WIDTH / 16;
+
+    /// The blocked product on one thread: `kc` inputs per pass, `mc` rows per packed block.
+    ///
+    /// # Safety
+    /// AVX-512F must be available; `x`, `y` must hold every addressed row (checked by
+    /// `gemm_panels`) and `y_stride >= outputs` unless `batch == 1`.
+    #[allow(clippy::too_many_arguments)]
+    #[target_feature(enable = "avx512f")]
+    pub(super) unsafe fn blocked(
+        batch: usize,
+        x: &[f32],
+        x_stride: usize,
+        w: &PanelMatrix,
+        y: &mut [f32],
+        y_stride: usize,
+        accumulate: bool,
+        kc_max: usize,
+        mc_max: usize,
+        buf: &mut [f32],
+    ) {
+        let (inputs, outputs) = (w.inputs, w.outputs);
+        let panels = w.panels();
+        let data = w.data().as_ptr();
+        let y_ptr = y.as_mut_ptr();
+        let mut pc = 0;
+        while pc < inputs {
+            let kc = kc_max.min(inputs - pc);
+            let load_c = accumulate || pc > 0;
+            let mut ic = 0;
+            while ic < batch {
+                let mc = mc_max.min(batch - ic);
+                pack_rows(&x[ic * x_stride..], x_stride, mc, pc, kc, buf);
+                for p in 0..panels {
+                    let first = p * PANEL_WIDTH;
+                    let width = PANEL_WIDTH.min(outputs - first);
+                    let masks = column_masks(width);
+                    // SAFETY: panel `p` holds `inputs * PANEL_WIDTH` floats; we start `pc` rows in.
+                    let b = unsafe { data.add((p * inputs + pc) * PANEL_WIDTH) };
+                    let mut ir = 0;
+                    while ir < mc {
+                        let m = TILE_ROWS.min(mc - ir);
+                        // SAFETY: tile rows `ic + ir ..+ m` and columns `first ..+ width` lie
+                        // inside `y`; the packed tile holds `m * kc` floats at `ir * kc`.
+                        unsafe {
+                            let a = buf.as_ptr().add(ir * kc);
+                            let c = y_ptr.add((ic + ir) * y_stride + first);
+                            tile_rows(m, kc, a, b, c, y_stride, load_c, masks);
+                        }
+                        ir += m;
+                    }
+                }
+                ic += mc;
+            }
+            pc += kc;
+        }
+    }
+
+    /// Lane masks of the panel's registers for the first `width` columns.
+    #[inline(always)]
+    fn column_masks(width: usize) -> [__mmask16; VECS] {
+        let mut masks = [0; VECS];
+        for (v, m) in masks.iter_mut().enumerate() {
+            let lanes = width.saturating_sub(16 * v).min(16);
+            *m = ((1u32 << lanes) - 1) as __mmask16;
+        }
+        masks
+    }
+
+    /// Copies `X[0..mc, pc..pc + kc]` into `buf` as tiles of `TILE_ROWS` rows (the last tile has
+    /// the remaining rows), each input-major: `tile[k * rows + r]`.
+    #[inline(always)]
+    fn pack_rows(x: &[f32], x_stride: usize, mc: usize, pc: usize, kc: usize, buf: &mut [f32]) {
+        let mut ir = 0;
+        while ir < mc {
+            let m = TILE_ROWS.min(mc - ir);
+            let tile = &mut buf[ir * kc..(ir + m) * kc];
+            for r in 0..m {
+                let row = &x[(ir + r) * x_stride + pc..(ir + r) * x_stride + pc + kc];
+                for (k, &v) in row.iter().enumerate() {
+                    tile[k * m + r] = v;
+                }
+            }
+            ir += m;
+        }
+    }
+
+    /// Runs the tile kernel for `m` (1..=TILE_ROWS) rows.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    unsafe fn tile_rows(
+        m: usize,
+        kc: usize,
+        a: *const f32,
+        b: *const f32,
+        c: *mut f32,
+        ldc: usize,
+        load_c: bool,
+        masks: [__mmask16; VECS],
+    ) {
+        macro_rules! by_rows {
+            ($($n:literal)*) => {
+                match m {
+                    $($n => unsafe { tile::<$n>(kc, a, b, c, ldc, load_c, masks) },)*
+                    _ => unreachable!("tile rows out of range"),
+                }
+            };
+        }
+        by_rows!(1 2 3 4 5 6 7 8 9 10 11 12);
+    }
+
+    /// `C[0..M, cols] (+)= A B` for a packed `A` tile (`a[k * M + r]`) and a panel slice
+    /// (`b[k * PANEL_WIDTH + j]`) over `kc` inputs; `masks` select the existing columns.
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    #[target_feature(enable = "avx512f")]
+    unsafe fn tile<const M: usize>(
+        kc: usize,
+        a: *const f32,
+        b: *const f32,
+        c: *mut f32,
+        ldc: usize,
+        load_c: bool,
+        masks: [__mmask16; VECS],
+    ) {
+        let mut acc = [[_mm512_setzero_ps(); VECS]; M];
+        let (mut a, mut b) = (a, b);
+        for _ in 0..kc {
+            // SAFETY: `a` has `M` and `b` `PANEL_WIDTH` floats per input step, `kc` steps.
+            unsafe {
+                let mut bv = [_mm512_setzero_ps(); VECS];
+                for (v, r) in bv.iter_mut().enumerate() {
+                    *r = _mm512_load_ps(b.add(16 * v));
+                }
+                for (r, row) in acc.iter_mut().enumerate() {
+                    let av = _mm512_set1_ps(*a.add(r));
+                    for (s, bvv) in row.iter_mut().zip(&bv) {
+                        *s = _mm512_fmadd_ps(av, *bvv, *s);
+                    }
+                }
+                a = a.add(M);
+                b = b.add(PANEL_WIDTH);
+            }
+        }
+        for (r, row) in acc.iter().enumerate() {
+            for (v, &s) in row.iter().enumerate() {
+                // SAFETY: row `r` of the tile, columns selected by the mask, lie inside `y`.
+                unsafe {
+                    // `wrapping_add`: a fully masked-off register may start past the end of `y`.
+                    let p = c.wrapping_add(r * ldc + 16 * v);
+                    let out = if load_c {
+                        _mm512_add_ps(_mm512_maskz_loadu_ps(masks[v], p), s)
+                    } else {
+                        s
+                    };
+                    _mm512_mask_storeu_ps(p, masks[v], out);
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Deterministic values in [-1, 1) from a 64-bit LCG (fixed seed per call site).
+    fn data(n: usize, seed: u64) -> Vec<f32> {
+        let mut s = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (0..n)
+            .map(|_| {
+                s = s
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                ((s >> 40) as f32) / (1u64 << 23) as f32 - 1.0
+            })
+            .collect()
+    }
+
+    /// `y0 (+)= X Wᵀ` in f64 (for the rows/columns the layout addresses).
+    #[allow(clippy::too_many_arguments)]
+    fn reference(
+        batch: usize,
+        inputs: usize,
+        outputs: usize,
+        x: &[f32],
+        x_stride: usize,
+        w: &[f32],
+        y0: &[f32],
+        y_stride: usize,
+        accumulate: bool,
+    ) -> Vec<f64> {
+        let mut y: Vec<f64> = y0.iter().map(|&v| v as f64).collect();
+        for b in 0..batch {
+            for o in 0..outputs {
+                let d: f64 = (0..inputs)
+                    .map(|k| x[b * x_stride + k] as f64 * w[o * inputs + k] as f64)
+                    .sum();
+                let t = &mut y[b * y_stride + o];
+                *t = if accumulate { *t + d } else { d };
+            }
+        }
+        y
+    }
+
+    /// Runs one case through `gemm_panels` (and the portable path) and compares with f64.
+    fn check(batch: usize, inputs: usize, outputs: usize, pad: (usize, usize), accumulate: bool) {
+        let (x_stride, y_stride) = (inputs + pad.0, outputs + pad.1);
+        let seed = (batch * 1_000_003 + inputs * 1009 + outputs) as u64;
+        let x = data(batch.max(1) * x_stride, seed);
+        let w = data(outputs * inputs, seed + 1);
+        let y0 = data(batch.max(1) * y_stride, seed + 2);
+        let packed = PanelMatrix::pack(&w, outputs, inputs);
+        assert_eq!((packed.outputs(), packed.inputs()), (outputs, inputs));
+        let expect = reference(
+            batch, inputs, outputs, &x, x_stride, &w, &y0, y_stride, accumulate,
+        );
+        // Sums of `inputs` products of values in [-1, 1): f32 rounding grows like sqrt(inputs).
+        let tol = 2e-6 * (inputs as f64).sqrt().max(1.0) * 4.0;
+        for (name, fast) in [("dispatch", true), ("portable", false)] {
+            let mut y = y0.clone();
+            if fast {
+                gemm_panels(batch, &x, x_stride, &packed, &mut y, y_stride, accumulate);
+            } else {
+                portable(batch, &x, x_stride, &packed, &mut y, y_stride, accumulate);
+            }
+            for (i, (&got, &want)) in y.iter().zip(&expect).enumerate() {
+                assert!(
+                    (got as f64 - want).abs() <= tol * want.abs().max(1.0),
+                    "{name} batch {batch} in {inputs} out {outputs} pad {pad:?} acc {accumulate}: \
+                     y[{i}] = {got}, expected {want}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn sgemm_matches_f64_reference_on_model_shapes() {
+        for &batch in &[1, 2, 13, 256, 257] {
+            for &inputs in &[54, 216, 512, 1024] {
+                for &outputs in &[54, 1024, 1536] {
+                    check(batch, inputs, outputs, (0, 0), batch % 2 == 1);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn sgemm_ragged_shapes_strides_and_accumulate() {
+        for &(batch, inputs, outputs) in &[
+            (1, 1, 1),
+            (3, 5, 7),
+            (12, 16, 32),
+            (11, 17, 33),
+            (25, 300, 65),
+            (49, 257, 31),
+            (300, 70, 100),
+        ] {
+            for pad in [(0, 0), (3, 5), (16, 0)] {
+                for accumulate in [false, true] {
+                    check(batch, inputs, outputs, pad, accumulate);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn sgemm_splits_over_threads_like_one_thread() {
+        let (batch, inputs, outputs) = (257, 512, 1536);
+        let x = data(batch * inputs, 7);
+        let w = PanelMatrix::pack(&data(outputs * inputs, 8), outputs, inputs);
+        let run = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("thread pool");
+            let mut y = vec![0.0; batch * outputs];
+            pool.install(|| gemm_panels(batch, &x, inputs, &w, &mut y, outputs, false));
+            y
+        };
+        // Each row is computed by one thread in the same order either way: identical bits.
+        assert_eq!(run(1), run(2));
+    }
+
+    #[test]
+    fn sgemm_zero_inputs_and_empty_products() {
+        let w = PanelMatrix::pack(&[], 5, 0);
+        let mut y = vec![1.0; 10];
+        gemm_panels(2, &[], 0, &w, &mut y, 5, true);
+        assert_eq!(y, vec![1.0; 10]);
+        gemm_panels(2, &[], 0, &w, &mut y, 5, false);
+        assert_eq!(y, vec![0.0; 10]);
+        let w = PanelMatrix::pack(&[], 0, 3);
+        gemm_panels(2, &[0.0; 6], 3, &w, &mut [], 0, false);
+        gemm_panels(
+            0,
+            &[],
+            3,
+            &PanelMatrix::pack(&[0.0; 6], 2, 3),
+            &mut [],
+            2,
+            false,
+        );
+    }
+
+    #[test]
+    fn sgemm_leaves_columns_past_outputs_alone() {
+        let (batch, inputs, outputs, y_stride) = (13, 40, 37, 50);
+        let x = data(batch * inputs, 11);
+        let w = PanelMatrix::pack(&data(outputs * inputs, 12), outputs, inputs);
+        let mut y = vec![9.0; batch * y_stride];
+        gemm_panels(batch, &x, inputs, &w, &mut y, y_stride, false);
+        for b in 0..batch {
+            assert!(y[b * y_stride + outputs..(b + 1) * y_stride]
+                .iter()
+                .all(|&v| v == 9.0));
+        }
+    }
+}
