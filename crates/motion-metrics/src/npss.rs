@@ -6,11 +6,9 @@
 //! Two spectra are offered: the paper's `|DFT|²` ([`SpectrumPower::Modulus`], the default) and
 //! the published implementation's `Re(DFT)²` ([`SpectrumPower::RealPart`]), which is what every
 //! published NPSS number was computed with.
-use std::sync::Arc;
-
-use ndarray::{s, ArrayView3};
+use ndarray::{s, ArrayView2, ArrayView3, Axis};
 use rayon::prelude::*;
-use rustfft::{num_complex::Complex, Fft, FftPlanner};
+use realfft::{num_complex::Complex, RealFftPlanner, RealToComplex};
 
 use crate::error::{check_finite, check_not_empty, MetricError};
 
@@ -22,15 +20,6 @@ pub enum SpectrumPower {
     /// `Re(DFT)²`: the published code stored the complex coefficients in a real array, dropping
     /// the imaginary part. Reproduces the papers' tables.
     RealPart,
-}
-
-impl SpectrumPower {
-    fn of(self, c: Complex<f64>) -> f64 {
-        match self {
-            SpectrumPower::Modulus => c.re * c.re + c.im * c.im,
-            SpectrumPower::RealPart => c.re * c.re,
-        }
-    }
 }
 
 /// A time window of the prediction on which NPSS is computed with its own DFT (paper 000 Table 5).
@@ -72,10 +61,10 @@ pub struct WindowScore {
     pub value: f64,
 }
 
-/// A reusable NPSS evaluator: keeps one FFT planner so that repeated calls with the same
-/// sequence length reuse the plan.
+/// A reusable NPSS evaluator: keeps one real-input FFT planner so that repeated calls with the
+/// same sequence length reuse the plan.
 pub struct Npss {
-    planner: FftPlanner<f64>,
+    planner: RealFftPlanner<f64>,
 }
 
 impl Default for Npss {
@@ -90,19 +79,11 @@ impl std::fmt::Debug for Npss {
     }
 }
 
-/// Per-thread work buffers: the DFTs of one sequence's ground truth and prediction, dim-major.
-struct SequenceBuffers {
-    gt: Vec<Complex<f64>>,
-    pred: Vec<Complex<f64>>,
-    scratch: Vec<Complex<f64>>,
-    cumulative_gt: Vec<f64>,
-}
-
 impl Npss {
     /// A new evaluator with an empty plan cache.
     pub fn new() -> Self {
         Self {
-            planner: FftPlanner::new(),
+            planner: RealFftPlanner::new(),
         }
     }
 
@@ -116,10 +97,16 @@ impl Npss {
         pred: ArrayView3<'_, f64>,
         power: SpectrumPower,
     ) -> Result<f64, MetricError> {
-        check_inputs(&gt, &pred)?;
-        let (_, frames, dims) = gt.dim();
-        let fft = self.planner.plan_fft_forward(frames);
-        let per_sequence = weighted_emd_per_sequence(&fft, gt, pred, power, frames, dims);
+        check_shapes(&gt, &pred)?;
+        let fft = self.planner.plan_fft_forward(gt.dim().1);
+        // Finiteness is checked inside the one pass over the data (the arrays can be hundreds of
+        // MB); only when something is not finite are they walked again to name the first place.
+        let per_sequence = weighted_emd_per_sequence(&*fft, gt, pred, power);
+        let Some(per_sequence) = per_sequence else {
+            check_finite("ground truth", &gt)?;
+            check_finite("prediction", &pred)?;
+            unreachable!("a non-finite value was seen, so one of the checks fails");
+        };
         // Summed in sequence order so that the result does not depend on the thread count.
         let (weighted, total) = per_sequence
             .iter()
@@ -144,7 +131,9 @@ impl Npss {
         power: SpectrumPower,
         windows: &[NpssWindow],
     ) -> Result<Vec<WindowScore>, MetricError> {
-        check_inputs(&gt, &pred)?;
+        check_shapes(&gt, &pred)?;
+        check_finite("ground truth", &gt)?;
+        check_finite("prediction", &pred)?;
         let frames = gt.dim().1;
         windows
             .iter()
@@ -158,7 +147,7 @@ impl Npss {
     }
 }
 
-fn check_inputs(gt: &ArrayView3<'_, f64>, pred: &ArrayView3<'_, f64>) -> Result<(), MetricError> {
+fn check_shapes(gt: &ArrayView3<'_, f64>, pred: &ArrayView3<'_, f64>) -> Result<(), MetricError> {
     check_not_empty("ground truth", gt)?;
     if gt.shape() != pred.shape() {
         return Err(MetricError::ShapeMismatch {
@@ -167,90 +156,190 @@ fn check_inputs(gt: &ArrayView3<'_, f64>, pred: &ArrayView3<'_, f64>) -> Result<
             expected: gt.shape().to_vec(),
         });
     }
-    check_finite("ground truth", gt)?;
-    check_finite("prediction", pred)
+    Ok(())
 }
 
-/// For every sequence: (Σ_j w_ij · emd_ij, Σ_j w_ij).
+/// Per-thread work buffers, allocated once per rayon job and reused for every sequence.
+struct SpectrumBuffers {
+    /// The ground truth's `D` series of `T` frames, dim-major (the FFT overwrites its input).
+    gt_series: Vec<f64>,
+    /// The prediction's series.
+    pred_series: Vec<f64>,
+    /// The `T/2 + 1` non-redundant DFT coefficients of one series.
+    spectrum: Vec<Complex<f64>>,
+    scratch: Vec<Complex<f64>>,
+    /// The ground truth's half power spectrum (`T/2 + 1` values) of the dim being compared.
+    gt_power: Vec<f64>,
+    /// The prediction's half power spectrum.
+    pred_power: Vec<f64>,
+}
+
+impl SpectrumBuffers {
+    fn new(fft: &dyn RealToComplex<f64>, dims: usize) -> Self {
+        let frames = fft.len();
+        Self {
+            gt_series: vec![0.0; dims * frames],
+            pred_series: vec![0.0; dims * frames],
+            spectrum: fft.make_output_vec(),
+            scratch: fft.make_scratch_vec(),
+            gt_power: vec![0.0; fft.complex_len()],
+            pred_power: vec![0.0; fft.complex_len()],
+        }
+    }
+
+    /// (Σ_j w_ij · emd_ij, Σ_j w_ij) of one sequence (`T x D` each); `None` if a value of
+    /// either is not finite.
+    fn sequence(
+        &mut self,
+        fft: &dyn RealToComplex<f64>,
+        gt: ArrayView2<'_, f64>,
+        pred: ArrayView2<'_, f64>,
+        power: SpectrumPower,
+    ) -> Option<(f64, f64)> {
+        let frames = gt.nrows();
+        if !(load_dim_major(gt, &mut self.gt_series) & load_dim_major(pred, &mut self.pred_series))
+        {
+            return None;
+        }
+        let mut weighted = 0.0;
+        let mut total = 0.0;
+        for (gt, pred) in self
+            .gt_series
+            .chunks_exact_mut(frames)
+            .zip(self.pred_series.chunks_exact_mut(frames))
+        {
+            // The DFT of a real series is conjugate-symmetric, and so are both power spectra:
+            // the T/2 + 1 coefficients of the real FFT determine them.
+            for (input, out) in [(gt, &mut self.gt_power), (pred, &mut self.pred_power)] {
+                fft.process_with_scratch(input, &mut self.spectrum, &mut self.scratch)
+                    .expect("buffers made by this plan");
+                match power {
+                    SpectrumPower::Modulus => {
+                        for (p, c) in out.iter_mut().zip(&self.spectrum) {
+                            *p = c.re * c.re + c.im * c.im;
+                        }
+                    }
+                    SpectrumPower::RealPart => {
+                        for (p, c) in out.iter_mut().zip(&self.spectrum) {
+                            *p = c.re * c.re;
+                        }
+                    }
+                }
+            }
+            let (emd, weight) = spectral_emd(&mut self.gt_power, &mut self.pred_power, frames);
+            weighted += weight * emd;
+            total += weight;
+        }
+        Some((weighted, total))
+    }
+}
+
+/// For every sequence: (Σ_j w_ij · emd_ij, Σ_j w_ij); `None` if a value is not finite.
 fn weighted_emd_per_sequence(
-    fft: &Arc<dyn Fft<f64>>,
+    fft: &dyn RealToComplex<f64>,
     gt: ArrayView3<'_, f64>,
     pred: ArrayView3<'_, f64>,
     power: SpectrumPower,
-    frames: usize,
-    dims: usize,
-) -> Vec<(f64, f64)> {
-    let scratch_len = fft.get_inplace_scratch_len();
-    (0..gt.dim().0)
+) -> Option<Vec<(f64, f64)>> {
+    let sequences = gt.dim().0;
+    // Few, long jobs: each allocates its buffers once (fresh pages cost more than the FFTs).
+    let per_job = sequences.div_ceil(4 * rayon::current_num_threads()).max(1);
+    (0..sequences)
         .into_par_iter()
+        .with_min_len(per_job)
         .map_init(
-            || SequenceBuffers {
-                gt: vec![Complex::default(); frames * dims],
-                pred: vec![Complex::default(); frames * dims],
-                scratch: vec![Complex::default(); scratch_len],
-                cumulative_gt: vec![0.0; frames],
-            },
+            || SpectrumBuffers::new(fft, gt.dim().2),
             |buffers, i| {
-                load_dim_major(gt.slice(s![i, .., ..]), &mut buffers.gt);
-                load_dim_major(pred.slice(s![i, .., ..]), &mut buffers.pred);
-                // One call transforms all D contiguous series of length T.
-                fft.process_with_scratch(&mut buffers.gt, &mut buffers.scratch);
-                fft.process_with_scratch(&mut buffers.pred, &mut buffers.scratch);
-                let mut weighted = 0.0;
-                let mut total = 0.0;
-                for j in 0..dims {
-                    let series = j * frames..(j + 1) * frames;
-                    let (emd, weight) = spectral_emd(
-                        &buffers.gt[series.clone()],
-                        &buffers.pred[series],
-                        power,
-                        &mut buffers.cumulative_gt,
-                    );
-                    weighted += weight * emd;
-                    total += weight;
-                }
-                (weighted, total)
+                let (gt, pred) = (gt.index_axis(Axis(0), i), pred.index_axis(Axis(0), i));
+                buffers.sequence(fft, gt, pred, power)
             },
         )
         .collect()
 }
 
-/// Copies a `T x D` sequence into `D` contiguous complex series of length `T`.
-fn load_dim_major(sequence: ndarray::ArrayView2<'_, f64>, out: &mut [Complex<f64>]) {
+/// Copies a `T x D` sequence into `D` contiguous series of length `T` (`out` is `D x T`);
+/// false if a value is not finite.
+fn load_dim_major(sequence: ArrayView2<'_, f64>, out: &mut [f64]) -> bool {
     let frames = sequence.nrows();
-    for ((t, j), &v) in sequence.indexed_iter() {
-        out[j * frames + t] = Complex::new(v, 0.0);
+    match sequence.to_slice() {
+        Some(values) => {
+            // Reading row by row streams through memory; the 8 frames of one cache line of
+            // each series are written while its line is still in L1.
+            for (t, row) in values.chunks_exact(sequence.ncols()).enumerate() {
+                for (series, &v) in out.chunks_exact_mut(frames).zip(row) {
+                    series[t] = v;
+                }
+            }
+            all_finite(values)
+        }
+        None => {
+            for (t, row) in sequence.rows().into_iter().enumerate() {
+                for (series, &v) in out.chunks_exact_mut(frames).zip(row) {
+                    series[t] = v;
+                }
+            }
+            all_finite(out)
+        }
     }
 }
 
+/// True if no value is NaN or infinite: `v · 0` is ±0 for finite `v` and NaN otherwise.
+/// Eight running sums keep the loop free of a serial dependency.
+fn all_finite(values: &[f64]) -> bool {
+    let mut sums = [0.0; 8];
+    let mut chunks = values.chunks_exact(8);
+    for chunk in &mut chunks {
+        for (s, &v) in sums.iter_mut().zip(chunk) {
+            *s += v * 0.0;
+        }
+    }
+    for (s, &v) in sums.iter_mut().zip(chunks.remainder()) {
+        *s += v * 0.0;
+    }
+    sums.iter().sum::<f64>() == 0.0
+}
+
 /// The EMD between the normalized power spectra of one dim (the L1 distance of their cumulative
-/// sums) and the ground truth's total power (the weight). A spectrum of total power 0 stays 0.
-fn spectral_emd(
-    gt: &[Complex<f64>],
-    pred: &[Complex<f64>],
-    power: SpectrumPower,
-    cumulative_gt: &mut [f64],
-) -> (f64, f64) {
-    let gt_total: f64 = gt.iter().map(|&c| power.of(c)).sum();
-    let pred_total: f64 = pred.iter().map(|&c| power.of(c)).sum();
+/// sums over all `T` frequencies) and the ground truth's total power (the weight). A spectrum
+/// of total power 0 stays 0.
+///
+/// `gt` and `pred` hold the half spectra `P[0..=T/2]` on entry (a real series has
+/// `P[T - f] = P[f]`) and their running sums `C` on return. With `D[f] = ĉ_pred[f] - ĉ_gt[f]`
+/// (normalized cumulative sums), symmetry gives `D[T - 1 - g] = K - D[g]` for the upper
+/// frequencies, `K = D[h - 1] + D[T - h]` with `h = T/2 + 1` (in exact arithmetic `K = D[0]`,
+/// both normalized sums ending at 1), so one pass over `h` frequencies covers all `T`.
+fn spectral_emd(gt: &mut [f64], pred: &mut [f64], frames: usize) -> (f64, f64) {
+    let half = gt.len();
+    let upper = frames - half;
+    let (mut gt_running, mut pred_running) = (0.0, 0.0);
+    for (g, p) in gt.iter_mut().zip(pred.iter_mut()) {
+        gt_running += *g;
+        *g = gt_running;
+        pred_running += *p;
+        *p = pred_running;
+    }
+    // Σ_f P[f] = C[h - 1] + C[T - h] - P[0], with P[0] = C[0].
+    let total = |c: &[f64]| c[half - 1] + if upper > 0 { c[upper] - c[0] } else { 0.0 };
+    let (gt_total, pred_total) = (total(gt), total(pred));
     let gt_scale = if gt_total > 0.0 { 1.0 / gt_total } else { 0.0 };
     let pred_scale = if pred_total > 0.0 {
         1.0 / pred_total
     } else {
         0.0
     };
-    let mut running = 0.0;
-    for (c, out) in gt.iter().zip(cumulative_gt.iter_mut()) {
-        running += power.of(*c) * gt_scale;
-        *out = running;
+    let d = |f: usize| pred[f] * pred_scale - gt[f] * gt_scale;
+    // The upper frequencies f = h..T have cumulative sums C[h - 1] + (C[T - h] - C[T - 1 - f]).
+    let k = d(half - 1) + if upper > 0 { d(upper) } else { 0.0 };
+    let mut lower_sum = 0.0;
+    let mut upper_sum = 0.0;
+    for f in 0..half {
+        let diff = d(f);
+        lower_sum += diff.abs();
+        if f < upper {
+            upper_sum += (k - diff).abs();
+        }
     }
-    let mut running = 0.0;
-    let mut emd = 0.0;
-    for (c, cg) in pred.iter().zip(cumulative_gt.iter()) {
-        running += power.of(*c) * pred_scale;
-        emd += (running - cg).abs();
-    }
-    (emd, gt_total)
+    (lower_sum + upper_sum, gt_total)
 }
 
 /// NPSS with the paper's `|DFT|²` power spectrum over the whole sequences (`N x T x D`).
