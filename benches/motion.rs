@@ -4,10 +4,18 @@ use criterion::{criterion_group, criterion_main};
 
 #[path = "motion/foundations.rs"]
 mod foundations;
+#[path = "motion/gemm.rs"]
+mod gemm;
 #[path = "motion/metrics.rs"]
 mod metrics;
 #[path = "motion/nn.rs"]
 mod nn;
 
-criterion_group!(benches, foundations::benches, nn::benches, metrics::benches);
+criterion_group!(
+    benches,
+    foundations::benches,
+    nn::benches,
+    metrics::benches,
+    gemm::benches
+);
 criterion_main!(benches);

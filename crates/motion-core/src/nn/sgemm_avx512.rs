@@ -7,26 +7,28 @@
 //! is exactly the order the kernel streams them, so a call never re-packs the weight (the cost
 //! that makes `matrixmultiply` slow at every batch size > 1).
 //!
-//! A call ([`gemm_panels`]) copies blocks of `X` rows into a small per-thread buffer, interleaved by
-//! [`TILE_ROWS`] rows, then runs a `TILE_ROWS x PANEL_WIDTH` tile of accumulators over every
-//! panel (the Goto/BLIS loop order: a panel slice of `KC` inputs stays in L1 while all row tiles
-//! of the block pass over it; the packed row block stays in L2). The buffer is a thread-local
-//! `Vec` that only grows, so steady-state calls do not allocate. Large products are split by rows
-//! over the rayon pool.
+//! A call ([`gemm_panels`]) runs a `TILE_ROWS x PANEL_WIDTH` tile of accumulators (24 of the 32
+//! zmm registers) over every panel, broadcasting `X` straight from its rows: packing `X` into a
+//! tile-interleaved buffer first (the usual BLIS step) measured slower at every shape of the
+//! step, by up to 40 % for the 54-output decoder where the copy is not amortized over many
+//! panels. Loop order (Goto/BLIS): blocks of `MC_MAX` rows; within one, each panel slice is
+//! reused by all the block's row tiles while it is hot in L1/L2. A call allocates nothing.
+//! Large products are split by rows over the rayon pool.
 //!
 //! Without AVX-512F (or off x86-64) [`available`] is false and [`gemm_panels`] still computes the
 //! right numbers with portable loops over the same layout, only slowly; callers should use
 //! their own fallback then.
-use std::cell::RefCell;
 
 /// Output columns per panel: two 16-lane AVX-512 registers.
 pub const PANEL_WIDTH: usize = 32;
 /// Rows of `X` per register tile (`TILE_ROWS x PANEL_WIDTH` accumulators = 24 of 32 zmm).
 pub const TILE_ROWS: usize = 12;
-/// Inputs per pass (the depth of the panel slice kept in L1: 256 x 32 x 4 B = 32 KiB).
-const KC_MAX: usize = 256;
-/// Rows of `X` per packed block (288 x 256 x 4 B = 288 KiB, well inside L2).
-const MC_MAX: usize = 288;
+/// Inputs per pass. Measured on Zen 5 (48 KiB L1, 1 MiB L2) at batch 256: depths 128..1024 are
+/// within noise of each other for K <= 512, and one pass beats four passes of 256 at K = 1024
+/// (the panel slice streams well from L2; fewer passes mean fewer round trips of `Y`).
+const KC_MAX: usize = 1024;
+/// Rows of `X` per block (96 x 1024 x 4 B = 384 KiB, inside L2); 48..264 measured alike.
+const MC_MAX: usize = 96;
 /// Below this many multiply-adds a product is not split across threads.
 const PARALLEL_MIN_WORK: usize = 1 << 21;
 /// Minimum rows per thread when splitting.
@@ -183,11 +185,6 @@ pub fn gemm_panels(
     }
 }
 
-thread_local! {
-    /// Packed `X` rows of the current block (grows to the largest block seen, then reused).
-    static PACKED_ROWS: RefCell<Vec<f32>> = const { RefCell::new(Vec::new()) };
-}
-
 /// Splits `total` into the fewest near-equal parts of at most `max`, each rounded up to `align`.
 fn block_len(total: usize, max: usize, align: usize) -> usize {
     let parts = total.div_ceil(max);
@@ -218,20 +215,9 @@ fn serial(
         if available() {
             let kc = block_len(inputs, KC_MAX, 1);
             let mc = block_len(batch, MC_MAX, TILE_ROWS);
-            PACKED_ROWS.with(|buf| {
-                let mut buf = buf.borrow_mut();
-                let need = mc * kc;
-                if buf.len() < need {
-                    buf.resize(need, 0.0);
-                }
-                // SAFETY: the CPU has AVX-512F, and the caller checked that every row of `x` and
-                // `y` the layout addresses lies inside the slices (`y` exclusively borrowed).
-                unsafe {
-                    avx512::blocked(
-                        batch, x, x_stride, w, y, y_stride, accumulate, kc, mc, &mut buf,
-                    )
-                };
-            });
+            // SAFETY: the CPU has AVX-512F, and the caller checked that every row of `x` and `y`
+            // the layout addresses lies inside the slices (`y` exclusively borrowed).
+            unsafe { avx512::blocked(batch, x, x_stride, w, y, y_stride, accumulate, kc, mc) };
             return;
         }
     }
@@ -281,7 +267,7 @@ mod avx512 {
     /// Registers per panel row.
     const VECS: usize = PANEL_WIDTH / 16;
 
-    /// The blocked product on one thread: `kc` inputs per pass, `mc` rows per packed block.
+    /// The blocked product on one thread: `kc` inputs per pass, `mc` rows per block.
     ///
     /// # Safety
     /// AVX-512F must be available; `x`, `y` must hold every addressed row (checked by
@@ -298,7 +284,6 @@ mod avx512 {
         accumulate: bool,
         kc_max: usize,
         mc_max: usize,
-        buf: &mut [f32],
     ) {
         let (inputs, outputs) = (w.inputs, w.outputs);
         let panels = w.panels();
@@ -311,7 +296,7 @@ mod avx512 {
             let mut ic = 0;
             while ic < batch {
                 let mc = mc_max.min(batch - ic);
-                pack_rows(&x[ic * x_stride..], x_stride, mc, pc, kc, buf);
+                let x_block = &x[ic * x_stride..];
                 for p in 0..panels {
                     let first = p * PANEL_WIDTH;
                     let width = PANEL_WIDTH.min(outputs - first);
@@ -322,11 +307,11 @@ mod avx512 {
                     while ir < mc {
                         let m = TILE_ROWS.min(mc - ir);
                         // SAFETY: tile rows `ic + ir ..+ m` and columns `first ..+ width` lie
-                        // inside `y`; the packed tile holds `m * kc` floats at `ir * kc`.
+                        // inside `y`; rows `ic + ir ..+ m` of `x` hold inputs `pc ..+ kc`.
                         unsafe {
-                            let a = buf.as_ptr().add(ir * kc);
                             let c = y_ptr.add((ic + ir) * y_stride + first);
-                            tile_rows(m, kc, a, b, c, y_stride, load_c, masks);
+                            let a = x_block.as_ptr().add(ir * x_stride + pc);
+                            tile_rows(m, kc, a, x_stride, b, c, y_stride, load_c, masks);
                         }
                         ir += m;
                     }
@@ -348,24 +333,6 @@ mod avx512 {
         masks
     }
 
-    /// Copies `X[0..mc, pc..pc + kc]` into `buf` as tiles of `TILE_ROWS` rows (the last tile has
-    /// the remaining rows), each input-major: `tile[k * rows + r]`.
-    #[inline(always)]
-    fn pack_rows(x: &[f32], x_stride: usize, mc: usize, pc: usize, kc: usize, buf: &mut [f32]) {
-        let mut ir = 0;
-        while ir < mc {
-            let m = TILE_ROWS.min(mc - ir);
-            let tile = &mut buf[ir * kc..(ir + m) * kc];
-            for r in 0..m {
-                let row = &x[(ir + r) * x_stride + pc..(ir + r) * x_stride + pc + kc];
-                for (k, &v) in row.iter().enumerate() {
-                    tile[k * m + r] = v;
-                }
-            }
-            ir += m;
-        }
-    }
-
     /// Runs the tile kernel for `m` (1..=TILE_ROWS) rows.
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
@@ -373,6 +340,7 @@ mod avx512 {
         m: usize,
         kc: usize,
         a: *const f32,
+        lda: usize,
         b: *const f32,
         c: *mut f32,
         ldc: usize,
@@ -382,7 +350,7 @@ mod avx512 {
         macro_rules! by_rows {
             ($($n:literal)*) => {
                 match m {
-                    $($n => unsafe { tile::<$n>(kc, a, b, c, ldc, load_c, masks) },)*
+                    $($n => unsafe { tile::<$n>(kc, a, lda, b, c, ldc, load_c, masks) },)*
                     _ => unreachable!("tile rows out of range"),
                 }
             };
@@ -390,7 +358,7 @@ mod avx512 {
         by_rows!(1 2 3 4 5 6 7 8 9 10 11 12);
     }
 
-    /// `C[0..M, cols] (+)= A B` for a packed `A` tile (`a[k * M + r]`) and a panel slice
+    /// `C[0..M, cols] (+)= A B` for `M` rows of `X` (`a[r * lda + k]`) and a panel slice
     /// (`b[k * PANEL_WIDTH + j]`) over `kc` inputs; `masks` select the existing columns.
     #[allow(clippy::too_many_arguments)]
     #[inline]
@@ -398,6 +366,7 @@ mod avx512 {
     unsafe fn tile<const M: usize>(
         kc: usize,
         a: *const f32,
+        lda: usize,
         b: *const f32,
         c: *mut f32,
         ldc: usize,
@@ -407,19 +376,19 @@ mod avx512 {
         let mut acc = [[_mm512_setzero_ps(); VECS]; M];
         let (mut a, mut b) = (a, b);
         for _ in 0..kc {
-            // SAFETY: `a` has `M` and `b` `PANEL_WIDTH` floats per input step, `kc` steps.
+            // SAFETY: rows `a + r * lda` (r < M) hold `kc` inputs; `b` holds `kc` panel rows.
             unsafe {
                 let mut bv = [_mm512_setzero_ps(); VECS];
                 for (v, r) in bv.iter_mut().enumerate() {
                     *r = _mm512_load_ps(b.add(16 * v));
                 }
                 for (r, row) in acc.iter_mut().enumerate() {
-                    let av = _mm512_set1_ps(*a.add(r));
+                    let av = _mm512_set1_ps(*a.add(r * lda));
                     for (s, bvv) in row.iter_mut().zip(&bv) {
                         *s = _mm512_fmadd_ps(av, *bvv, *s);
                     }
                 }
-                a = a.add(M);
+                a = a.add(1);
                 b = b.add(PANEL_WIDTH);
             }
         }
