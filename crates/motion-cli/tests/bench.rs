@@ -137,3 +137,83 @@ fn npss_timing_reports_both_spectra() {
     assert!((rows[0]["value"].as_f64().unwrap() - expected).abs() < 1e-12);
     assert!(rows[0]["median_ms"].as_f64().unwrap() >= 0.0);
 }
+
+#[test]
+fn ndms_timing_scores_every_set_of_the_manifest() {
+    use motion_core::formats::npy::write_npy;
+    use motion_metrics::ndms::{NdmsConfig, NdmsDatabase, NnMethod};
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("bench-ndms");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    // 32-joint positions with every joint moving: a database sequence and 2 forecasts per set.
+    let motion = |frames: usize, salt: usize| {
+        ndarray::Array3::from_shape_fn((frames, 32, 3), |(t, j, c)| {
+            let phase = (salt * 97 + j * 3 + c) as f64;
+            100.0 * (0.2 * t as f64 + phase).sin() + 10.0 * phase
+        })
+    };
+    let mut expected = Vec::new();
+    for set in 0..2 {
+        let db = motion(40, set);
+        let forecasts = ndarray::stack(
+            ndarray::Axis(0),
+            &[motion(12, 10 + set).view(), motion(12, 20 + set).view()],
+        )
+        .unwrap();
+        write_npy(dir.join(format!("db{set}.npy")), &db).unwrap();
+        write_npy(dir.join(format!("pred{set}.npy")), &forecasts).unwrap();
+        let database =
+            NdmsDatabase::from_sequences(NdmsConfig::h36m(), &[db.view()], NnMethod::BruteForce)
+                .unwrap();
+        let views: Vec<_> = forecasts.outer_iter().collect();
+        expected.push(database.score_forecasts(&views, None).unwrap().mean);
+    }
+    let manifest = dir.join("manifest.json");
+    std::fs::write(
+        &manifest,
+        r#"{"sets": [{"name": "a", "pred": "pred0.npy", "db": ["db0.npy"]},
+                     {"name": "b", "pred": "pred1.npy", "db": ["db1.npy", "db1.npy"]}]}"#,
+    )
+    .unwrap();
+    let (code, out, err) = bench(&[
+        "--ndms",
+        manifest.to_str().unwrap(),
+        "--reps",
+        "2",
+        "--json",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let report: serde_json::Value = serde_json::from_str(&out).expect("stdout is JSON");
+    let ndms = &report["ndms"];
+    let sets = ndms["sets"].as_array().expect("sets is an array");
+    assert_eq!(sets.len(), 2);
+    assert_eq!(sets[0]["name"], "a");
+    assert_eq!(sets[0]["database_words"], 33);
+    assert_eq!(sets[1]["database_words"], 66);
+    assert_eq!(sets[0]["query_words"], 10);
+    // A database holding its words twice has the same nearest neighbours.
+    for (set, mean) in sets.iter().zip(&expected) {
+        assert!(
+            (set["mean"].as_f64().unwrap() - mean).abs() < 1e-12,
+            "{set}"
+        );
+    }
+    assert!(ndms["median_ms"].as_f64().unwrap() >= 0.0);
+    assert_eq!(ndms["exact"], true);
+    for phase in ["words", "index", "search", "similarity"] {
+        assert!(ndms["phases_ms"][phase].as_f64().is_some(), "{ndms}");
+    }
+
+    // A manifest that is not one, or names a file that is not there: exit 2.
+    std::fs::write(dir.join("bad.json"), r#"{"sets": []}"#).unwrap();
+    std::fs::write(
+        dir.join("missing.json"),
+        r#"{"sets": [{"pred": "nothing.npy", "db": ["db0.npy"]}]}"#,
+    )
+    .unwrap();
+    for name in ["bad.json", "missing.json", "absent.json"] {
+        let (code, _, err) = bench(&["--ndms", dir.join(name).to_str().unwrap()]);
+        assert_eq!(code, 2, "{name}: {err}");
+        assert!(!err.is_empty());
+    }
+}

@@ -13,14 +13,26 @@
 //!
 //! `--npss GT.npy PRED.npy` times NPSS instead (both spectra, files loaded outside the clock):
 //! the median of `--reps` evaluations, for the comparison scripts in `benches/compare/`.
+//!
+//! `--ndms MANIFEST.json` times NDMS on many (database, forecasts) sets in one process, as a
+//! whole evaluation does (e.g. every H3.6M action): the manifest is
+//! `{"sets": [{"name": "walking", "pred": "forecasts.npy", "db": ["s5_1.npy", "s5_2.npy"]}]}` with
+//! 32-joint H3.6M world positions (`pred`: `N x T x 32 x 3` or `T x 32 x 3`; `db`: `T x 32 x 3` or
+//! `N x T x 32 x 3`), words in `metrics.md`'s heading frame (as `score --input-space raw`),
+//! forecasts scored without seed. Files are read outside the clock; each repetition builds every
+//! set's words and index and scores its forecasts (sets in parallel), and the median is reported
+//! with a breakdown of one sequential pass into words, index build, search and similarity.
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
 
 use motion_core::formats::npy::read_npy_as;
 use motion_core::model::{Architecture, BatchGenerator, ModelConfig, MotionModel, Noise};
+use motion_metrics::ndms::index::NearestIndex;
+use motion_metrics::ndms::{similarity, word, NdmsConfig, NdmsDatabase, NnMethod};
 use motion_metrics::npss::{Npss, SpectrumPower};
-use ndarray::{Array3, Ix3};
+use ndarray::{Array3, Array4, ArrayView3, Axis, Ix3};
+use rayon::prelude::*;
 
 use super::UsageError;
 
@@ -76,7 +88,10 @@ pub struct Args {
     /// Time NPSS on these two .npy files (ground truth, prediction; N x T x D) instead of a model.
     #[arg(long, num_args = 2, value_names = ["GT.npy", "PRED.npy"], conflicts_with_all = ["model", "arch"])]
     pub npss: Vec<PathBuf>,
-    /// Repetitions of the `--npss` evaluation (the median is reported).
+    /// Time NDMS on the (database, forecasts) sets of this JSON manifest instead of a model.
+    #[arg(long, value_name = "MANIFEST.json", conflicts_with_all = ["model", "arch", "npss"])]
+    pub ndms: Option<PathBuf>,
+    /// Repetitions of the `--npss` or `--ndms` evaluation (the median is reported).
     #[arg(long, default_value_t = 5)]
     pub reps: usize,
     /// Print one JSON object instead of a table.
@@ -114,6 +129,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     if !args.npss.is_empty() {
         return run_npss(&args);
+    }
+    if let Some(manifest) = &args.ndms {
+        return run_ndms(manifest, args.reps, args.json);
     }
     let models = models(&args)?;
     let mut results = Vec::new();
@@ -273,6 +291,202 @@ fn run_npss(args: &Args) -> anyhow::Result<()> {
         for (metric, value, median_ms, min_ms) in rows {
             println!("{metric:<16} {value:>14.9} {median_ms:>12.2} {min_ms:>12.2}");
         }
+    }
+    Ok(())
+}
+
+/// One NDMS set of the manifest, read: database sequences and forecasts (positions).
+struct NdmsSet {
+    name: String,
+    database: Vec<Array3<f64>>,
+    forecasts: Array4<f64>,
+}
+
+/// Reads the manifest and every file it names.
+fn read_ndms_sets(manifest: &std::path::Path) -> anyhow::Result<Vec<NdmsSet>> {
+    let bad = |m: String| UsageError(format!("{}: {m}", manifest.display()));
+    let text = std::fs::read_to_string(manifest)
+        .map_err(|e| bad(format!("cannot read the manifest: {e}")))?;
+    let json: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| bad(format!("not JSON: {e}")))?;
+    let sets = json["sets"]
+        .as_array()
+        .filter(|s| !s.is_empty())
+        .ok_or_else(|| bad("expected {\"sets\": [{\"name\", \"pred\", \"db\"}, ...]}".into()))?;
+    let base = manifest.parent().unwrap_or(std::path::Path::new("."));
+    let mut out = Vec::with_capacity(sets.len());
+    for (i, set) in sets.iter().enumerate() {
+        let field = |key: &str| {
+            set[key]
+                .as_str()
+                .map(|p| base.join(p))
+                .ok_or_else(|| bad(format!("set {i}: \"{key}\" must be a path")))
+        };
+        let pred = field("pred")?;
+        let db: Vec<PathBuf> = set["db"]
+            .as_array()
+            .filter(|d| !d.is_empty())
+            .and_then(|d| d.iter().map(|p| p.as_str().map(|p| base.join(p))).collect())
+            .ok_or_else(|| bad(format!("set {i}: \"db\" must be a non-empty list of paths")))?;
+        let name = set["name"]
+            .as_str()
+            .map_or_else(|| format!("set {i}"), str::to_string);
+        let forecasts = positions4(&pred)?;
+        let mut database = Vec::new();
+        for path in &db {
+            database.extend(positions4(path)?.outer_iter().map(|s| s.to_owned()));
+        }
+        out.push(NdmsSet {
+            name,
+            database,
+            forecasts,
+        });
+    }
+    Ok(out)
+}
+
+/// Positions `N x T x J x 3` from a .npy of that shape or `T x J x 3` (one sequence).
+fn positions4(path: &std::path::Path) -> anyhow::Result<Array4<f64>> {
+    let array = motion_core::formats::npy::read_npy_dyn(path)?;
+    let shape = array.shape().to_vec();
+    let array = if array.ndim() == 3 {
+        array.insert_axis(Axis(0))
+    } else {
+        array
+    };
+    match array.into_dimensionality::<ndarray::Ix4>() {
+        Ok(a) if a.dim().3 == 3 => Ok(a),
+        _ => Err(UsageError(format!(
+            "{}: expected positions T x J x 3 or N x T x J x 3, found shape {shape:?}",
+            path.display()
+        ))
+        .into()),
+    }
+}
+
+/// f_sim of one set: database words and index built, every forecast word scored.
+fn ndms_set(set: &NdmsSet, config: &NdmsConfig) -> anyhow::Result<(f64, usize)> {
+    let database: Vec<ArrayView3<'_, f64>> = set.database.iter().map(|d| d.view()).collect();
+    let forecasts: Vec<ArrayView3<'_, f64>> = set.forecasts.outer_iter().collect();
+    let what = |e| UsageError(format!("NDMS of {}: {e}", set.name));
+    let db = NdmsDatabase::from_sequences(config.clone(), &database, NnMethod::default())
+        .map_err(what)?;
+    let report = db.score_forecasts(&forecasts, None).map_err(what)?;
+    Ok((report.mean, db.len()))
+}
+
+/// Milliseconds of one sequential pass over every set, by phase: words (database and
+/// queries), index build, nearest-neighbour search, similarity.
+fn ndms_phases(sets: &[NdmsSet], config: &NdmsConfig) -> [f64; 4] {
+    let mut phases = [0.0; 4];
+    let mut lap = |phase: usize, start: Instant| {
+        phases[phase] += start.elapsed().as_secs_f64() * 1e3;
+        Instant::now()
+    };
+    let len = config.word_len();
+    for set in sets {
+        let start = Instant::now();
+        let mut words = Vec::new();
+        for sequence in &set.database {
+            word::append_all_words(sequence.view(), config, &mut words);
+        }
+        let mut queries = Vec::new();
+        for forecast in set.forecasts.outer_iter() {
+            word::append_all_words(forecast, config, &mut queries);
+        }
+        let start = lap(0, start);
+        let index = NearestIndex::build_frames(NnMethod::default(), words, len, config.kappa);
+        let start = lap(1, start);
+        let neighbours = index.nearest_batch(&queries);
+        let start = lap(2, start);
+        let total: f64 = queries
+            .chunks_exact(len)
+            .zip(&neighbours)
+            .map(|(q, n)| {
+                let w = &index.words()[n.index * len..(n.index + 1) * len];
+                similarity::ndms(w, q, config.kappa)
+            })
+            .sum();
+        std::hint::black_box(total);
+        lap(3, start);
+    }
+    phases
+}
+
+/// `--ndms MANIFEST`: median seconds of `reps` whole NDMS evaluations over the manifest's sets.
+fn run_ndms(manifest: &std::path::Path, reps: usize, json: bool) -> anyhow::Result<()> {
+    if reps == 0 {
+        return Err(UsageError("--reps must be at least 1".into()).into());
+    }
+    let start = Instant::now();
+    let sets = read_ndms_sets(manifest)?;
+    let read_ms = start.elapsed().as_secs_f64() * 1e3;
+    let config = NdmsConfig::h36m();
+    let mut times = Vec::with_capacity(reps);
+    let mut results = Vec::new();
+    for _ in 0..reps {
+        let start = Instant::now();
+        results = sets
+            .par_iter()
+            .map(|set| ndms_set(set, &config))
+            .collect::<anyhow::Result<Vec<_>>>()?;
+        times.push(start.elapsed().as_secs_f64() * 1e3);
+    }
+    times.sort_by(f64::total_cmp);
+    let median_ms = times[times.len() / 2];
+    let phases = ndms_phases(&sets, &config);
+    let query_words = |set: &NdmsSet| {
+        let (n, t, _, _) = set.forecasts.dim();
+        n * (t + 1).saturating_sub(config.kappa)
+    };
+    let f_sim = results.iter().map(|r| r.0).sum::<f64>() / results.len() as f64;
+    let peak = peak_rss_mb();
+    if json {
+        let rows: Vec<serde_json::Value> = sets
+            .iter()
+            .zip(&results)
+            .map(|(set, &(mean, words))| {
+                serde_json::json!({
+                    "name": set.name, "mean": mean, "database_words": words,
+                    "query_words": query_words(set),
+                })
+            })
+            .collect();
+        let report = serde_json::json!({
+            "ndms": {
+                "sets": rows, "mean_f_sim": f_sim, "median_ms": median_ms, "min_ms": times[0],
+                "reps": reps, "threads": rayon::current_num_threads(), "read_ms": read_ms,
+                "phases_ms": {
+                    "words": phases[0], "index": phases[1], "search": phases[2],
+                    "similarity": phases[3],
+                },
+                "exact": true, "nearest_neighbour": "pose-bound",
+            },
+            "peak_rss_mb": peak,
+        });
+        println!("{report}");
+    } else {
+        println!(
+            "{:<20} {:>10} {:>10} {:>10}",
+            "set", "db words", "queries", "f_sim"
+        );
+        for (set, (mean, words)) in sets.iter().zip(&results) {
+            println!(
+                "{:<20} {words:>10} {:>10} {mean:>10.6}",
+                set.name,
+                query_words(set)
+            );
+        }
+        println!(
+            "all {} sets: mean f_sim {f_sim:.6}, median {median_ms:.1} ms (min {:.1}) over {reps} reps, {} threads; files read in {read_ms:.1} ms",
+            sets.len(),
+            times[0],
+            rayon::current_num_threads()
+        );
+        println!(
+            "one sequential pass: words {:.1} ms, index {:.1} ms, search {:.1} ms, similarity {:.1} ms",
+            phases[0], phases[1], phases[2], phases[3]
+        );
     }
     Ok(())
 }

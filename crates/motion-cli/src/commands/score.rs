@@ -49,6 +49,8 @@ pub enum NnChoice {
     BruteForce,
     /// kd-tree over a PCA projection, exact re-ranking.
     PcaKdTree,
+    /// Scan of mean-pose lower bounds, exact re-ranking.
+    PoseBound,
 }
 
 /// Arguments of `motion-cli score`.
@@ -77,8 +79,8 @@ pub struct Args {
     /// raw positions (4-D, N x T x J x 3) are taken as gravity-aligned, y up (metrics.md's recipe).
     #[arg(long, value_enum)]
     pub input_space: Option<InputSpace>,
-    /// NDMS nearest-neighbour search (both exact; the kd-tree is faster on motion words).
-    #[arg(long, value_enum, default_value = "pca-kd-tree")]
+    /// NDMS nearest-neighbour search (all exact; the pose-bound scan is fastest on motion words).
+    #[arg(long, value_enum, default_value = "pose-bound")]
     pub nn: NnChoice,
     /// A BVH whose hierarchy names the joints of raw positions (N x T x J x 3) that are not on the
     /// 32-joint H3.6M skeleton: NDMS finds its joints by the H3.6M names (LeftHand, RightHand,
@@ -223,6 +225,7 @@ pub fn run(args: Args) -> Result<()> {
         let method = match args.nn {
             NnChoice::BruteForce => NnMethod::BruteForce,
             NnChoice::PcaKdTree => NnMethod::PcaKdTree,
+            NnChoice::PoseBound => NnMethod::PoseBound,
         };
         report.insert(
             "ndms".into(),
@@ -761,7 +764,7 @@ fn score_ndms(
             WordFrame::Heading => "heading (metrics.md recipe)",
             WordFrame::Body { .. } => "body (rigid, first frame's hips and shoulders)",
         },
-        "nearest_neighbour": match method { NnMethod::BruteForce => "brute-force", NnMethod::PcaKdTree => "pca-kd-tree" },
+        "nearest_neighbour": match method { NnMethod::BruteForce => "brute-force", NnMethod::PcaKdTree => "pca-kd-tree", NnMethod::PoseBound => "pose-bound" },
     }))
 }
 

@@ -183,7 +183,7 @@ impl NdmsDatabase {
                 ),
             });
         }
-        let index = NearestIndex::build(method, words, config.word_len());
+        let index = NearestIndex::build_frames(method, words, config.word_len(), config.kappa);
         Ok(Self { config, index })
     }
 

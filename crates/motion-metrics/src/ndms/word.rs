@@ -25,11 +25,10 @@ pub fn normalize_word(
 ) {
     debug_assert_eq!(out.len(), config.word_len());
     let order = config.axis_order();
-    // A joint of the first frame with the vertical axis last.
-    let point = |joint: usize| {
-        let p = positions.slice(ndarray::s![start, joint, ..]);
-        [p[order[0]], p[order[1]], p[order[2]]]
-    };
+    // A joint of a frame with the vertical axis last (plain indexing: a slice view per point
+    // would cost more than the arithmetic).
+    let at = |t: usize, joint: usize| order.map(|c| positions[[t, joint, c]]);
+    let point = |joint: usize| at(start, joint);
     let (left, right) = (point(config.left_hip), point(config.right_hip));
     let (origin, axes) = match config.frame {
         WordFrame::Heading => heading_frame(left, right),
@@ -41,12 +40,8 @@ pub fn normalize_word(
     let mut slots = out.chunks_exact_mut(3);
     for t in start..start + config.kappa {
         for &joint in &config.joints {
-            let p = positions.slice(ndarray::s![t, joint, ..]);
-            let d = [
-                p[order[0]] - origin[0],
-                p[order[1]] - origin[1],
-                p[order[2]] - origin[2],
-            ];
+            let p = at(t, joint);
+            let d = [p[0] - origin[0], p[1] - origin[1], p[2] - origin[2]];
             let slot = slots.next().expect("out has word_len numbers");
             for (value, axis) in slot.iter_mut().zip(&axes) {
                 *value = axis[0] * d[0] + axis[1] * d[1] + axis[2] * d[2];

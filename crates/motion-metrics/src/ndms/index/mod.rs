@@ -1,21 +1,25 @@
 //! Exact nearest-neighbour search over normalized motion words (flattened, `κ·joints·3` numbers,
-//! 288 for H3.6M). A kd-tree over 288 raw dimensions degenerates into brute force, so two exact
+//! 288 for H3.6M). A kd-tree over 288 raw dimensions degenerates into brute force, so three exact
 //! strategies are offered:
+//! - [`PoseBoundIndex`] (the default): lower bounds from the words' mean poses (a word is `κ`
+//!   frames, and its mean pose carries most of its distance to another word), scanned for all
+//!   words in `f32`, then in `f64` for the few that pass, then exact distances for a handful;
 //! - [`BruteForceIndex`]: blocked brute force, the squared distances of a block of queries to a
 //!   block of words as one matrix product (`‖q‖² - 2 q·d + ‖d‖²`), with every candidate that the
 //!   product's rounding error cannot exclude re-checked exactly in `f64`;
-//! - [`PcaKdIndex`]: a kiddo kd-tree over a low-dimensional orthonormal PCA projection; the projected
-//!   distance never exceeds the true one, so all words within the best exact distance in the
-//!   projection are candidates, and they are re-ranked exactly.
+//! - [`PcaKdIndex`]: a kiddo kd-tree over the same low-dimensional bound as the pose-bound scan,
+//!   radius queries for the best exact distance, exact re-ranking.
 //!
-//! Both return exactly what [`nearest_naive`] returns: the smallest [`squared_distance`], ties to
+//! All return exactly what [`nearest_naive`] returns: the smallest [`squared_distance`], ties to
 //! the lowest word index.
 mod brute_force;
 mod pca;
 mod pca_kd;
+mod pose_bound;
 
 pub use brute_force::BruteForceIndex;
-pub use pca_kd::{PcaKdIndex, PCA_DIMS};
+pub use pca_kd::PcaKdIndex;
+pub use pose_bound::{PoseBoundIndex, COARSE_DIMS, PCA_DIMS};
 
 /// The nearest word of a query.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -60,19 +64,21 @@ pub fn nearest_naive(words: &[f64], dim: usize, query: &[f64]) -> Neighbour {
 
 /// Which exact nearest-neighbour strategy to use.
 ///
-/// The default is the kd-tree: on real motion words (H3.6M S5 in the body word frame,
-/// `benches/motion/metrics.rs`) it answered 800 queries 3.2x (2,747 words: 20 ms vs 64 ms) to
-/// 12x (30,609 words: 52 ms vs 656 ms) faster than brute force, because motion words are nearly
-/// low-rank; its build costs more (49 ms and 287 ms vs 1 ms and 73 ms). On high-rank data
-/// (independent random signals) the projection prunes little and brute force is faster
-/// (20,000 words, 100 queries: 52 ms vs 440 ms).
+/// The default is the pose-bound scan. On the H3.6M evaluation's words (13 actions' S5
+/// databases, 1,027-3,894 words each, 800 S1 query words each; `motion-cli bench --ndms`, one
+/// thread) it searched all 10,400 queries in about 25 ms against about 300 ms for the kd-tree over
+/// the same bound, whose radius queries visit many nodes: on these words the nearest neighbour is
+/// about as far as the data's spread along its first principal axes. Brute force costs
+/// `words x queries x 288` multiply-adds (2.8 s).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum NnMethod {
     /// Blocked brute force as matrix products with exact re-checks.
     BruteForce,
-    /// kiddo kd-tree over a PCA projection, with exact re-ranking.
-    #[default]
+    /// kiddo kd-tree over the coarse mean-pose bound, with exact re-ranking.
     PcaKdTree,
+    /// Scan of mean-pose lower bounds with exact re-ranking.
+    #[default]
+    PoseBound,
 }
 
 /// An exact nearest-neighbour index built with one of the [`NnMethod`]s.
@@ -82,14 +88,26 @@ pub enum NearestIndex {
     BruteForce(BruteForceIndex),
     /// See [`PcaKdIndex`].
     PcaKdTree(PcaKdIndex),
+    /// See [`PoseBoundIndex`].
+    PoseBound(PoseBoundIndex),
 }
 
 impl NearestIndex {
     /// Builds the index over `words` (row-major, `dim` numbers per word; at least one word).
     pub fn build(method: NnMethod, words: Vec<f64>, dim: usize) -> Self {
+        Self::build_frames(method, words, dim, 1)
+    }
+
+    /// Builds the index over words of `frames` equal frames each (motion words: `κ`, which
+    /// must divide `dim`); the pose-bound scan and the kd-tree bound distances by the words'
+    /// mean poses (with 1 frame, by the words themselves).
+    pub fn build_frames(method: NnMethod, words: Vec<f64>, dim: usize, frames: usize) -> Self {
         match method {
             NnMethod::BruteForce => NearestIndex::BruteForce(BruteForceIndex::new(words, dim)),
-            NnMethod::PcaKdTree => NearestIndex::PcaKdTree(PcaKdIndex::new(words, dim)),
+            NnMethod::PcaKdTree => {
+                NearestIndex::PcaKdTree(PcaKdIndex::with_frames(words, dim, frames))
+            }
+            NnMethod::PoseBound => NearestIndex::PoseBound(PoseBoundIndex::new(words, dim, frames)),
         }
     }
 
@@ -98,6 +116,7 @@ impl NearestIndex {
         match self {
             NearestIndex::BruteForce(i) => i.words(),
             NearestIndex::PcaKdTree(i) => i.words(),
+            NearestIndex::PoseBound(i) => i.words(),
         }
     }
 
@@ -106,6 +125,7 @@ impl NearestIndex {
         match self {
             NearestIndex::BruteForce(i) => i.nearest_batch(queries),
             NearestIndex::PcaKdTree(i) => i.nearest_batch(queries),
+            NearestIndex::PoseBound(i) => i.nearest_batch(queries),
         }
     }
 }

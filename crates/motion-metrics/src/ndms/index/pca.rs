@@ -2,16 +2,19 @@
 //!
 //! Only orthonormality matters for exactness (it makes projected distances lower bounds of true
 //! ones); how close the basis is to the true principal directions only affects speed. So the
-//! covariance is estimated from at most [`MAX_SAMPLE_ROWS`] evenly spaced rows and the basis comes
-//! from a fixed number of subspace iterations, re-orthonormalized by modified Gram-Schmidt.
-
-/// Rows used to estimate the covariance.
-pub const MAX_SAMPLE_ROWS: usize = 4096;
+//! covariance is estimated from a bounded number of evenly spaced rows and the basis comes from a
+//! fixed number of subspace iterations, re-orthonormalized by modified Gram-Schmidt.
 /// Subspace iterations on the covariance.
 const ITERATIONS: usize = 40;
 
-/// The mean row and `k` orthonormal directions (row-major `k x dim`) of `rows` (`dim` per row).
-pub fn principal_basis(rows: &[f64], dim: usize, k: usize) -> (Vec<f64>, Vec<f64>) {
+/// The mean row and `k` orthonormal directions (row-major `k x dim`) of `rows` (`dim` per row),
+/// the covariance estimated from at most `max_sample_rows` evenly spaced rows.
+pub fn principal_basis(
+    rows: &[f64],
+    dim: usize,
+    k: usize,
+    max_sample_rows: usize,
+) -> (Vec<f64>, Vec<f64>) {
     let count = rows.len() / dim;
     let mut mean = vec![0.0; dim];
     for row in rows.chunks_exact(dim) {
@@ -23,7 +26,7 @@ pub fn principal_basis(rows: &[f64], dim: usize, k: usize) -> (Vec<f64>, Vec<f64
         *m /= count.max(1) as f64;
     }
     // Centred sample (s x dim).
-    let stride = count.div_ceil(MAX_SAMPLE_ROWS).max(1);
+    let stride = count.div_ceil(max_sample_rows.max(1)).max(1);
     let sample: Vec<f64> = rows
         .chunks_exact(dim)
         .step_by(stride)
@@ -127,7 +130,7 @@ mod tests {
                 ]
             })
             .collect();
-        let (_, basis) = principal_basis(&rows, 5, 2);
+        let (_, basis) = principal_basis(&rows, 5, 2, 4096);
         for a in 0..2 {
             for b in 0..2 {
                 let dot: f64 = (0..5).map(|i| basis[a * 5 + i] * basis[b * 5 + i]).sum();

@@ -1,35 +1,44 @@
-//! Exact nearest neighbour with a kiddo kd-tree over a PCA projection.
+//! Exact nearest neighbour with a kiddo kd-tree over the coarse points of [`super::pose_bound`]
+//! (PCA coordinates of the words' mean poses, the residual `σ` and the motion norm `ρ`), the
+//! pose bound and exact re-ranking.
 //!
-//! Each word `x` is embedded as `e(x) = (P(x - μ), ‖r(x)‖)`: its coordinates in a few orthonormal
-//! PCA directions `P` and the length of its residual `r(x) = (x - μ) - Pᵀ P (x - μ)` outside them.
-//! Pythagoras and the reverse triangle inequality in the residual space give
-//! `‖e(q) - e(d)‖² = ‖P(q - d)‖² + (‖r(q)‖ - ‖r(d)‖)² <= ‖q - d‖²`: a lower bound. So: take the few
-//! nearest words in the embedding, re-rank them exactly, giving a best exact distance `b`; every
-//! word that could be nearer lies within `b` in the embedding, so a radius query for `b` (widened
-//! by a rounding margin) yields all remaining candidates, which are re-ranked exactly too.
+//! A query: a first guess (the neighbour of the previous query and its successor, else the
+//! nearest few in the tree), measured exactly; then a radius query in the tree for the best exact
+//! distance `b` (widened by a rounding margin); each word found is kept only if its pose bound is
+//! within `b` too, and then measured frame by frame, abandoned once the partial sum exceeds `b²`.
+//! On H3.6M words the tree's radius queries cost more than [`super::PoseBoundIndex`]'s scan.
 use std::num::NonZeroUsize;
 
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 
-use super::{pca::principal_basis, squared_distance, Neighbour};
+use super::pose_bound::{distance_within, pose_summaries, summarize, Summary, COARSE_DIMS};
+use super::{squared_distance, Neighbour};
 
-/// PCA directions of the embedding (kd-trees work best below about ten dimensions).
-pub const PCA_DIMS: usize = 11;
-/// Embedding dimensions: the PCA coordinates and the residual length.
-const TREE_DIMS: usize = PCA_DIMS + 1;
-/// Projected nearest words re-ranked before the radius query.
-const FIRST_CANDIDATES: usize = 8;
+/// Tree dimensions: the coarse points.
+const TREE_DIMS: usize = COARSE_DIMS;
+/// Tree neighbours re-ranked exactly when there is no previous query to start from.
+const FIRST_CANDIDATES: usize = 4;
+/// Queries answered in sequence by one task (each starts from its predecessor's neighbour).
+const QUERY_CHUNK: usize = 50;
 
-/// Exact nearest neighbour: kd-tree over a PCA projection plus exact re-ranking.
+/// Exact nearest neighbour: kd-tree over the PCA of mean poses, pose bound, exact re-ranking.
 pub struct PcaKdIndex {
     words: Vec<f64>,
     dim: usize,
-    mean: Vec<f64>,
-    basis: Vec<f64>,
+    /// Frames per word (`κ`); a frame has `dim / frames` numbers.
+    frames: usize,
+    /// Mean pose of every word, `dim / frames` numbers each.
+    poses: Vec<f64>,
+    /// `ρ`: the norm of every word's motion around its mean pose.
+    motion_norms: Vec<f64>,
+    /// The mean of the mean poses.
+    centre: Vec<f64>,
+    /// The principal directions of the mean poses, transposed.
+    basis_t: Vec<f64>,
     tree: ImmutableKdTree<f64, TREE_DIMS>,
-    /// Largest distance of a word to the mean, for the rounding margin.
-    max_radius: f64,
+    /// Largest norm of a word, for the rounding margin.
+    max_norm: f64,
 }
 
 impl std::fmt::Debug for PcaKdIndex {
@@ -37,39 +46,51 @@ impl std::fmt::Debug for PcaKdIndex {
         f.debug_struct("PcaKdIndex")
             .field("words", &(self.words.len() / self.dim))
             .field("dim", &self.dim)
-            .field("projected_dims", &PCA_DIMS)
+            .field("frames", &self.frames)
             .finish()
     }
 }
 
 impl PcaKdIndex {
-    /// Indexes `words` (row-major, `dim` numbers per word, at least one word).
+    /// Indexes `words` (row-major, `dim` numbers per word, at least one word), each taken as a
+    /// single frame (the pose bound is then the distance itself).
     pub fn new(words: Vec<f64>, dim: usize) -> Self {
+        Self::with_frames(words, dim, 1)
+    }
+
+    /// Indexes `words` of `frames` equal frames each (motion words: `κ`); `frames` must divide
+    /// `dim`.
+    pub fn with_frames(words: Vec<f64>, dim: usize, frames: usize) -> Self {
         assert!(
             dim > 0 && words.len().is_multiple_of(dim) && !words.is_empty(),
             "need whole rows of {dim}"
         );
-        let (mean, basis) = principal_basis(&words, dim, PCA_DIMS.min(dim));
-        let mut basis = basis;
-        // Fewer data dims than projected dims: pad with zero directions (still a contraction).
-        basis.resize(PCA_DIMS * dim, 0.0);
-        let projected: Vec<[f64; TREE_DIMS]> = words
+        assert!(
+            frames > 0 && dim.is_multiple_of(frames),
+            "{frames} frames do not divide {dim}"
+        );
+        let (poses, motion_norms, centre, basis_t) = pose_summaries(&words, dim, frames);
+        let points: Vec<[f64; TREE_DIMS]> = words
             .par_chunks(dim)
-            .map(|w| embed(w, &mean, &basis, dim))
+            .map(|w| summarize(w, frames, &centre, &basis_t).point)
             .collect();
-        let max_radius = words
+        let max_norm = words
             .chunks_exact(dim)
-            .map(|w| squared_distance(w, &mean).sqrt())
-            .fold(0.0, f64::max);
+            .map(|w| w.iter().map(|x| x * x).sum::<f64>())
+            .fold(0.0, f64::max)
+            .sqrt();
         let tree =
-            ImmutableKdTree::new_from_slice(&projected).expect("a non-empty set of finite points");
+            ImmutableKdTree::new_from_slice(&points).expect("a non-empty set of finite points");
         Self {
             words,
             dim,
-            mean,
-            basis,
+            frames,
+            poses,
+            motion_norms,
+            centre,
+            basis_t,
             tree,
-            max_radius,
+            max_norm,
         }
     }
 
@@ -78,67 +99,97 @@ impl PcaKdIndex {
         &self.words
     }
 
-    /// The exact nearest word of every query (row-major, `dim` numbers per query).
+    /// The exact nearest word of every query (row-major, `dim` numbers per query). Queries are
+    /// answered in order within chunks, each starting from its predecessor's neighbour, so
+    /// consecutive words of one motion are fastest kept together.
     pub fn nearest_batch(&self, queries: &[f64]) -> Vec<Neighbour> {
-        queries
-            .par_chunks(self.dim)
-            .map(|q| self.nearest(q))
-            .collect()
+        let mut out = vec![Neighbour::NONE; queries.len() / self.dim];
+        out.par_chunks_mut(QUERY_CHUNK)
+            .zip(queries.par_chunks(QUERY_CHUNK * self.dim))
+            .for_each(|(best, block)| {
+                let mut previous = None;
+                for (b, q) in best.iter_mut().zip(block.chunks_exact(self.dim)) {
+                    *b = self.nearest_after(q, previous);
+                    previous = Some(b.index);
+                }
+            });
+        out
     }
 
     /// The exact nearest word of one query.
     pub fn nearest(&self, query: &[f64]) -> Neighbour {
-        let z = embed(query, &self.mean, &self.basis, self.dim);
-        let word = |i: usize| &self.words[i * self.dim..(i + 1) * self.dim];
+        self.nearest_after(query, None)
+    }
+
+    /// The exact nearest word of `query`, trying the successor of `previous` (the previous
+    /// query's neighbour) first.
+    fn nearest_after(&self, query: &[f64], previous: Option<usize>) -> Neighbour {
+        let count = self.motion_norms.len();
+        let summary = summarize(query, self.frames, &self.centre, &self.basis_t);
         let mut best = Neighbour::NONE;
-        let first = NonZeroUsize::new(FIRST_CANDIDATES).expect("non-zero");
-        for hit in self
-            .tree
-            .query(&z)
-            .nearest_n::<SquaredEuclidean<f64>>(first)
-            .execute()
-        {
-            let i = hit.item as usize;
-            best.offer(i, squared_distance(query, word(i)));
+        match previous {
+            Some(p) => {
+                for i in [p, p + 1] {
+                    if i < count {
+                        best.offer(i, squared_distance(query, self.word(i)));
+                    }
+                }
+            }
+            None => {
+                let first = NonZeroUsize::new(FIRST_CANDIDATES.min(count)).expect("non-empty");
+                for hit in self
+                    .tree
+                    .query(&summary.point)
+                    .nearest_n::<SquaredEuclidean<f64>>(first)
+                    .execute()
+                {
+                    let i = hit.item as usize;
+                    best.offer(i, squared_distance(query, self.word(i)));
+                }
+            }
         }
-        // The embedding and kiddo's arithmetic round: widen the radius by far more than their
-        // error (relative 1e-12, absolute 1e-9 of the data's extent), which costs nothing in pruning.
-        let extent = squared_distance(query, &self.mean).sqrt() + self.max_radius;
-        let radius = best.distance_sq.sqrt() * (1.0 + 1e-12) + 1e-9 * extent;
-        for hit in self
+        // Every bound and distance here rounds: widen the radius by far more than their error
+        // (relative 1e-12, absolute 1e-9 of the data's extent), which costs nothing in pruning.
+        let norm = query.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let slack = 1e-9 * (norm + self.max_norm);
+        let radius_sq = |best: &Neighbour| {
+            let r = best.distance_sq.sqrt() * (1.0 + 1e-12) + slack;
+            r * r
+        };
+        let hits = self
             .tree
-            .query(&z)
-            .within::<SquaredEuclidean<f64>>(radius * radius)
+            .query(&summary.point)
+            .within::<SquaredEuclidean<f64>>(radius_sq(&best))
             .unsorted()
-            .execute()
-        {
+            .execute();
+        for hit in hits {
             let i = hit.item as usize;
-            best.offer(i, squared_distance(query, word(i)));
+            let limit = radius_sq(&best);
+            if hit.distance > limit || self.pose_bound(&summary, i) > limit {
+                continue;
+            }
+            if let Some(d) = distance_within(query, self.word(i), self.dim / self.frames, best) {
+                best.offer(i, d);
+            }
         }
         best
     }
-}
 
-/// `(basis · (x - mean), ‖residual‖)`, the residual computed explicitly (no cancellation).
-fn embed(x: &[f64], mean: &[f64], basis: &[f64], dim: usize) -> [f64; TREE_DIMS] {
-    let mut e = [0.0; TREE_DIMS];
-    for (k, out) in e.iter_mut().take(PCA_DIMS).enumerate() {
-        let direction = &basis[k * dim..(k + 1) * dim];
-        *out = x
+    fn word(&self, i: usize) -> &[f64] {
+        &self.words[i * self.dim..(i + 1) * self.dim]
+    }
+
+    /// `κ‖m_q - m_i‖² + (ρ_q - ρ_i)²`, a lower bound of the squared distance to word `i`.
+    fn pose_bound(&self, query: &Summary, i: usize) -> f64 {
+        let len = query.pose.len();
+        let pose = &self.poses[i * len..(i + 1) * len];
+        let poses: f64 = query
+            .pose
             .iter()
-            .zip(mean)
-            .zip(direction)
-            .map(|((x, m), d)| (x - m) * d)
+            .zip(pose)
+            .map(|(a, b)| (a - b) * (a - b))
             .sum();
+        let motion = query.motion_norm - self.motion_norms[i];
+        self.frames as f64 * poses + motion * motion
     }
-    let mut residual_sq = 0.0;
-    for i in 0..dim {
-        let mut r = x[i] - mean[i];
-        for k in 0..PCA_DIMS {
-            r -= e[k] * basis[k * dim + i];
-        }
-        residual_sq += r * r;
-    }
-    e[PCA_DIMS] = residual_sq.sqrt();
-    e
 }
