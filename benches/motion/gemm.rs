@@ -3,6 +3,9 @@
 //! layout `W [out, in]` (re-packed, with a transposing gather, on every call) and reading a
 //! pre-transposed `Wᵀ [in, out]` (its cheapest per-call packing), on 1 and 2 rayon threads.
 //! Throughput is in FLOP (`2 * batch * in * out` per call), so criterion's "elem/s" is FLOP/s.
+//! `gemm/peak/fma_registers` times 24 independent chains of AVX-512 FMAs on registers only: the
+//! core's f32 peak at its current clock, measured in the same run (the VM reports only the base
+//! clock, 2.6 GHz, while the cores boost; Zen 5 retires two 16-lane FMAs per cycle).
 //!
 //! Run: `cargo bench --bench motion -- gemm/`
 use criterion::{BenchmarkId, Criterion, Throughput};
@@ -87,8 +90,42 @@ fn matrixmultiply_rows_serial(
     }
 }
 
+/// Register-only FMA throughput: `n` rounds of 24 independent 16-lane FMAs.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+fn fma_registers(n: usize) -> f32 {
+    use std::arch::x86_64::*;
+    let mut acc = [_mm512_set1_ps(0.0); 24];
+    let (a, b) = (_mm512_set1_ps(0.999), _mm512_set1_ps(0.001));
+    for _ in 0..n {
+        for r in acc.iter_mut() {
+            *r = _mm512_fmadd_ps(*r, a, b);
+        }
+    }
+    let mut sum = _mm512_set1_ps(0.0);
+    for r in acc {
+        sum = _mm512_add_ps(sum, r);
+    }
+    _mm512_reduce_add_ps(sum)
+}
+
 /// Registers this module's benchmarks.
 pub fn benches(c: &mut Criterion) {
+    #[cfg(target_arch = "x86_64")]
+    if sgemm_avx512::available() {
+        const ROUNDS: usize = 100_000;
+        let mut group = c.benchmark_group("gemm/peak");
+        group
+            .sample_size(10)
+            .warm_up_time(Duration::from_millis(300))
+            .measurement_time(Duration::from_secs(1))
+            .throughput(Throughput::Elements((ROUNDS * 24 * 32) as u64));
+        // SAFETY: AVX-512F is available (checked above).
+        group.bench_function("fma_registers", |b| {
+            b.iter(|| unsafe { fma_registers(black_box(ROUNDS)) })
+        });
+        group.finish();
+    }
     let mut group = c.benchmark_group("gemm/batch256");
     group
         .sample_size(10)

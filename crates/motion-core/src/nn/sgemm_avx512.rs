@@ -303,9 +303,13 @@ mod avx512 {
                     let masks = column_masks(width);
                     // SAFETY: panel `p` holds `inputs * PANEL_WIDTH` floats; we start `pc` rows in.
                     let b = unsafe { data.add((p * inputs + pc) * PANEL_WIDTH) };
+                    // Rows spread evenly over the fewest tiles (13 rows = 7 + 6, not 12 + 1): a
+                    // tile of fewer than 4 rows has too few independent FMA chains to hide the
+                    // FMA latency.
+                    let tiles = mc.div_ceil(TILE_ROWS);
                     let mut ir = 0;
-                    while ir < mc {
-                        let m = TILE_ROWS.min(mc - ir);
+                    for t in 0..tiles {
+                        let m = mc / tiles + usize::from(t < mc % tiles);
                         // SAFETY: tile rows `ic + ir ..+ m` and columns `first ..+ width` lie
                         // inside `y`; rows `ic + ir ..+ m` of `x` hold inputs `pc ..+ kc`.
                         unsafe {
