@@ -3,21 +3,33 @@
 The public NDMS package finds each query word's nearest database word with Annoy (10 trees, f32
 vectors) and scores words with numpy/numba. This script re-implements its algorithm as
 metrics.md states it (word normalization: z up, hip centre, heading along +x; 12 joints; κ = 8)
-with numba for the word maths and Annoy for the search, and times it against
-``motion-cli score --metric ndms --input-space raw`` on the same positions.
+with numba for the word maths and Annoy for the search, and times it against ours on the same
+positions.
 
 Data: with the H3.6M files (``$MOTION_DATA_DIR``, default ``../shared/data``), for every action
 the database holds the words of its S5 files at 25 Hz (world joint positions from
 ``motion-cli convert --positions``, untimed) and the queries are 8 windows of 107 frames (100 words
 each) of S1's first file of that action: the size of the whole evaluation. Without the data (or with
 ``--synthetic``) smooth synthetic motions of the same sizes are used. ``--check`` also computes
-exact NDMS with numpy brute force for one action and compares it with ours to 1e-9. Ours is timed
-with both exact searches (``--nn pca-kd-tree``, the default, and ``brute-force``) as whole
-``motion-cli score`` processes (loading the .npy files included).
+exact NDMS with numpy brute force for one action and compares it with ours to 1e-9.
+
+What is timed, on both sides the whole evaluation from positions in memory to f_sim per action:
+
+- **ours**: ``motion-cli bench --ndms MANIFEST`` (one process for all actions; the .npy files are
+  read before its clock starts, as the Python side has its arrays in memory): every action's
+  database words, index build, query words, exact nearest neighbours and similarities, actions in
+  parallel; the median of ``--inner-reps`` evaluations, at 1 and at ``--threads`` rayon threads;
+- **numba + Annoy**: database words, Annoy index (add items, build 10 trees), query words,
+  ``get_nns_by_vector`` and the numba similarity, one thread (numba and Annoy's build and queries
+  run single-threaded here);
+- for information, ours as one ``motion-cli score --metric ndms`` process per action (start-up and
+  reading the .npy files included, 13 processes).
+
+Engines alternate within each round; the table shows medians over ``--reps`` rounds.
 
     cargo build --release -p motion-cli
     training/.venv/bin/pip install -r benches/compare/requirements.txt   # numba, annoy
-    training/.venv/bin/python benches/compare/compare_ndms.py
+    training/.venv/bin/python benches/compare/compare_ndms.py --check
 """
 
 from __future__ import annotations
@@ -161,7 +173,8 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--actions", type=int, default=15)
     parser.add_argument("--reps", type=int, default=3, help="rounds (engines alternate; median)")
-    parser.add_argument("--threads", type=int, default=2, help="rayon threads of ours")
+    parser.add_argument("--threads", type=int, default=2, help="rayon threads of ours (also timed at 1)")
+    parser.add_argument("--inner-reps", type=int, default=5, help="evaluations per `bench --ndms` run (median)")
     parser.add_argument("--check", action="store_true", help="also check ours against exact numpy NDMS")
     parser.add_argument("--synthetic", action="store_true", help="synthetic motions even if the data is there")
     parser.add_argument("--cli", default=os.path.join(REPO, "target", "release", "motion-cli"))
@@ -169,7 +182,6 @@ def main() -> int:
     if not os.path.exists(args.cli):
         print(f"error: {args.cli} not found; run `cargo build --release -p motion-cli` first", file=sys.stderr)
         return 2
-    env = dict(os.environ, RAYON_NUM_THREADS=str(args.threads))
     data_dir = os.environ.get("MOTION_DATA_DIR", os.path.join(REPO, "..", "shared", "data"))
 
     with tempfile.TemporaryDirectory(prefix="motion-ndms-") as tmp:
@@ -180,7 +192,7 @@ def main() -> int:
             data = [(list(synthetic(rng, 2, 1400)), synthetic(rng, 8, 107)) for _ in range(args.actions)]
             source = "synthetic motions"
         ndms_annoy([data[0][0][0][:40]], data[0][1][:, :20])  # numba compile, untimed
-        paths = []
+        paths, sets = [], []
         for a, (db, q) in enumerate(data):
             dbps = []
             for k, seq in enumerate(db):
@@ -189,26 +201,44 @@ def main() -> int:
             qp = os.path.join(tmp, f"q{a}.npy")
             np.save(qp, q)
             paths.append((dbps, qp))
+            sets.append({"name": f"set{a}", "pred": os.path.basename(qp), "db": [os.path.basename(p) for p in dbps]})
+        manifest = os.path.join(tmp, "manifest.json")
+        with open(manifest, "w") as f:
+            json.dump({"sets": sets}, f)
 
-        def ours(nn: str):
-            def run() -> list[float]:
-                values = []
-                for dbps, qp in paths:
-                    cmd = [args.cli, "score", "--pred", qp, "--db", *dbps, "--metric", "ndms"]
-                    cmd += ["--input-space", "raw", "--nn", nn, "--json"]
-                    out = subprocess.run(cmd, check=True, capture_output=True, text=True, env=env).stdout
-                    values.append(json.loads(out)["ndms"]["mean"])
-                return values
+        def bench(threads: int):
+            """``bench --ndms``: per-action f_sim; its own median time replaces the wall time."""
+
+            def run() -> tuple[list[float], float]:
+                env = dict(os.environ, RAYON_NUM_THREADS=str(threads))
+                cmd = [args.cli, "bench", "--ndms", manifest, "--reps", str(args.inner_reps), "--json"]
+                out = subprocess.run(cmd, check=True, capture_output=True, text=True, env=env).stdout
+                report = json.loads(out)["ndms"]
+                phases[threads] = report["phases_ms"]
+                return [s["mean"] for s in report["sets"]], report["median_ms"] / 1e3
 
             return run
+
+        def processes() -> list[float]:
+            env = dict(os.environ, RAYON_NUM_THREADS=str(args.threads))
+            values = []
+            for dbps, qp in paths:
+                cmd = [args.cli, "score", "--pred", qp, "--db", *dbps, "--metric", "ndms"]
+                cmd += ["--input-space", "raw", "--json"]
+                out = subprocess.run(cmd, check=True, capture_output=True, text=True, env=env).stdout
+                values.append(json.loads(out)["ndms"]["mean"])
+            return values
 
         def annoy() -> list[float]:
             return [ndms_annoy(db, q) for db, q in data]
 
-        engines = [
-            ("ours, exact (pca-kd-tree)", ours("pca-kd-tree")),
-            ("ours, exact (brute-force)", ours("brute-force")),
+        phases: dict[int, dict] = {}
+        engines = [(f"ours, {args.threads} threads (bench --ndms)", bench(args.threads))]
+        if args.threads != 1:
+            engines.append(("ours, 1 thread (bench --ndms)", bench(1)))
+        engines += [
             ("numba + Annoy (10 trees)", annoy),
+            (f"ours, {len(paths)} score processes", processes),
         ]
         times: dict[str, list[float]] = {name: [] for name, _ in engines}
         values = {}
@@ -216,21 +246,29 @@ def main() -> int:
             k = rep % len(engines)
             for name, fn in engines[k:] + engines[:k]:
                 start = time.perf_counter()
-                values[name] = fn()
-                times[name].append(time.perf_counter() - start)
+                result = fn()
+                elapsed = time.perf_counter() - start
+                if isinstance(result, tuple):  # bench --ndms reports its own clock
+                    result, elapsed = result
+                values[name] = result
+                times[name].append(elapsed)
         exact0 = ndms_exact(*data[0]) if args.check else None
 
     med = {n: statistics.median(t) for n, t in times.items()}
-    base = min(med["ours, exact (pca-kd-tree)"], med["ours, exact (brute-force)"])
+    annoy_name = "numba + Annoy (10 trees)"
     words = sum(len(words_of(s, NDMS_JOINTS)) for db, _ in data for s in db)
     print(f"NDMS on {source}: {len(data)} actions, {words} database words, {len(data) * 800} query words")
-    print(f"{'implementation':<28} {'seconds':>9} {'x best ours':>11} {'mean f_sim':>11}")
+    print(f"median of {args.reps} rounds; `bench --ndms` rows: median of {args.inner_reps} evaluations each")
+    print(f"{'implementation':<36} {'seconds':>9} {'Annoy / this':>12} {'mean f_sim':>11}")
     for name in times:
-        print(f"{name:<28} {med[name]:>9.3f} {med[name] / base:>11.2f} {np.mean(values[name]):>11.6f}")
-    exact = values["ours, exact (pca-kd-tree)"]
-    diff = max(abs(a - b) for a, b in zip(exact, values["numba + Annoy (10 trees)"]))
-    same = max(abs(a - b) for a, b in zip(exact, values["ours, exact (brute-force)"]))
-    print(f"max per-action |ours - Annoy|: {diff:.1e} (Annoy is approximate); kd-tree vs brute force: {same:.1e}")
+        print(f"{name:<36} {med[name]:>9.4f} {med[annoy_name] / med[name]:>12.1f} {np.mean(values[name]):>11.6f}")
+    exact = values[engines[0][0]]
+    diff = max(abs(a - b) for a, b in zip(exact, values[annoy_name]))
+    same = max(abs(a - b) for name, _ in engines if name != annoy_name for a, b in zip(exact, values[name]))
+    print(f"max per-action |ours - Annoy|: {diff:.1e} (Annoy is approximate); between our runs: {same:.1e}")
+    for threads, p in sorted(phases.items()):
+        parts = ", ".join(f"{k} {v:.1f} ms" for k, v in p.items())
+        print(f"ours, one sequential pass over all actions ({threads} thread(s)): {parts}")
     if exact0 is not None:
         err = abs(exact0 - exact[0])
         print(f"ours vs exact numpy, action 0: |diff| = {err:.1e}")

@@ -1,6 +1,6 @@
 //! The metrics on protocol-sized inputs: NPSS (both variants) and the Euler error of 8 x 100 x 99
-//! sequences, APD of 8 forecasts x 50 samples x 100 frames x 32 joints, and NDMS with both exact
-//! nearest-neighbour methods: a synthetic database of 20,000 motion words (the size of all S5
+//! sequences, APD of 8 forecasts x 50 samples x 100 frames x 32 joints, and NDMS with the three
+//! exact nearest-neighbour methods: a synthetic database of 20,000 motion words (the size of all S5
 //! words of a few actions) queried by 100 words, and, when MOTION_DATA_DIR holds H3.6M, the S5
 //! walking words queried by the 8 zero-velocity forecasts.
 //!
@@ -121,15 +121,18 @@ fn bench_ndms_pair(
     let query_count = query_words.len() / config.word_len();
     let mut group = c.benchmark_group(format!("metrics/ndms_{name}_{word_count}_words"));
     group.sample_size(10);
+    let build =
+        |method| NearestIndex::build_frames(method, words.clone(), config.word_len(), config.kappa);
     for (label, method) in [
         ("brute_force", NnMethod::BruteForce),
         ("pca_kd_tree", NnMethod::PcaKdTree),
+        ("pose_bound", NnMethod::PoseBound),
     ] {
         group.throughput(Throughput::Elements(1));
         group.bench_function(BenchmarkId::new("build", label), |b| {
-            b.iter(|| NearestIndex::build(method, black_box(words.clone()), config.word_len()))
+            b.iter(|| build(black_box(method)))
         });
-        let index = NearestIndex::build(method, words.clone(), config.word_len());
+        let index = build(method);
         group.throughput(Throughput::Elements(query_count as u64));
         group.bench_function(
             BenchmarkId::new(format!("{query_count}_queries"), label),

@@ -12,6 +12,7 @@
 //!
 //! A normalized word is flattened frame-major, then joint, then coordinate: `κ x joints x 3`.
 use ndarray::ArrayView3;
+use rayon::prelude::*;
 
 use super::{NdmsConfig, WordFrame};
 
@@ -25,9 +26,34 @@ pub fn normalize_word(
 ) {
     debug_assert_eq!(out.len(), config.word_len());
     let order = config.axis_order();
-    // A joint of a frame with the vertical axis last (plain indexing: a slice view per point
-    // would cost more than the arithmetic).
-    let at = |t: usize, joint: usize| order.map(|c| positions[[t, joint, c]]);
+    // A joint of a frame with the vertical axis last, by plain indexing (a slice view per point
+    // would cost more than the arithmetic); each layout gets its own inlined copy.
+    match positions.to_slice() {
+        Some(values) => {
+            let joints = positions.dim().1;
+            let at = |t: usize, joint: usize| {
+                let p = &values[(t * joints + joint) * 3..][..3];
+                order.map(|c| p[c])
+            };
+            write_word(at, start, config, out);
+        }
+        None => write_word(
+            |t, joint| order.map(|c| positions[[t, joint, c]]),
+            start,
+            config,
+            out,
+        ),
+    }
+}
+
+/// [`normalize_word`] with `at(t, joint)` giving a joint's position, vertical axis last.
+#[inline(always)]
+fn write_word(
+    at: impl Fn(usize, usize) -> [f64; 3],
+    start: usize,
+    config: &NdmsConfig,
+    out: &mut [f64],
+) {
     let point = |joint: usize| at(start, joint);
     let (left, right) = (point(config.left_hip), point(config.right_hip));
     let (origin, axes) = match config.frame {
@@ -121,8 +147,10 @@ pub fn append_all_words(
     let len = config.word_len();
     let first = out.len();
     out.resize(first + count * len, 0.0);
-    for (start, word) in out[first..].chunks_exact_mut(len).enumerate() {
-        normalize_word(positions, start, config, word);
-    }
+    out[first..]
+        .par_chunks_exact_mut(len)
+        .enumerate()
+        .with_min_len(256)
+        .for_each(|(start, word)| normalize_word(positions, start, config, word));
     count
 }

@@ -102,11 +102,11 @@ impl PoseBoundIndex {
                 coarse[c * count + i] = x as f32;
             }
         }
-        let max_norm = words
-            .chunks_exact(dim)
-            .map(|w| w.iter().map(|x| x * x).sum::<f64>())
-            .fold(0.0, f64::max)
-            .sqrt();
+        let max_norm = poses
+            .chunks_exact(pose_len)
+            .zip(&motion_norms)
+            .map(|(pose, &rho)| word_norm(pose, rho, frames))
+            .fold(0.0, f64::max);
         Self {
             words,
             dim,
@@ -186,7 +186,7 @@ impl PoseBoundIndex {
         // Every bound and distance here rounds: widen the radius by far more than their error
         // (f32 coarse bound: relative 1e-5 and 1e-5 of the coarse points' extent; f64 pose
         // bound: relative 1e-12 and 1e-9 of the words' extent), which costs nothing in pruning.
-        let norm = query.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let norm = word_norm(&summary.pose, summary.motion_norm, self.frames);
         let query_coarse = summary.point.iter().map(|x| x * x).sum::<f64>().sqrt();
         let coarse_slack = self.coarse_slack + 1e-5 * query_coarse;
         let slack = 1e-9 * (norm + self.max_norm);
@@ -235,6 +235,12 @@ impl PoseBoundIndex {
         let motion = query.motion_norm - self.motion_norms[i];
         self.frames as f64 * sum_sq_diff(&query.pose, pose) + motion * motion
     }
+}
+
+/// `‖x‖ = √(κ‖m‖² + ρ²)` of a word from its mean pose `m` and motion norm `ρ` (only used for
+/// rounding margins, which are far wider than this identity's rounding).
+pub(super) fn word_norm(pose: &[f64], motion_norm: f64, frames: usize) -> f64 {
+    (frames as f64 * pose.iter().map(|p| p * p).sum::<f64>() + motion_norm * motion_norm).sqrt()
 }
 
 /// `Σ (a_i - b_i)²` with four running sums (no serial dependency; rounds differently from
