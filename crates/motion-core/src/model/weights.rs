@@ -118,6 +118,15 @@ pub enum WeightsError {
     },
 }
 
+/// A 16-bit float format a tensor can be stored in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum HalfDtype {
+    /// IEEE 754 binary16.
+    F16,
+    /// bfloat16 (the upper half of an f32).
+    Bf16,
+}
+
 /// One stored tensor, still in its file dtype.
 #[derive(Debug, Clone)]
 struct StoredTensor {
@@ -220,6 +229,30 @@ impl WeightStore {
         self.convert(name, stored)
     }
 
+    /// The tensor `name` as raw 16-bit floats (little-endian bit patterns) when the file stores it
+    /// as f16 or bf16, `None` when it is stored as f32; checked like [`WeightStore::tensor`]
+    /// (shape, dtype, finite values). Lets layers keep half-size weights in their stored dtype.
+    pub fn tensor_half_bits(
+        &self,
+        name: &str,
+        expected: &[usize],
+    ) -> Result<Option<(HalfDtype, Vec<u16>)>, WeightsError> {
+        // Shape, dtype and finiteness checks (the f32 copy is dropped).
+        self.tensor(name, expected)?;
+        let stored = self.stored(name)?;
+        let kind = match stored.dtype {
+            Dtype::F16 => HalfDtype::F16,
+            Dtype::BF16 => HalfDtype::Bf16,
+            _ => return Ok(None),
+        };
+        let bits = stored
+            .bytes
+            .chunks_exact(2)
+            .map(|b| u16::from_le_bytes([b[0], b[1]]))
+            .collect();
+        Ok(Some((kind, bits)))
+    }
+
     /// The tensor `name` as f32 with whatever shape it has (for fixtures whose sizes are read from the file).
     pub fn tensor_any_shape(&self, name: &str) -> Result<(Vec<usize>, Vec<f32>), WeightsError> {
         let stored = self.stored(name)?;
@@ -269,6 +302,37 @@ impl WeightStore {
             });
         }
         Ok(values)
+    }
+
+    /// A copy with every tensor except the normalization statistics (`norm.*`) rounded to f16,
+    /// the layout `training.export` writes for f16 files: random models with half-size weights
+    /// for benchmarks and tests. Tensors already f16 are kept; non-float tensors are left as they
+    /// are (loading them fails as usual).
+    pub fn with_f16_parameters(&self) -> WeightStore {
+        let mut out = self.clone();
+        for (name, stored) in out.tensors.iter_mut() {
+            if name.starts_with("norm.") || !matches!(stored.dtype, Dtype::F32 | Dtype::BF16) {
+                continue;
+            }
+            let values: Vec<f32> = match stored.dtype {
+                Dtype::F32 => stored
+                    .bytes
+                    .chunks_exact(4)
+                    .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+                    .collect(),
+                _ => stored
+                    .bytes
+                    .chunks_exact(2)
+                    .map(|b| half::bf16::from_le_bytes([b[0], b[1]]).to_f32())
+                    .collect(),
+            };
+            stored.dtype = Dtype::F16;
+            stored.bytes = values
+                .iter()
+                .flat_map(|&v| half::f16::from_f32(v).to_le_bytes())
+                .collect();
+        }
+        out
     }
 
     /// All `__metadata__` entries.
@@ -360,6 +424,46 @@ mod tests {
             .collect();
         let s = WeightStore::from_bytes(&file(Dtype::BF16, &[1], &b), "b").unwrap();
         assert_eq!(s.tensor("a.weight", &[1]).unwrap(), vec![0.5]);
+    }
+
+    #[test]
+    fn half_bits_keep_the_stored_dtype() {
+        let h = half::f16::from_f32(0.25);
+        let s = WeightStore::from_bytes(&file(Dtype::F16, &[1], &h.to_le_bytes()), "h").unwrap();
+        assert_eq!(
+            s.tensor_half_bits("a.weight", &[1]).unwrap(),
+            Some((HalfDtype::F16, vec![h.to_bits()]))
+        );
+        let b = half::bf16::from_f32(-2.5);
+        let s = WeightStore::from_bytes(&file(Dtype::BF16, &[1], &b.to_le_bytes()), "b").unwrap();
+        assert_eq!(
+            s.tensor_half_bits("a.weight", &[1]).unwrap(),
+            Some((HalfDtype::Bf16, vec![b.to_bits()]))
+        );
+        let s = WeightStore::from_bytes(&file(Dtype::F32, &[1], &f32_bytes(&[1.0])), "f").unwrap();
+        assert_eq!(s.tensor_half_bits("a.weight", &[1]).unwrap(), None);
+        let inf = half::f16::INFINITY.to_le_bytes();
+        let s = WeightStore::from_bytes(&file(Dtype::F16, &[1], &inf), "i").unwrap();
+        assert!(matches!(
+            s.tensor_half_bits("a.weight", &[1]),
+            Err(WeightsError::NonFinite { .. })
+        ));
+    }
+
+    #[test]
+    fn f16_parameters_round_all_but_norm() {
+        let one = [0.1f32];
+        let tensors: Vec<(&str, &[usize], &[f32])> =
+            vec![("a.weight", &[1], &one), ("norm.std", &[1], &one)];
+        let bytes = serialize_f32(tensors, &BTreeMap::new());
+        let s = WeightStore::from_bytes(&bytes, "r")
+            .unwrap()
+            .with_f16_parameters();
+        assert_eq!(s.dtype_name("a.weight").as_deref(), Some("F16"));
+        assert_eq!(s.dtype_name("norm.std").as_deref(), Some("F32"));
+        let rounded = half::f16::from_f32(0.1).to_f32();
+        assert_eq!(s.tensor("a.weight", &[1]).unwrap(), vec![rounded]);
+        assert_eq!(s.tensor("norm.std", &[1]).unwrap(), vec![0.1]);
     }
 
     #[test]

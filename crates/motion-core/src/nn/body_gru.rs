@@ -5,6 +5,7 @@
 //! ([`GruConvention`](super::gru::GruConvention)); the paper's own is `U (r ⊙ h)`.
 use super::gemm::MatMul;
 use super::gru::{GruCell, GruConfig, GruScratch};
+use super::packed::PackedMatrix;
 use crate::model::weights::{WeightStore, WeightsError};
 
 /// Sizes and convention of a [`BodyGruCell`].
@@ -21,7 +22,7 @@ pub struct BodyGruConfig {
 pub struct BodyGruCell {
     config: BodyGruConfig,
     gru: GruCell,
-    weight_ph: Vec<f32>,
+    weight_ph: PackedMatrix,
 }
 
 impl BodyGruCell {
@@ -32,9 +33,11 @@ impl BodyGruCell {
         config: BodyGruConfig,
     ) -> Result<Self, WeightsError> {
         let gru = GruCell::load(store, prefix, config.gru)?;
-        let weight_ph = store.tensor(
+        let weight_ph = PackedMatrix::load(
+            store,
             &format!("{prefix}.weight_ph"),
-            &[3 * config.gru.hidden, config.guide],
+            3 * config.gru.hidden,
+            config.guide,
         )?;
         Ok(Self {
             config,

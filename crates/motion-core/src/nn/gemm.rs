@@ -1,10 +1,21 @@
-//! The one matrix product every layer uses: `Y = X Wᵀ` for a row-major weight `W [out, in]`
-//! (the PyTorch layout) and a batch of input rows `X [batch, in]`.
+//! The one matrix product every layer uses: `Y = X Wᵀ` for a weight `W [out, in]` (the PyTorch
+//! layout) held as a [`PackedMatrix`] and a batch of input rows `X [batch, in]`.
 //!
-//! Batch 1 goes through a tight GEMV (dot products with independent accumulators, written so the
-//! compiler vectorizes them) that touches no heap memory. Larger batches go to
-//! `matrixmultiply::sgemm` (whose packing buffers are its own business), split over rayon
-//! threads by rows of `X` when the product is big enough to pay for the fork.
+//! Two paths, chosen by batch size:
+//! - **Row kernels** (batch 1 up to [`row_kernel_max_batch`]): weight rows are the outer loop and each
+//!   is read once for all batch rows, in its stored dtype (f32, f16 or bf16, widened in
+//!   registers). A batch-1 step is bound by how fast weights stream from cache, so reading each
+//!   once, and half-size when the file is half-size, is what matters. AVX-512 kernels
+//!   ([`super::rows_avx512`]) when the CPU has them (detected at run time), else the same
+//!   portable loop compiled for AVX2 + FMA or for the baseline target. No heap memory.
+//! - **GEMM** (larger batches): with AVX-512, [`sgemm_avx512::gemm_panels`] over the weights
+//!   packed into column panels at load; otherwise `matrixmultiply::sgemm` over the f32 rows (its
+//!   packing buffers are its own business), split over rayon threads by rows of `X` when the
+//!   product is big enough to pay for the fork.
+//!
+//! For a given machine and path every result is deterministic.
+use super::packed::{PackedMatrix, RowDtype, Rows, Wide};
+use super::sgemm_avx512;
 
 /// Operand layout of one product `Y[b, o] = beta * Y[b, o] + Σ_i X[b, i] * W[o, i]`.
 #[derive(Debug, Clone, Copy)]
@@ -19,6 +30,21 @@ pub struct MatMul {
     pub x_stride: usize,
     /// Distance between consecutive rows of `Y`.
     pub y_stride: usize,
+}
+
+/// Largest batch the row kernels take for `w`; larger batches go to the GEMM.
+///
+/// Chosen by measurement on Zen 5 (`cargo bench --bench motion -- nn/product`, and the same
+/// products timed interleaved): against the AVX-512 panel GEMM, f32 rows tie at batch 1 (both
+/// read 4 bytes a weight) and lose above; f16/bf16 rows read half the bytes and win up to batch 4
+/// on the step's `[1536, 512]` products. `matrixmultiply` re-packs the weight on every call, so
+/// without panels the row kernels win up to batch 16 at least.
+pub fn row_kernel_max_batch(w: &PackedMatrix) -> usize {
+    match (w.wide(), w.dtype()) {
+        (Wide::Panels(_), RowDtype::F32) => 1,
+        (Wide::Panels(_), _) => 4,
+        _ => 16,
+    }
 }
 
 /// Below this many multiply-adds a product is not split across threads.
@@ -47,32 +73,73 @@ impl MatMul {
         }
     }
 
-    /// `Y = X Wᵀ` (`accumulate = false`) or `Y += X Wᵀ` (`accumulate = true`).
+    /// `Y = X Wᵀ` (`accumulate = false`) or `Y += X Wᵀ` (`accumulate = true`), by the path
+    /// the batch size picks (see the module doc).
     ///
-    /// Panics if a slice is too short for the layout (a programming error, not bad input).
-    pub fn run(&self, x: &[f32], w: &[f32], y: &mut [f32], accumulate: bool) {
-        if self.batch == 0 || self.outputs == 0 {
+    /// Panics if `w` is not `[outputs, inputs]` or a slice is too short for the layout (a
+    /// programming error, not bad input).
+    pub fn run(&self, x: &[f32], w: &PackedMatrix, y: &mut [f32], accumulate: bool) {
+        if self.batch <= row_kernel_max_batch(w) {
+            self.run_rows(x, w, y, accumulate);
+        } else {
+            self.run_gemm(x, w, y, accumulate);
+        }
+    }
+
+    /// [`MatMul::run`] through the row kernels whatever the batch (benchmarks compare paths).
+    pub fn run_rows(&self, x: &[f32], w: &PackedMatrix, y: &mut [f32], accumulate: bool) {
+        if !self.check(x, w, y) {
             return;
         }
-        assert!(w.len() >= self.outputs * self.inputs, "weight too short");
-        assert!(
-            x.len() >= (self.batch - 1) * self.x_stride + self.inputs,
-            "input too short"
-        );
-        assert!(
-            y.len() >= (self.batch - 1) * self.y_stride + self.outputs,
-            "output too short"
-        );
-        if self.batch == 1 {
-            gemv(
-                &x[..self.inputs],
-                w,
-                self.inputs,
-                &mut y[..self.outputs],
+        if self.inputs == 0 {
+            if !accumulate {
+                for b in 0..self.batch {
+                    y[b * self.y_stride..b * self.y_stride + self.outputs].fill(0.0);
+                }
+            }
+            return;
+        }
+        #[cfg(target_arch = "x86_64")]
+        {
+            if super::rows_avx512::available() {
+                // SAFETY: the CPU has the kernels' features, `inputs > 0` and `check` asserted
+                // the slice lengths.
+                unsafe { super::rows_avx512::product(self, x, w.rows(), y, accumulate) };
+                return;
+            }
+            if std::arch::is_x86_feature_detected!("avx2")
+                && std::arch::is_x86_feature_detected!("fma")
+            {
+                // SAFETY: the CPU supports the features `rows_avx2_fma` is compiled for.
+                unsafe { rows_avx2_fma(self, x, w.rows(), y, accumulate) };
+                return;
+            }
+        }
+        rows_portable::<false>(self, x, w.rows(), y, accumulate);
+    }
+
+    /// [`MatMul::run`] through the GEMM whatever the batch (benchmarks compare paths).
+    pub fn run_gemm(&self, x: &[f32], w: &PackedMatrix, y: &mut [f32], accumulate: bool) {
+        if !self.check(x, w, y) {
+            return;
+        }
+        match (w.wide(), w.f32_rows()) {
+            (Wide::Panels(panels), _) => sgemm_avx512::gemm_panels(
+                self.batch,
+                x,
+                self.x_stride,
+                panels,
+                y,
+                self.y_stride,
                 accumulate,
-            );
-            return;
+            ),
+            (_, Some(rows)) => self.sgemm_threads(x, rows, y, accumulate),
+            _ => unreachable!("a matrix without panels has f32 rows"),
         }
+    }
+
+    /// `matrixmultiply::sgemm`, split by rows of `X` over rayon threads when big enough.
+    fn sgemm_threads(&self, x: &[f32], w: &[f32], y: &mut [f32], accumulate: bool) {
         let work = self.batch * self.inputs * self.outputs;
         let threads = rayon::current_num_threads();
         if threads > 1 && work >= PARALLEL_MIN_WORK && self.batch >= 2 * PARALLEL_MIN_ROWS {
@@ -101,6 +168,31 @@ impl MatMul {
         }
     }
 
+    /// Asserts the operands fit the layout; false when there is nothing to compute.
+    fn check(&self, x: &[f32], w: &PackedMatrix, y: &[f32]) -> bool {
+        assert_eq!(
+            (w.outputs(), w.inputs()),
+            (self.outputs, self.inputs),
+            "weight shape"
+        );
+        if self.batch == 0 || self.outputs == 0 {
+            return false;
+        }
+        assert!(
+            self.x_stride >= self.inputs && self.y_stride >= self.outputs,
+            "row strides"
+        );
+        assert!(
+            x.len() >= (self.batch - 1) * self.x_stride + self.inputs,
+            "input too short"
+        );
+        assert!(
+            y.len() >= (self.batch - 1) * self.y_stride + self.outputs,
+            "output too short"
+        );
+        true
+    }
+
     fn sgemm(&self, x: &[f32], w: &[f32], y: &mut [f32], accumulate: bool) {
         let beta = if accumulate { 1.0 } else { 0.0 };
         // SAFETY: the asserts in `run` (and the chunking there) guarantee that every element the
@@ -127,35 +219,41 @@ impl MatMul {
     }
 }
 
-/// `y = W x` or `y += W x` for a row-major `W [y.len(), inputs]`.
-///
-/// On x86-64 with AVX2 and FMA (detected at run time) the same kernel is compiled for those
-/// features and uses fused multiply-adds; elsewhere it is portable code the compiler vectorizes
-/// for the baseline target. Either way the result for a given machine is deterministic.
-pub fn gemv(x: &[f32], w: &[f32], inputs: usize, y: &mut [f32], accumulate: bool) {
-    debug_assert_eq!(x.len(), inputs);
-    if inputs == 0 {
-        if !accumulate {
-            y.fill(0.0);
-        }
-        return;
-    }
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
-        {
-            // SAFETY: the CPU supports the features `gemv_avx2_fma` is compiled for.
-            unsafe { gemv_avx2_fma(x, w, inputs, y, accumulate) };
-            return;
-        }
-    }
-    gemv_kernel::<false>(x, w, inputs, y, accumulate);
-}
-
+/// The row-kernel product without AVX-512: the portable loop compiled for AVX2 + FMA.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-unsafe fn gemv_avx2_fma(x: &[f32], w: &[f32], inputs: usize, y: &mut [f32], accumulate: bool) {
-    gemv_kernel::<true>(x, w, inputs, y, accumulate);
+unsafe fn rows_avx2_fma(mm: &MatMul, x: &[f32], rows: &Rows, y: &mut [f32], accumulate: bool) {
+    rows_portable::<true>(mm, x, rows, y, accumulate);
+}
+
+/// The row-kernel product in portable code: one GEMV per batch row (`FMA` picks fused
+/// multiply-adds, only worth it where the target has them).
+#[inline(always)]
+fn rows_portable<const FMA: bool>(
+    mm: &MatMul,
+    x: &[f32],
+    rows: &Rows,
+    y: &mut [f32],
+    accumulate: bool,
+) {
+    for b in 0..mm.batch {
+        let xb = &x[b * mm.x_stride..b * mm.x_stride + mm.inputs];
+        let yb = &mut y[b * mm.y_stride..b * mm.y_stride + mm.outputs];
+        match rows {
+            Rows::F32(w) => gemv_kernel::<f32, FMA>(xb, w, |v| v, yb, accumulate),
+            Rows::F16(w) => {
+                gemv_kernel::<u16, FMA>(xb, w, |v| half::f16::from_bits(v).to_f32(), yb, accumulate)
+            }
+            Rows::Bf16(w) => gemv_kernel::<u16, FMA>(
+                xb,
+                w,
+                // bf16 is the upper half of an f32.
+                |v| f32::from_bits(u32::from(v) << 16),
+                yb,
+                accumulate,
+            ),
+        }
+    }
 }
 
 /// Lanes per accumulator row: 16 f32 = two AVX registers, enough independent sums to hide the
@@ -184,19 +282,26 @@ fn reduce(mut acc: [f32; LANES]) -> f32 {
     acc[0]
 }
 
-/// Four rows at a time, so each load of `x` serves four dot products.
+/// `y (+)= W x` for one input row `x [inputs]` and `W [y.len(), inputs]` stored as `E`, widened
+/// by `widen`. Four rows at a time, so each load of `x` serves four dot products.
 #[inline(always)]
-fn gemv_kernel<const FMA: bool>(
+fn gemv_kernel<E: Copy, const FMA: bool>(
     x: &[f32],
-    w: &[f32],
-    inputs: usize,
+    w: &[E],
+    widen: impl Fn(E) -> f32 + Copy,
     y: &mut [f32],
     accumulate: bool,
 ) {
-    let rows = y.len();
+    let (rows, inputs) = (y.len(), x.len());
     let w = &w[..rows * inputs];
     let full = inputs / LANES * LANES;
     let (x_body, x_tail) = x.split_at(full);
+    let tail_dot = |row: &[E], mut d: f32| {
+        for (a, b) in row[full..].iter().zip(x_tail) {
+            d = madd::<FMA>(widen(*a), *b, d);
+        }
+        d
+    };
     let mut o = 0;
     while o + 4 <= rows {
         let r = |k: usize| &w[(o + k) * inputs..(o + k + 1) * inputs];
@@ -210,17 +315,14 @@ fn gemv_kernel<const FMA: bool>(
             .zip(r3.chunks_exact(LANES))
         {
             for k in 0..LANES {
-                acc[0][k] = madd::<FMA>(c0[k], xc[k], acc[0][k]);
-                acc[1][k] = madd::<FMA>(c1[k], xc[k], acc[1][k]);
-                acc[2][k] = madd::<FMA>(c2[k], xc[k], acc[2][k]);
-                acc[3][k] = madd::<FMA>(c3[k], xc[k], acc[3][k]);
+                acc[0][k] = madd::<FMA>(widen(c0[k]), xc[k], acc[0][k]);
+                acc[1][k] = madd::<FMA>(widen(c1[k]), xc[k], acc[1][k]);
+                acc[2][k] = madd::<FMA>(widen(c2[k]), xc[k], acc[2][k]);
+                acc[3][k] = madd::<FMA>(widen(c3[k]), xc[k], acc[3][k]);
             }
         }
         for (j, row) in [r0, r1, r2, r3].iter().enumerate() {
-            let mut d = reduce(acc[j]);
-            for (a, b) in row[full..].iter().zip(x_tail) {
-                d = madd::<FMA>(*a, *b, d);
-            }
+            let d = tail_dot(row, reduce(acc[j]));
             y[o + j] = if accumulate { y[o + j] + d } else { d };
         }
         o += 4;
@@ -230,13 +332,10 @@ fn gemv_kernel<const FMA: bool>(
         let mut acc = [0.0f32; LANES];
         for (xc, c) in x_body.chunks_exact(LANES).zip(row.chunks_exact(LANES)) {
             for k in 0..LANES {
-                acc[k] = madd::<FMA>(c[k], xc[k], acc[k]);
+                acc[k] = madd::<FMA>(widen(c[k]), xc[k], acc[k]);
             }
         }
-        let mut d = reduce(acc);
-        for (a, b) in row[full..].iter().zip(x_tail) {
-            d = madd::<FMA>(*a, *b, d);
-        }
+        let d = tail_dot(row, reduce(acc));
         y[o] = if accumulate { y[o] + d } else { d };
         o += 1;
     }
@@ -245,80 +344,200 @@ fn gemv_kernel<const FMA: bool>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::weights::HalfDtype;
 
-    fn naive(x: &[f32], w: &[f32], b: usize, i: usize, o: usize) -> Vec<f32> {
-        let mut y = vec![0.0; b * o];
-        for r in 0..b {
-            for c in 0..o {
-                y[r * o + c] = (0..i).map(|k| x[r * i + k] * w[c * i + k]).sum();
-            }
-        }
-        y
-    }
-
-    fn data(n: usize, seed: u32) -> Vec<f32> {
+    /// Deterministic values in [-1, 1) from a fixed-seed xorshift generator.
+    fn data(n: usize, seed: u64) -> Vec<f32> {
+        let mut s = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
         (0..n)
-            .map(|k| {
-                (((k as u32).wrapping_mul(2654435761).wrapping_add(seed) >> 8) % 1000) as f32
-                    / 500.0
-                    - 1.0
+            .map(|_| {
+                s ^= s << 13;
+                s ^= s >> 7;
+                s ^= s << 17;
+                (s >> 40) as f32 / (1u64 << 23) as f32 - 1.0
             })
             .collect()
     }
 
-    #[test]
-    fn gemv_and_gemm_match_naive() {
-        for &(b, i, o) in &[(1, 37, 11), (3, 5, 7), (64, 100, 300), (1, 0, 4)] {
-            let x = data(b * i, 1);
-            let w = data(o * i, 2);
-            let expect = naive(&x, &w, b, i, o);
-            let mut y = vec![1.0; b * o];
-            MatMul::dense(b, i, o).run(&x, &w, &mut y, false);
-            for (p, q) in y.iter().zip(&expect) {
-                assert!((p - q).abs() < 1e-4, "{p} vs {q}");
-            }
-            MatMul::dense(b, i, o).run(&x, &w, &mut y, true);
-            for (p, q) in y.iter().zip(&expect) {
-                assert!((p - 2.0 * q).abs() < 2e-4);
-            }
-        }
+    /// The matrix in each stored dtype (f16/bf16 rounded from `values`).
+    fn matrices(values: &[f32], outputs: usize, inputs: usize) -> Vec<PackedMatrix> {
+        let bf16 = values
+            .iter()
+            .map(|&v| half::bf16::from_f32(v).to_bits())
+            .collect();
+        vec![
+            PackedMatrix::from_f32(values.to_vec(), outputs, inputs),
+            PackedMatrix::f16_from_f32(values, outputs, inputs),
+            PackedMatrix::from_half_bits(HalfDtype::Bf16, bf16, outputs, inputs),
+        ]
     }
 
-    #[test]
-    fn portable_and_fused_kernels_match_naive() {
-        for &(i, o) in &[(37, 11), (216, 9), (16, 4), (5, 3)] {
-            let x = data(i, 5);
-            let w = data(o * i, 6);
-            let expect = naive(&x, &w, 1, i, o);
-            for fused in [false, true] {
-                let mut y = vec![0.0; o];
-                if fused {
-                    gemv_kernel::<true>(&x, &w, i, &mut y, false);
+    /// Checks `y` (row stride `ys`) against `init + X Wᵀ` in f64 with the widened weights; the
+    /// bound scales with `Σ|x w|` (f32 accumulation of `inputs` terms).
+    #[allow(clippy::too_many_arguments)]
+    fn assert_product(
+        what: &str,
+        mm: &MatMul,
+        x: &[f32],
+        w: &PackedMatrix,
+        init: &[f32],
+        y: &[f32],
+        accumulate: bool,
+    ) {
+        let wf = w.to_f32();
+        for b in 0..mm.batch {
+            for o in 0..mm.outputs {
+                let (mut dot, mut mag) = (0.0f64, 0.0f64);
+                for i in 0..mm.inputs {
+                    let t = f64::from(x[b * mm.x_stride + i]) * f64::from(wf[o * mm.inputs + i]);
+                    dot += t;
+                    mag += t.abs();
+                }
+                let k = b * mm.y_stride + o;
+                let expect = if accumulate {
+                    f64::from(init[k]) + dot
                 } else {
-                    gemv_kernel::<false>(&x, &w, i, &mut y, false);
-                }
-                for (p, q) in y.iter().zip(&expect) {
-                    assert!((p - q).abs() < 1e-4, "fused {fused}: {p} vs {q}");
+                    dot
+                };
+                let got = f64::from(y[k]);
+                let bound = 1e-6 * (mag + f64::from(init[k]).abs()) + 1e-7;
+                assert!(
+                    (got - expect).abs() <= bound,
+                    "{what} {:?} batch {} in {} out {} acc {accumulate}: y[{b},{o}] = {got} vs {expect}",
+                    w.dtype(),
+                    mm.batch,
+                    mm.inputs,
+                    mm.outputs
+                );
+            }
+            // Columns past `outputs` of a strided row are never written.
+            for k in b * mm.y_stride + mm.outputs..((b + 1) * mm.y_stride).min(y.len()) {
+                assert_eq!(y[k], init[k], "{what}: wrote past the row");
+            }
+        }
+    }
+
+    /// Shapes with ragged input widths (masked tails), row counts off the 4-row tiles and batches
+    /// off the 4-row batch tiles.
+    const SHAPES: &[(usize, usize)] = &[
+        (1, 1),
+        (5, 3),
+        (16, 4),
+        (17, 9),
+        (37, 11),
+        (54, 1536),
+        (216, 13),
+        (512, 54),
+        (100, 300),
+    ];
+
+    /// Every path the machine has, under a name: (name, product).
+    type Path = (
+        &'static str,
+        fn(&MatMul, &[f32], &PackedMatrix, &mut [f32], bool),
+    );
+
+    fn paths() -> Vec<Path> {
+        let mut p: Vec<Path> = vec![
+            ("dispatch", |m, x, w, y, a| m.run(x, w, y, a)),
+            ("rows", |m, x, w, y, a| m.run_rows(x, w, y, a)),
+            ("gemm", |m, x, w, y, a| m.run_gemm(x, w, y, a)),
+            ("matrixmultiply", |m, x, w, y, a| {
+                m.sgemm_threads(x, &w.to_f32(), y, a)
+            }),
+            ("portable", |m, x, w, y, a| {
+                rows_portable::<false>(m, x, w.rows(), y, a)
+            }),
+        ];
+        #[cfg(target_arch = "x86_64")]
+        {
+            if std::arch::is_x86_feature_detected!("avx2")
+                && std::arch::is_x86_feature_detected!("fma")
+            {
+                p.push(("avx2-fma", |m, x, w, y, a| {
+                    // SAFETY: features detected above.
+                    unsafe { rows_avx2_fma(m, x, w.rows(), y, a) }
+                }));
+            }
+            if super::super::rows_avx512::available() {
+                p.push(("avx512", |m, x, w, y, a| {
+                    // SAFETY: features detected above; shapes have inputs > 0.
+                    unsafe { super::super::rows_avx512::product(m, x, w.rows(), y, a) }
+                }));
+            } else {
+                eprintln!("SKIPPED: AVX-512 row kernels (this CPU lacks AVX-512 F/BW/VL)");
+            }
+        }
+        p
+    }
+
+    #[test]
+    fn every_kernel_and_dtype_matches_f64_reference() {
+        let paths = paths();
+        for (seed, &(inputs, outputs)) in SHAPES.iter().enumerate() {
+            let values = data(outputs * inputs, 2 * seed as u64 + 1);
+            for w in matrices(&values, outputs, inputs) {
+                for batch in [1, 2, 3, 4, 5, 8, 13, 16, 17] {
+                    let x = data(batch * inputs, 100 + seed as u64);
+                    let mm = MatMul::dense(batch, inputs, outputs);
+                    let init = data(batch * outputs, 7);
+                    for (name, product) in &paths {
+                        for accumulate in [false, true] {
+                            let mut y = init.clone();
+                            product(&mm, &x, &w, &mut y, accumulate);
+                            assert_product(name, &mm, &x, &w, &init, &y, accumulate);
+                        }
+                    }
                 }
             }
         }
     }
 
     #[test]
-    fn strided_rows() {
-        let (b, i, o) = (4, 6, 3);
-        let x = data(b * 10, 3);
-        let w = data(o * i, 4);
-        let mut y = vec![0.0; b * 5];
-        MatMul::dense(b, i, o)
-            .strided(10, 5)
-            .run(&x, &w, &mut y, false);
-        for r in 0..b {
-            for c in 0..o {
-                let e: f32 = (0..i).map(|k| x[r * 10 + k] * w[c * i + k]).sum();
-                assert!((y[r * 5 + c] - e).abs() < 1e-5);
+    fn strided_rows_leave_the_gaps_alone() {
+        let (inputs, outputs) = (37, 7);
+        let values = data(outputs * inputs, 3);
+        for w in matrices(&values, outputs, inputs) {
+            for batch in [1, 3, 6, 20] {
+                let mm = MatMul::dense(batch, inputs, outputs).strided(inputs + 5, outputs + 3);
+                let x = data(batch * (inputs + 5), 4);
+                let init = data(batch * (outputs + 3), 5);
+                for (name, product) in paths() {
+                    let mut y = init.clone();
+                    product(&mm, &x, &w, &mut y, true);
+                    assert_product(name, &mm, &x, &w, &init, &y, true);
+                }
             }
-            assert_eq!(&y[r * 5 + 3..r * 5 + 5], &[0.0, 0.0]);
+        }
+    }
+
+    #[test]
+    fn zero_inputs_clear_or_keep_the_output() {
+        let w = PackedMatrix::from_f32(Vec::new(), 4, 0);
+        for batch in [1, 40] {
+            let mut y = vec![1.0; batch * 4];
+            MatMul::dense(batch, 0, 4).run(&[], &w, &mut y, true);
+            assert!(y.iter().all(|&v| v == 1.0));
+            MatMul::dense(batch, 0, 4).run(&[], &w, &mut y, false);
+            assert!(y.iter().all(|&v| v == 0.0));
+        }
+    }
+
+    #[test]
+    fn a_row_sums_the_same_in_any_batch_or_tile() {
+        // The row kernels give every (batch row, output) the same arithmetic, so a character's
+        // step does not depend on the batch it runs in or the tile its output falls in.
+        let (inputs, outputs) = (216, 13);
+        let values = data(outputs * inputs, 9);
+        for w in matrices(&values, outputs, inputs) {
+            let x = data(5 * inputs, 10);
+            let mut all = vec![0.0; 5 * outputs];
+            MatMul::dense(5, inputs, outputs).run_rows(&x, &w, &mut all, false);
+            for b in 0..5 {
+                let mut one = vec![0.0; outputs];
+                MatMul::dense(1, inputs, outputs).run_rows(&x[b * inputs..], &w, &mut one, false);
+                assert_eq!(one, all[b * outputs..(b + 1) * outputs]);
+            }
         }
     }
 }

@@ -9,6 +9,7 @@
 //! [`GruCell::step_projected`].
 use super::activation::{sigmoid, tanh};
 use super::gemm::MatMul;
+use super::packed::PackedMatrix;
 use crate::model::weights::{WeightStore, WeightsError};
 
 /// Where the reset gate acts in the candidate (the only difference between the two conventions).
@@ -56,8 +57,12 @@ pub struct GruConfig {
 #[derive(Debug, Clone)]
 pub struct GruCell {
     config: GruConfig,
-    weight_ih: Vec<f32>,
-    weight_hh: Vec<f32>,
+    weight_ih: PackedMatrix,
+    /// Rows `0..2H` of `weight_hh` (the r and z gates).
+    weight_hh_rz: PackedMatrix,
+    /// Rows `2H..3H` of `weight_hh` (the candidate), apart because the paper convention
+    /// multiplies it by `r ⊙ h`.
+    weight_hh_n: PackedMatrix,
     bias_ih: Vec<f32>,
     bias_hh: Vec<f32>,
 }
@@ -99,10 +104,13 @@ impl GruCell {
         config: GruConfig,
     ) -> Result<Self, WeightsError> {
         let (i, h) = (config.inputs, config.hidden);
+        let weight_hh = PackedMatrix::load(store, &format!("{prefix}.weight_hh"), 3 * h, h)?;
+        let (weight_hh_rz, weight_hh_n) = weight_hh.split_rows(2 * h);
         Ok(Self {
             config,
-            weight_ih: store.tensor(&format!("{prefix}.weight_ih"), &[3 * h, i])?,
-            weight_hh: store.tensor(&format!("{prefix}.weight_hh"), &[3 * h, h])?,
+            weight_ih: PackedMatrix::load(store, &format!("{prefix}.weight_ih"), 3 * h, i)?,
+            weight_hh_rz,
+            weight_hh_n,
             bias_ih: store.tensor(&format!("{prefix}.bias_ih"), &[3 * h])?,
             bias_hh: store.tensor(&format!("{prefix}.bias_hh"), &[3 * h])?,
         })
@@ -115,18 +123,19 @@ impl GruCell {
 
     /// Number of trainable parameters.
     pub fn parameter_count(&self) -> usize {
-        self.weight_ih.len() + self.weight_hh.len() + self.bias_ih.len() + self.bias_hh.len()
+        self.weight_ih.len()
+            + self.weight_hh_rz.len()
+            + self.weight_hh_n.len()
+            + self.bias_ih.len()
+            + self.bias_hh.len()
     }
 
     /// Column `col` of `weight_ih` plus `bias_ih` (the input projection of a one-hot input), into `gi [3H]`.
     pub fn project_one_hot(&self, col: Option<usize>, gi: &mut [f32]) {
         gi.copy_from_slice(&self.bias_ih);
         if let Some(c) = col {
-            for (g, row) in gi
-                .iter_mut()
-                .zip(self.weight_ih.chunks_exact(self.config.inputs))
-            {
-                *g += row[c];
+            for (r, g) in gi.iter_mut().enumerate() {
+                *g += self.weight_ih.get(r, c);
             }
         }
     }
@@ -185,9 +194,18 @@ impl GruCell {
         for row in gh.chunks_exact_mut(g) {
             row.copy_from_slice(&self.bias_hh);
         }
+        // r and z first (rows 0..2H of U).
+        MatMul::dense(batch, hid, 2 * hid)
+            .strided(hid, g)
+            .run(h, &self.weight_hh_rz, gh, true);
         match self.config.convention {
             GruConvention::PyTorch => {
-                MatMul::dense(batch, hid, g).run(h, &self.weight_hh, gh, true);
+                MatMul::dense(batch, hid, hid).strided(hid, g).run(
+                    h,
+                    &self.weight_hh_n,
+                    &mut gh[2 * hid..],
+                    true,
+                );
                 for b in 0..batch {
                     let (gi, gh) = (&gi[b * g..(b + 1) * g], &gh[b * g..(b + 1) * g]);
                     let hb = &mut h[b * hid..(b + 1) * hid];
@@ -200,13 +218,7 @@ impl GruCell {
                 }
             }
             GruConvention::Paper => {
-                // r and z first (rows 0..2H of U), then the candidate from U_n (r ⊙ h).
-                MatMul::dense(batch, hid, 2 * hid).strided(hid, g).run(
-                    h,
-                    &self.weight_hh[..2 * hid * hid],
-                    gh,
-                    true,
-                );
+                // The candidate from U_n (r ⊙ h).
                 let rh = &mut rh[..batch * hid];
                 for b in 0..batch {
                     for j in 0..hid {
@@ -216,7 +228,7 @@ impl GruCell {
                 }
                 MatMul::dense(batch, hid, hid).strided(hid, g).run(
                     rh,
-                    &self.weight_hh[2 * hid * hid..],
+                    &self.weight_hh_n,
                     &mut gh[2 * hid..],
                     true,
                 );

@@ -1,5 +1,6 @@
 //! A fully connected layer `y = W x + b` with PyTorch's `nn.Linear` layout (`weight [out, in]`).
 use super::gemm::MatMul;
+use super::packed::PackedMatrix;
 use crate::model::weights::{WeightStore, WeightsError};
 
 /// Sizes of a [`Linear`] layer.
@@ -15,7 +16,7 @@ pub struct LinearConfig {
 #[derive(Debug, Clone)]
 pub struct Linear {
     config: LinearConfig,
-    weight: Vec<f32>,
+    weight: PackedMatrix,
     bias: Vec<f32>,
 }
 
@@ -26,9 +27,11 @@ impl Linear {
         prefix: &str,
         config: LinearConfig,
     ) -> Result<Self, WeightsError> {
-        let weight = store.tensor(
+        let weight = PackedMatrix::load(
+            store,
             &format!("{prefix}.weight"),
-            &[config.outputs, config.inputs],
+            config.outputs,
+            config.inputs,
         )?;
         let bias = store.tensor(&format!("{prefix}.bias"), &[config.outputs])?;
         Ok(Self {

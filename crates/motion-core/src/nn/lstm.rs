@@ -3,6 +3,7 @@
 //! `W x + b_i + U h + b_h`. Built for the DAE-LSTM of paper 002.
 use super::activation::{sigmoid, tanh};
 use super::gemm::MatMul;
+use super::packed::PackedMatrix;
 use crate::model::weights::{WeightStore, WeightsError};
 
 /// Sizes of an [`LstmCell`].
@@ -18,8 +19,8 @@ pub struct LstmConfig {
 #[derive(Debug, Clone)]
 pub struct LstmCell {
     config: LstmConfig,
-    weight_ih: Vec<f32>,
-    weight_hh: Vec<f32>,
+    weight_ih: PackedMatrix,
+    weight_hh: PackedMatrix,
     bias_ih: Vec<f32>,
     bias_hh: Vec<f32>,
 }
@@ -50,8 +51,8 @@ impl LstmCell {
         let (i, h) = (config.inputs, config.hidden);
         Ok(Self {
             config,
-            weight_ih: store.tensor(&format!("{prefix}.weight_ih"), &[4 * h, i])?,
-            weight_hh: store.tensor(&format!("{prefix}.weight_hh"), &[4 * h, h])?,
+            weight_ih: PackedMatrix::load(store, &format!("{prefix}.weight_ih"), 4 * h, i)?,
+            weight_hh: PackedMatrix::load(store, &format!("{prefix}.weight_hh"), 4 * h, h)?,
             bias_ih: store.tensor(&format!("{prefix}.bias_ih"), &[4 * h])?,
             bias_hh: store.tensor(&format!("{prefix}.bias_hh"), &[4 * h])?,
         })

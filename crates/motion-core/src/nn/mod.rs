@@ -3,7 +3,8 @@
 //! Every layer is a `Config` plus `load(store, prefix, config)` reading PyTorch state-dict names
 //! from a [`WeightStore`](crate::model::weights::WeightStore). Weights are immutable after loading
 //! (share them with `Arc`); recurrent state and per-step scratch buffers belong to the caller and
-//! are sized once, so a step allocates nothing. All compute is f32.
+//! are sized once, so a step allocates nothing. Weight matrices are [`PackedMatrix`]es kept in
+//! their stored dtype (f32, f16 or bf16); all arithmetic is f32.
 pub mod activation;
 pub mod body_gru;
 pub mod gemm;
@@ -11,6 +12,9 @@ pub mod gru;
 pub mod linear;
 pub mod lstm;
 pub mod mlp;
+pub mod packed;
+#[cfg(target_arch = "x86_64")]
+mod rows_avx512;
 pub mod sgemm_avx512;
 
 pub use body_gru::{BodyGruCell, BodyGruConfig};
@@ -18,3 +22,4 @@ pub use gru::{GruCell, GruConfig, GruConvention, GruScratch};
 pub use linear::{Linear, LinearConfig};
 pub use lstm::{LstmCell, LstmConfig, LstmScratch};
 pub use mlp::{Mlp, MlpConfig, MlpScratch};
+pub use packed::{PackedMatrix, RowDtype};
