@@ -189,25 +189,40 @@ impl SpectrumBuffers {
 
     /// (Σ_j w_ij · emd_ij, Σ_j w_ij) of one sequence (`T x D` each); `None` if a value of
     /// either is not finite.
+    ///
+    /// `next` is the sequence this thread most likely scores next: its memory is prefetched
+    /// while this one's FFTs run, so that its transpose does not wait for DRAM.
     fn sequence(
         &mut self,
         fft: &dyn RealToComplex<f64>,
-        gt: ArrayView2<'_, f64>,
-        pred: ArrayView2<'_, f64>,
+        (gt, pred): (ArrayView2<'_, f64>, ArrayView2<'_, f64>),
+        next: Option<(ArrayView2<'_, f64>, ArrayView2<'_, f64>)>,
         power: SpectrumPower,
     ) -> Option<(f64, f64)> {
-        let frames = gt.nrows();
+        let (frames, dims) = gt.dim();
         if !(load_dim_major(gt, &mut self.gt_series) & load_dim_major(pred, &mut self.pred_series))
         {
             return None;
         }
+        let next = next.and_then(|(g, p)| Some([g.to_slice()?, p.to_slice()?]));
+        // Cache lines of the next sequence to prefetch per dim.
+        let lines_per_dim = (2 * frames * dims).div_ceil(8 * dims);
         let mut weighted = 0.0;
         let mut total = 0.0;
-        for (gt, pred) in self
+        for (j, (gt, pred)) in self
             .gt_series
             .chunks_exact_mut(frames)
             .zip(self.pred_series.chunks_exact_mut(frames))
+            .enumerate()
         {
+            if let Some(next) = next {
+                for line in j * lines_per_dim..(j + 1) * lines_per_dim {
+                    let (half, offset) = (line % 2, 8 * (line / 2));
+                    if let Some(value) = next[half].get(offset) {
+                        prefetch(value);
+                    }
+                }
+            }
             // The DFT of a real series is conjugate-symmetric, and so are both power spectra:
             // the T/2 + 1 coefficients of the real FFT determine them.
             for (input, out) in [(gt, &mut self.gt_power), (pred, &mut self.pred_power)] {
@@ -250,8 +265,9 @@ fn weighted_emd_per_sequence(
         .map_init(
             || SpectrumBuffers::new(fft, gt.dim().2),
             |buffers, i| {
-                let (gt, pred) = (gt.index_axis(Axis(0), i), pred.index_axis(Axis(0), i));
-                buffers.sequence(fft, gt, pred, power)
+                let at = |i: usize| (gt.index_axis(Axis(0), i), pred.index_axis(Axis(0), i));
+                let next = (i + 1 < sequences).then(|| at(i + 1));
+                buffers.sequence(fft, at(i), next, power)
             },
         )
         .collect()
@@ -281,6 +297,20 @@ fn load_dim_major(sequence: ArrayView2<'_, f64>, out: &mut [f64]) -> bool {
             all_finite(out)
         }
     }
+}
+
+/// Asks the CPU to bring the cache line of `value` into its caches (no effect on the program's
+/// results; a no-op off x86-64).
+#[inline(always)]
+fn prefetch(value: &f64) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: a prefetch never faults and does not change memory; the pointer is valid anyway.
+    unsafe {
+        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+        _mm_prefetch::<_MM_HINT_T0>((value as *const f64).cast());
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = value;
 }
 
 /// True if no value is NaN or infinite: `v · 0` is ±0 for finite `v` and NaN otherwise.
