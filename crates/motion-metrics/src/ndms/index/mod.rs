@@ -66,10 +66,10 @@ pub fn nearest_naive(words: &[f64], dim: usize, query: &[f64]) -> Neighbour {
 ///
 /// The default is the pose-bound scan. On the H3.6M evaluation's words (13 actions' S5
 /// databases, 1,027-3,894 words each, 800 S1 query words each; `motion-cli bench --ndms`, one
-/// thread) it searched all 10,400 queries in about 25 ms against about 300 ms for the kd-tree over
-/// the same bound, whose radius queries visit many nodes: on these words the nearest neighbour is
-/// about as far as the data's spread along its first principal axes. Brute force costs
-/// `words x queries x 288` multiply-adds (2.8 s).
+/// thread, on a busy 2-core machine) its search of all 10,400 queries took 40-130 ms, against
+/// 200-310 ms for the kd-tree over the same coarse bound, whose radius queries visit many nodes:
+/// on these words the nearest neighbour is about as far as the data's spread along its first
+/// principal axes. Brute force computes all `words x queries` distances (288 numbers each).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum NnMethod {
     /// Blocked brute force as matrix products with exact re-checks.
