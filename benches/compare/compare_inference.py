@@ -38,6 +38,33 @@ from step_graph import REPO, ClosedLoopStep, export_onnx, paper_model  # noqa: E
 from training.export import load_weights, save_weights  # noqa: E402
 
 ARCHES = ("gru-d", "vgru-d")
+DTYPES = {"float32": torch.float32, "float16": torch.float16, "bfloat16": torch.bfloat16}
+
+
+def step_matrices(model) -> list[str]:
+    """State-dict names of the weight matrices one closed-loop step multiplies by (the VGRU-d plan
+    GRU runs once per plan block, not per step, and is left out as in the timings)."""
+    names = []
+    for name, tensor in model.state_dict().items():
+        if tensor.dim() != 2:
+            continue
+        if name.startswith(("rnn.", "body.", "decoder.")):
+            names.append(name)
+    return names
+
+
+def step_cost(model, weights: str) -> tuple[int, int]:
+    """(FLOPs, bytes of weight matrices read) of one character-step, bytes in the file's dtype."""
+    from safetensors import safe_open
+
+    flops = 0
+    nbytes = 0
+    with safe_open(weights, framework="pt") as f:
+        for name in step_matrices(model):
+            t = f.get_tensor(name)
+            flops += 2 * t.numel()
+            nbytes += t.numel() * t.element_size()
+    return flops, nbytes
 
 
 def median_step_us(step_fn, state: dict, steps: int) -> float:
@@ -135,6 +162,16 @@ def main() -> int:
     parser.add_argument("--steps", type=int, default=300, help="timed steps per repetition at batch 1")
     parser.add_argument("--large-steps", type=int, default=30, help="timed steps per repetition at batch >= 64")
     parser.add_argument("--cli", default=os.path.join(REPO, "target", "release", "motion-cli"))
+    parser.add_argument(
+        "--dtype",
+        choices=sorted(DTYPES),
+        default="float32",
+        help="dtype the random models' weights are saved in (ORT and PyTorch get the same values as f32)",
+    )
+    parser.add_argument(
+        "--baseline-cli",
+        help="also time this motion-cli build (e.g. an older commit) in the same run, as `baseline`",
+    )
     parser.add_argument("--json", help="also write the results to this JSON file")
     args = parser.parse_args()
 
@@ -153,14 +190,28 @@ def main() -> int:
             for arch in args.arch.split(","):
                 model = paper_model(arch)
                 path = os.path.join(tmp, f"{arch}.safetensors")
-                save_weights(model, path, {"data": "random", "iterations": 0, "seed": 42})
+                save_weights(model, path, {"data": "random", "iterations": 0, "seed": 42}, dtype=DTYPES[args.dtype])
+                if args.dtype != "float32":
+                    # The stored (rounded) values, upcast to f32, for ONNX Runtime and PyTorch.
+                    model = load_weights(path)
                 models.append((model, path))
+        if args.dtype != "float32" and not args.model:
+            print(
+                f"weights stored as {args.dtype}: ours keeps them {args.dtype}; ONNX Runtime and PyTorch "
+                "compute with the same values upcast to f32 (identical numbers in every engine)"
+            )
         for model, weights in models:
             arch = model.config["architecture"]
             step = ClosedLoopStep(model).eval()
             onnx_path = os.path.join(tmp, f"{arch}.onnx")
             export_onnx(step, onnx_path, batch=2)
             sessions = {n: session_for(onnx_path, n) for n in {args.threads, 1}}
+            flops, weight_bytes = step_cost(model, weights)
+            print(
+                f"{arch} {model.hidden_size}: {flops / 1e6:.2f} MFLOP and {weight_bytes / 1e6:.2f} MB of weight "
+                f"matrices per character-step ({os.path.basename(weights)})",
+                flush=True,
+            )
             for batch in batches:
                 err = parity(step, sessions[args.threads], batch)
                 inputs = step.initial_inputs(batch)
@@ -170,8 +221,12 @@ def main() -> int:
                     "onnxruntime": ort_runner(sessions[args.threads], feeds),
                     "pytorch": torch_runner(step, inputs, args.threads),
                 }
+                if args.baseline_cli:
+                    engines["baseline"] = ours_runner(args.baseline_cli, weights, batch, args.threads)
                 if args.threads != 1:
                     engines["ours-1t"] = ours_runner(args.cli, weights, batch, 1)
+                    if args.baseline_cli:
+                        engines["baseline-1t"] = ours_runner(args.baseline_cli, weights, batch, 1)
                     engines["onnxruntime-1t"] = ort_runner(sessions[1], feeds)
                     engines["pytorch-1t"] = torch_runner(step, inputs, 1)
                 steps = args.steps if batch < 64 else args.large_steps
@@ -186,6 +241,7 @@ def main() -> int:
                 best_ours = min(v for n, v in med.items() if n.startswith("ours"))
                 best_ort = min(v for n, v in med.items() if n.startswith("onnxruntime"))
                 best_torch = min(v for n, v in med.items() if n.startswith("pytorch"))
+                best_base = min((v for n, v in med.items() if n.startswith("baseline")), default=float("nan"))
                 row = {
                     "arch": arch,
                     "hidden": model.hidden_size,
@@ -194,14 +250,21 @@ def main() -> int:
                     "char_steps_per_s": {n: batch * 1e6 / t for n, t in med.items()},
                     "ours_over_ort": best_ours / best_ort,
                     "pytorch_over_ours": best_torch / best_ours,
+                    "baseline_over_ort": best_base / best_ort,
                     "ort_vs_pytorch_max_abs": err,
+                    "flops_per_char_step": flops,
+                    "weight_bytes_per_step": weight_bytes,
+                    # Batch 1 reads every weight once per step; larger batches read them once
+                    # for all rows.
+                    "ours_weight_gb_per_s": weight_bytes / best_ours / 1e3,
+                    "ours_gflop_per_s": batch * flops / best_ours / 1e3,
                     "all_reps_us": times,
                 }
                 rows.append(row)
                 print_row(row, header=len(rows) == 1)
     if args.json:
         with open(args.json, "w") as f:
-            json.dump({"threads": args.threads, "reps": args.reps, "results": rows}, f, indent=1)
+            json.dump({"threads": args.threads, "reps": args.reps, "dtype": args.dtype, "results": rows}, f, indent=1)
     return 0
 
 
@@ -209,7 +272,8 @@ def print_row(row: dict, header: bool) -> None:
     if header:
         print(
             f"{'model':<14} {'batch':>5} {'ours µs':>10} {'ours-1t µs':>10} {'ORT µs':>10} {'ORT-1t µs':>10} {'torch µs':>10} "
-            f"{'torch-1t µs':>11} {'ours/ORT':>9} {'torch/ours':>10} {'best ours char-steps/s':>22} {'ORT-torch':>9}"
+            f"{'torch-1t µs':>11} {'ours/ORT':>9} {'torch/ours':>10} {'best ours char-steps/s':>22} {'ORT-torch':>9} "
+            f"{'ours GB/s':>9} {'ours GFLOP/s':>12} {'baseline µs':>11} {'baseline/ORT':>12}"
         )
     t = dict(row["us_per_step"])
     for n in ("ours-1t", "onnxruntime-1t", "pytorch-1t"):
@@ -220,7 +284,10 @@ def print_row(row: dict, header: bool) -> None:
         f"{t['pytorch']:>10.1f} {t['pytorch-1t']:>11.1f} "
         f"{row['ours_over_ort']:>9.2f} {row['pytorch_over_ours']:>10.2f} "
         f"{max(v for n, v in row['char_steps_per_s'].items() if n.startswith('ours')):>22.0f} "
-        f"{row['ort_vs_pytorch_max_abs']:>9.1e}",
+        f"{row['ort_vs_pytorch_max_abs']:>9.1e} "
+        f"{row['ours_weight_gb_per_s']:>9.1f} {row['ours_gflop_per_s']:>12.1f} "
+        f"{min((v for n, v in t.items() if n.startswith('baseline')), default=float('nan')):>11.1f} "
+        f"{row['baseline_over_ort']:>12.2f}",
         flush=True,
     )
 
