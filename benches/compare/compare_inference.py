@@ -113,13 +113,13 @@ def ort_runner(session: ort.InferenceSession, inputs: dict[str, np.ndarray]):
     return run
 
 
-def ours_runner(cli: str, weights: str, batch: int, threads: int):
+def ours_runner(cli: str, weights: str, batch: int, threads: int, extra: tuple[str, ...] = ()):
     """A closure that times ``motion-cli bench --model WEIGHTS`` (its median µs per step)."""
     env = dict(os.environ, RAYON_NUM_THREADS=str(threads))
 
     def run(steps: int) -> float:
         out = subprocess.run(
-            [cli, "bench", "--model", weights, "--batch", str(batch), "--steps", str(steps), "--json"],
+            [cli, "bench", "--model", weights, "--batch", str(batch), "--steps", str(steps), "--json", *extra],
             check=True,
             capture_output=True,
             text=True,
@@ -223,6 +223,9 @@ def main() -> int:
                 }
                 if args.baseline_cli:
                     engines["baseline"] = ours_runner(args.baseline_cli, weights, batch, args.threads)
+                if args.threads != 1 and batch <= 4:
+                    # Opt-in: products split over threads by output rows (`bench --row-split`).
+                    engines["split"] = ours_runner(args.cli, weights, batch, args.threads, ("--row-split",))
                 if args.threads != 1:
                     engines["ours-1t"] = ours_runner(args.cli, weights, batch, 1)
                     if args.baseline_cli:
@@ -250,6 +253,8 @@ def main() -> int:
                     "char_steps_per_s": {n: batch * 1e6 / t for n, t in med.items()},
                     "ours_over_ort": best_ours / best_ort,
                     "pytorch_over_ours": best_torch / best_ours,
+                    "split_over_ort": med.get("split", float("nan")) / best_ort,
+                    "pytorch_over_split": best_torch / med.get("split", float("nan")),
                     "baseline_over_ort": best_base / best_ort,
                     "ort_vs_pytorch_max_abs": err,
                     "flops_per_char_step": flops,
@@ -273,10 +278,11 @@ def print_row(row: dict, header: bool) -> None:
         print(
             f"{'model':<14} {'batch':>5} {'ours µs':>10} {'ours-1t µs':>10} {'ORT µs':>10} {'ORT-1t µs':>10} {'torch µs':>10} "
             f"{'torch-1t µs':>11} {'ours/ORT':>9} {'torch/ours':>10} {'best ours char-steps/s':>22} {'ORT-torch':>9} "
-            f"{'ours GB/s':>9} {'ours GFLOP/s':>12} {'baseline µs':>11} {'baseline/ORT':>12}"
+            f"{'ours GB/s':>9} {'ours GFLOP/s':>12} {'baseline µs':>11} {'baseline/ORT':>12} "
+            f"{'split µs':>9} {'split/ORT':>9} {'torch/split':>11}"
         )
     t = dict(row["us_per_step"])
-    for n in ("ours-1t", "onnxruntime-1t", "pytorch-1t"):
+    for n in ("ours-1t", "onnxruntime-1t", "pytorch-1t", "split"):
         t.setdefault(n, float("nan"))
     name = f"{row['arch']} {row['hidden']}"
     print(
@@ -287,7 +293,8 @@ def print_row(row: dict, header: bool) -> None:
         f"{row['ort_vs_pytorch_max_abs']:>9.1e} "
         f"{row['ours_weight_gb_per_s']:>9.1f} {row['ours_gflop_per_s']:>12.1f} "
         f"{min((v for n, v in t.items() if n.startswith('baseline')), default=float('nan')):>11.1f} "
-        f"{row['baseline_over_ort']:>12.2f}",
+        f"{row['baseline_over_ort']:>12.2f} "
+        f"{t['split']:>9.1f} {row['split_over_ort']:>9.2f} {row['pytorch_over_split']:>11.2f}",
         flush=True,
     )
 

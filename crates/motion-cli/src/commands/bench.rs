@@ -82,6 +82,11 @@ pub struct Args {
     /// VGRU-d: time one long run that re-plans every plan block (default: stay within a plan).
     #[arg(long)]
     pub with_plan: bool,
+    /// Split small-batch steps over threads by output rows (BatchGenerator::set_row_split:
+    /// lower latency at batch 1-4 on several cores; off by default because the step then runs on
+    /// a rayon pool thread, whose queue allocates now and then).
+    #[arg(long)]
+    pub row_split: bool,
     /// Seed of the random weights.
     #[arg(long, default_value_t = 42)]
     pub seed: u64,
@@ -137,7 +142,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut results = Vec::new();
     for model in &models {
         for &batch in &args.batch {
-            results.push(measure(model, batch, args.steps, args.with_plan)?);
+            results.push(measure(
+                model,
+                batch,
+                args.steps,
+                args.with_plan,
+                args.row_split,
+            )?);
         }
     }
     let peak = peak_rss_mb();
@@ -202,6 +213,7 @@ fn measure(
     batch: usize,
     steps: usize,
     with_plan: bool,
+    row_split: bool,
 ) -> anyhow::Result<Measurement> {
     let cfg = model.config();
     // Within-plan segments: the plan computed at seeding covers seed + horizon steps; re-seed
@@ -215,6 +227,7 @@ fn measure(
     let mut times = Vec::with_capacity(steps);
     while times.len() < steps {
         let mut generator = seeded(model, batch, horizon)?;
+        generator.set_row_split(row_split);
         for _ in 0..WARM_UP_STEPS {
             std::hint::black_box(generator.step()?[[0, 0]]);
         }

@@ -7,7 +7,12 @@
 //!   registers). A batch-1 step is bound by how fast weights stream from cache, so reading each
 //!   once, and half-size when the file is half-size, is what matters. AVX-512 kernels
 //!   ([`super::rows_avx512`]) when the CPU has them (detected at run time), else the same
-//!   portable loop compiled for AVX2 + FMA or for the baseline target. No heap memory.
+//!   portable loop compiled for AVX2 + FMA or for the baseline target. No heap memory. With
+//!   AVX-512 and a matrix of at least 256 KiB, a product called from a rayon pool thread splits
+//!   its output rows over the pool (`rayon::join`, no allocation): one core streams weights from
+//!   L3 at about 25 GB/s on the 2-core Intel Xeon we measure on, two cores together at about
+//!   32-43 GB/s. Called from elsewhere it stays on the calling thread (see
+//!   [`crate::model::BatchGenerator::set_row_split`]).
 //! - **GEMM** (larger batches): with AVX-512, [`sgemm_avx512::gemm_panels`] over the weights
 //!   packed into column panels at load; otherwise `matrixmultiply::sgemm` over the f32 rows (its
 //!   packing buffers are its own business), split over rayon threads by rows of `X` when the
@@ -46,6 +51,12 @@ pub fn row_kernel_max_batch(w: &PackedMatrix) -> usize {
         _ => 16,
     }
 }
+
+/// Row-kernel products over fewer weight bytes than this stay on one thread (a fork-join costs
+/// a few µs; a 256 KiB matrix streams in about 10 µs at one core's L3 bandwidth).
+const ROW_SPLIT_MIN_BYTES: usize = 256 << 10;
+/// Fewest output rows per thread of a split row-kernel product.
+const ROW_SPLIT_MIN_OUTPUTS: usize = 64;
 
 /// Below this many multiply-adds a product is not split across threads.
 const PARALLEL_MIN_WORK: usize = 1 << 21;
@@ -102,9 +113,14 @@ impl MatMul {
         #[cfg(target_arch = "x86_64")]
         {
             if super::rows_avx512::available() {
-                // SAFETY: the CPU has the kernels' features, `inputs > 0` and `check` asserted
-                // the slice lengths.
-                unsafe { super::rows_avx512::product(self, x, w.rows(), y, accumulate) };
+                let parts = self.row_split_parts(w);
+                if parts > 1 {
+                    self.rows_avx512_split(x, w, y, accumulate, parts);
+                } else {
+                    // SAFETY: the CPU has the kernels' features, `inputs > 0` and `check`
+                    // asserted the slice lengths.
+                    unsafe { super::rows_avx512::product(self, x, w.rows(), y, accumulate) };
+                }
                 return;
             }
             if std::arch::is_x86_feature_detected!("avx2")
@@ -116,6 +132,84 @@ impl MatMul {
             }
         }
         rows_portable::<false>(self, x, w.rows(), y, accumulate);
+    }
+
+    /// Into how many output ranges the row kernels split this product over threads (see the
+    /// module doc): 1 below [`ROW_SPLIT_MIN_BYTES`] of weights, inside [`super::parallel::serial`],
+    /// on one thread, or when not called from a rayon pool thread.
+    fn row_split_parts(&self, w: &PackedMatrix) -> usize {
+        let threads = super::parallel::threads();
+        // Off a pool thread a join is a trip through rayon's injection queue (slow, and it
+        // allocates a queue block every 63 jobs): only callers already on the pool split.
+        if threads < 2
+            || rayon::current_thread_index().is_none()
+            || self.outputs * self.inputs * w.dtype().size() < ROW_SPLIT_MIN_BYTES
+        {
+            return 1;
+        }
+        threads.min(self.outputs / ROW_SPLIT_MIN_OUTPUTS).max(1)
+    }
+
+    /// The row kernels over `parts` output ranges run by rayon (recursive halving; the caller's
+    /// thread takes the first half of every split).
+    #[cfg(target_arch = "x86_64")]
+    fn rows_avx512_split(
+        &self,
+        x: &[f32],
+        w: &PackedMatrix,
+        y: &mut [f32],
+        accumulate: bool,
+        parts: usize,
+    ) {
+        /// `Y`'s base pointer, shared by threads that write disjoint column ranges of it.
+        #[derive(Clone, Copy)]
+        struct Columns(*mut f32);
+        // SAFETY: each thread writes only its own column range (see `split`).
+        unsafe impl Send for Columns {}
+        unsafe impl Sync for Columns {}
+
+        fn split(
+            mm: &MatMul,
+            x: &[f32],
+            w: &PackedMatrix,
+            y: Columns,
+            accumulate: bool,
+            outputs: std::ops::Range<usize>,
+            parts: usize,
+        ) {
+            if parts <= 1 {
+                // SAFETY: the caller checked the CPU and the layout; `outputs` ranges of
+                // different calls are disjoint, so no two threads write the same element.
+                unsafe {
+                    super::rows_avx512::product_outputs(
+                        mm,
+                        x.as_ptr(),
+                        w.rows(),
+                        y.0,
+                        accumulate,
+                        outputs,
+                    )
+                };
+                return;
+            }
+            let left = parts / 2;
+            // Cut at a multiple of 16 columns (whole cache lines of f32 outputs per row).
+            let at = (outputs.start + outputs.len() * left / parts).next_multiple_of(16);
+            let at = at.min(outputs.end);
+            rayon::join(
+                || split(mm, x, w, y, accumulate, outputs.start..at, left),
+                || split(mm, x, w, y, accumulate, at..outputs.end, parts - left),
+            );
+        }
+        split(
+            self,
+            x,
+            w,
+            Columns(y.as_mut_ptr()),
+            accumulate,
+            0..self.outputs,
+            parts,
+        );
     }
 
     /// [`MatMul::run`] through the GEMM whatever the batch (benchmarks compare paths).
@@ -141,7 +235,7 @@ impl MatMul {
     /// `matrixmultiply::sgemm`, split by rows of `X` over rayon threads when big enough.
     fn sgemm_threads(&self, x: &[f32], w: &[f32], y: &mut [f32], accumulate: bool) {
         let work = self.batch * self.inputs * self.outputs;
-        let threads = rayon::current_num_threads();
+        let threads = super::parallel::threads();
         if threads > 1 && work >= PARALLEL_MIN_WORK && self.batch >= 2 * PARALLEL_MIN_ROWS {
             let rows = self.batch.div_ceil(threads).max(PARALLEL_MIN_ROWS);
             let this = *self;

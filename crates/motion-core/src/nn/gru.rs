@@ -7,7 +7,7 @@
 //! `h' = (1 - z) ⊙ n + z ⊙ h`. The input projection `W x + b_i` of all three gates is one matrix
 //! product ([`GruCell::project_input`]); the body GRU adds its guide term to it before
 //! [`GruCell::step_projected`].
-use super::activation::{sigmoid, tanh};
+use super::gates;
 use super::gemm::MatMul;
 use super::packed::PackedMatrix;
 use crate::model::weights::{WeightStore, WeightsError};
@@ -206,41 +206,19 @@ impl GruCell {
                     &mut gh[2 * hid..],
                     true,
                 );
-                for b in 0..batch {
-                    let (gi, gh) = (&gi[b * g..(b + 1) * g], &gh[b * g..(b + 1) * g]);
-                    let hb = &mut h[b * hid..(b + 1) * hid];
-                    for j in 0..hid {
-                        let r = sigmoid(gi[j] + gh[j]);
-                        let z = sigmoid(gi[hid + j] + gh[hid + j]);
-                        let n = tanh(gi[2 * hid + j] + r * gh[2 * hid + j]);
-                        hb[j] = (1.0 - z) * n + z * hb[j];
-                    }
-                }
+                gates::pytorch_state_update(gi, gh, h, batch, hid);
             }
             GruConvention::Paper => {
                 // The candidate from U_n (r ⊙ h).
                 let rh = &mut rh[..batch * hid];
-                for b in 0..batch {
-                    for j in 0..hid {
-                        let r = sigmoid(gi[b * g + j] + gh[b * g + j]);
-                        rh[b * hid + j] = r * h[b * hid + j];
-                    }
-                }
+                gates::reset_times_hidden(gi, gh, h, rh, batch, hid);
                 MatMul::dense(batch, hid, hid).strided(hid, g).run(
                     rh,
                     &self.weight_hh_n,
                     &mut gh[2 * hid..],
                     true,
                 );
-                for b in 0..batch {
-                    let (gi, gh) = (&gi[b * g..(b + 1) * g], &gh[b * g..(b + 1) * g]);
-                    let hb = &mut h[b * hid..(b + 1) * hid];
-                    for j in 0..hid {
-                        let z = sigmoid(gi[hid + j] + gh[hid + j]);
-                        let n = tanh(gi[2 * hid + j] + gh[2 * hid + j]);
-                        hb[j] = (1.0 - z) * n + z * hb[j];
-                    }
-                }
+                gates::paper_state_update(gi, gh, h, batch, hid);
             }
         }
     }

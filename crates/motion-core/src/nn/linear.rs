@@ -46,6 +46,11 @@ impl Linear {
         self.config
     }
 
+    /// The weight matrix `[outputs, inputs]`.
+    pub fn weight(&self) -> &PackedMatrix {
+        &self.weight
+    }
+
     /// Number of trainable parameters.
     pub fn parameter_count(&self) -> usize {
         self.weight.len() + self.bias.len()

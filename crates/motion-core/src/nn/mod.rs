@@ -7,12 +7,14 @@
 //! their stored dtype (f32, f16 or bf16); all arithmetic is f32.
 pub mod activation;
 pub mod body_gru;
+pub mod gates;
 pub mod gemm;
 pub mod gru;
 pub mod linear;
 pub mod lstm;
 pub mod mlp;
 pub mod packed;
+pub mod parallel;
 #[cfg(target_arch = "x86_64")]
 mod rows_avx512;
 pub mod sgemm_avx512;

@@ -156,7 +156,7 @@ pub fn gemm_panels(
     );
     assert!(batch == 1 || y_stride >= outputs, "output rows overlap");
     let work = batch * inputs * outputs;
-    let threads = rayon::current_num_threads();
+    let threads = super::parallel::threads();
     if threads > 1 && work >= PARALLEL_MIN_WORK && batch >= 2 * PARALLEL_MIN_ROWS {
         // Row blocks that are whole tiles (except the last), one per thread.
         let rows = batch
