@@ -7,7 +7,11 @@
 //! kernels and through the GEMM at batches 1 to 64, f32 and f16 rows: where the row kernels stop
 //! paying is `row_kernel_max_batch` in `nn/gemm.rs`.
 //!
-//! Run: `cargo bench --bench motion -- closed_loop_step` (or `-- nn/product`)
+//! `nn/gates`: the element-wise half of a GRU step at batch 256 x 512 units (paper convention,
+//! one thread): `nn::gates` (branch-free `exp`, vectorized) against the same formulas with the
+//! scalar libm `exp`/`tanh` the cells used before.
+//!
+//! Run: `cargo bench --bench motion -- closed_loop_step` (or `-- nn/product`, `-- nn/gates`)
 use criterion::{BenchmarkId, Criterion, Throughput};
 use motion::core::model::random::random_weights_bytes;
 use motion::core::model::{
@@ -60,6 +64,61 @@ fn paper_model(architecture: Architecture, f16: bool) -> Arc<MotionModel> {
 pub fn benches(c: &mut Criterion) {
     closed_loop_step(c);
     product(c);
+    gates(c);
+}
+
+fn gates(c: &mut Criterion) {
+    use motion::core::nn::activation::{sigmoid, tanh};
+    use motion::core::nn::{gates, parallel};
+    let (batch, hidden) = (256, 512);
+    let g = 3 * hidden;
+    let gi: Vec<f32> = (0..batch * g)
+        .map(|i| ((i * 37 % 1000) as f32 - 500.0) / 120.0)
+        .collect();
+    let gh: Vec<f32> = (0..batch * g)
+        .map(|i| ((i * 91 % 1000) as f32 - 500.0) / 150.0)
+        .collect();
+    let h0: Vec<f32> = (0..batch * hidden)
+        .map(|i| ((i % 200) as f32 - 100.0) / 100.0)
+        .collect();
+    let mut group = c.benchmark_group("nn/gates");
+    group
+        .sample_size(20)
+        .warm_up_time(Duration::from_millis(300))
+        .measurement_time(Duration::from_secs(1))
+        .throughput(Throughput::Elements((batch * hidden) as u64));
+    group.bench_function("vectorized", |b| {
+        let (mut h, mut rh) = (h0.clone(), vec![0.0; batch * hidden]);
+        b.iter(|| {
+            parallel::serial(|| {
+                gates::reset_times_hidden(&gi, &gh, &h, &mut rh, batch, hidden);
+                gates::paper_state_update(&gi, &gh, &mut h, batch, hidden);
+            });
+            black_box(h[0])
+        })
+    });
+    group.bench_function("scalar_libm", |b| {
+        let (mut h, mut rh) = (h0.clone(), vec![0.0; batch * hidden]);
+        b.iter(|| {
+            for r in 0..batch {
+                let (gi, gh) = (&gi[r * g..(r + 1) * g], &gh[r * g..(r + 1) * g]);
+                let (h, rh) = (
+                    &mut h[r * hidden..(r + 1) * hidden],
+                    &mut rh[r * hidden..(r + 1) * hidden],
+                );
+                for j in 0..hidden {
+                    rh[j] = sigmoid(gi[j] + gh[j]) * h[j];
+                }
+                for j in 0..hidden {
+                    let z = sigmoid(gi[hidden + j] + gh[hidden + j]);
+                    let n = tanh(gi[2 * hidden + j] + gh[2 * hidden + j]);
+                    h[j] = (1.0 - z) * n + z * h[j];
+                }
+            }
+            black_box(h[0])
+        })
+    });
+    group.finish();
 }
 
 fn closed_loop_step(c: &mut Criterion) {
