@@ -148,6 +148,16 @@ fn run(
     }
 }
 
+/// The read-only operands of one row range.
+#[derive(Clone, Copy)]
+struct Operands<'a> {
+    update: Update,
+    gi: &'a [f32],
+    gh: &'a [f32],
+    read: &'a [f32],
+    hidden: usize,
+}
+
 /// The update over consecutive rows, in the widest vector code the CPU runs.
 fn rows_dispatch(
     update: Update,
@@ -157,52 +167,52 @@ fn rows_dispatch(
     out: &mut [f32],
     hidden: usize,
 ) {
+    let ops = Operands {
+        update,
+        gi,
+        gh,
+        read,
+        hidden,
+    };
     #[cfg(target_arch = "x86_64")]
     {
         if std::arch::is_x86_feature_detected!("avx512f") {
             // SAFETY: the CPU has AVX-512F.
-            unsafe { rows_avx512(update, gi, gh, read, out, hidden) };
+            unsafe { rows_avx512(ops, out) };
             return;
         }
         if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
         {
             // SAFETY: the CPU has AVX2 and FMA.
-            unsafe { rows_avx2(update, gi, gh, read, out, hidden) };
+            unsafe { rows_avx2(ops, out) };
             return;
         }
     }
-    rows(update, gi, gh, read, out, hidden);
+    rows(ops, out);
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
-unsafe fn rows_avx512(
-    update: Update,
-    gi: &[f32],
-    gh: &[f32],
-    read: &[f32],
-    out: &mut [f32],
-    hidden: usize,
-) {
-    rows(update, gi, gh, read, out, hidden);
+unsafe fn rows_avx512(ops: Operands<'_>, out: &mut [f32]) {
+    rows(ops, out);
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-unsafe fn rows_avx2(
-    update: Update,
-    gi: &[f32],
-    gh: &[f32],
-    read: &[f32],
-    out: &mut [f32],
-    hidden: usize,
-) {
-    rows(update, gi, gh, read, out, hidden);
+unsafe fn rows_avx2(ops: Operands<'_>, out: &mut [f32]) {
+    rows(ops, out);
 }
 
 /// The plain loops (compiled once per instruction set by the wrappers above).
 #[inline(always)]
-fn rows(update: Update, gi: &[f32], gh: &[f32], read: &[f32], out: &mut [f32], hidden: usize) {
+fn rows(ops: Operands<'_>, out: &mut [f32]) {
+    let Operands {
+        update,
+        gi,
+        gh,
+        read,
+        hidden,
+    } = ops;
     let g = 3 * hidden;
     let batch = out.len() / hidden;
     for b in 0..batch {
