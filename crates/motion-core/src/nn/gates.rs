@@ -84,71 +84,32 @@ pub fn reset_times_hidden(
     batch: usize,
     hidden: usize,
 ) {
-    // `rh` is the output here; `h` is only read.
-    run(Update::ResetTimesHidden, gi, gh, h, rh, batch, hidden);
+    let ops = Operands::new(Update::ResetTimesHidden, gi, gh, h, batch, hidden);
+    run(ops, rh, batch);
 }
 
 /// Paper convention, second half: `h[b] = (1 - z) ⊙ tanh(gi_n + gh_n) + z ⊙ h[b]`,
 /// `z = σ(gi_z + gh_z)` (here `gh_n` already holds `U_n (r ⊙ h) + b_hn`).
 pub fn paper_state_update(gi: &[f32], gh: &[f32], h: &mut [f32], batch: usize, hidden: usize) {
-    run(Update::PaperState, gi, gh, &[], h, batch, hidden);
+    run(
+        Operands::new(Update::PaperState, gi, gh, &[], batch, hidden),
+        h,
+        batch,
+    );
 }
 
 /// PyTorch convention: `h[b] = (1 - z) ⊙ tanh(gi_n + r ⊙ gh_n) + z ⊙ h[b]`.
 pub fn pytorch_state_update(gi: &[f32], gh: &[f32], h: &mut [f32], batch: usize, hidden: usize) {
-    run(Update::PyTorchState, gi, gh, &[], h, batch, hidden);
-}
-
-/// Splits the rows over the rayon pool when there are enough of them; `read` is the state `h`
-/// for [`Update::ResetTimesHidden`] (whose output is `out`) and unused otherwise (`out` is `h`).
-fn run(
-    update: Update,
-    gi: &[f32],
-    gh: &[f32],
-    read: &[f32],
-    out: &mut [f32],
-    batch: usize,
-    hidden: usize,
-) {
-    let g = 3 * hidden;
-    let (gi, gh, out) = (
-        &gi[..batch * g],
-        &gh[..batch * g],
-        &mut out[..batch * hidden],
+    run(
+        Operands::new(Update::PyTorchState, gi, gh, &[], batch, hidden),
+        h,
+        batch,
     );
-    let read = if read.is_empty() {
-        read
-    } else {
-        &read[..batch * hidden]
-    };
-    let threads = super::parallel::threads();
-    if threads > 1 && batch >= 2 && batch * hidden >= PARALLEL_MIN_ELEMENTS {
-        let rows = batch.div_ceil(threads);
-        out.par_chunks_mut(rows * hidden)
-            .enumerate()
-            .for_each(|(c, out)| {
-                let start = c * rows;
-                let n = out.len() / hidden;
-                let read = if read.is_empty() {
-                    read
-                } else {
-                    &read[start * hidden..(start + n) * hidden]
-                };
-                rows_dispatch(
-                    update,
-                    &gi[start * g..(start + n) * g],
-                    &gh[start * g..(start + n) * g],
-                    read,
-                    out,
-                    hidden,
-                );
-            });
-    } else {
-        rows_dispatch(update, gi, gh, read, out, hidden);
-    }
 }
 
-/// The read-only operands of one row range.
+/// The read-only operands of a range of rows: `read` is the state `h` for
+/// [`Update::ResetTimesHidden`] (whose output is another buffer) and empty otherwise (the output
+/// is `h` itself).
 #[derive(Clone, Copy)]
 struct Operands<'a> {
     update: Update,
@@ -158,22 +119,59 @@ struct Operands<'a> {
     hidden: usize,
 }
 
+impl<'a> Operands<'a> {
+    /// The first `batch` rows of each operand.
+    fn new(
+        update: Update,
+        gi: &'a [f32],
+        gh: &'a [f32],
+        read: &'a [f32],
+        batch: usize,
+        hidden: usize,
+    ) -> Self {
+        Self {
+            update,
+            gi,
+            gh,
+            read,
+            hidden,
+        }
+        .rows(0, batch)
+    }
+
+    /// Rows `start .. start + n`.
+    fn rows(self, start: usize, n: usize) -> Self {
+        let (g, h) = (3 * self.hidden, self.hidden);
+        Self {
+            gi: &self.gi[start * g..(start + n) * g],
+            gh: &self.gh[start * g..(start + n) * g],
+            read: if self.read.is_empty() {
+                self.read
+            } else {
+                &self.read[start * h..(start + n) * h]
+            },
+            ..self
+        }
+    }
+}
+
+/// Splits the rows over the rayon pool when there are enough of them.
+fn run(ops: Operands<'_>, out: &mut [f32], batch: usize) {
+    let hidden = ops.hidden;
+    let out = &mut out[..batch * hidden];
+    let threads = super::parallel::threads();
+    if threads > 1 && batch >= 2 && batch * hidden >= PARALLEL_MIN_ELEMENTS {
+        let rows = batch.div_ceil(threads);
+        out.par_chunks_mut(rows * hidden)
+            .enumerate()
+            .for_each(|(c, out)| rows_dispatch(ops.rows(c * rows, out.len() / hidden), out));
+    } else {
+        rows_dispatch(ops, out);
+    }
+}
+
 /// The update over consecutive rows, in the widest vector code the CPU runs.
-fn rows_dispatch(
-    update: Update,
-    gi: &[f32],
-    gh: &[f32],
-    read: &[f32],
-    out: &mut [f32],
-    hidden: usize,
-) {
-    let ops = Operands {
-        update,
-        gi,
-        gh,
-        read,
-        hidden,
-    };
+fn rows_dispatch(ops: Operands<'_>, out: &mut [f32]) {
     #[cfg(target_arch = "x86_64")]
     {
         if std::arch::is_x86_feature_detected!("avx512f") {
