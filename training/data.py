@@ -249,9 +249,12 @@ def test_intervals(rows) -> dict[tuple[str, int], list[tuple[int, int]]]:
     return out
 
 
-def free_window_starts(n: int, blocked: list[tuple[int, int]], length: int) -> list[int]:
-    """Non-overlapping window starts (greedy tiling left to right, from MIN_START) of `length` frames in a
-    sequence of n frames that avoid every blocked half-open interval."""
+def free_window_starts(n: int, blocked: list[tuple[int, int]], length: int, stride: int | None = None) -> list[int]:
+    """Window starts (greedy tiling left to right, from MIN_START, every `stride` frames; default `length`, i.e.
+    non-overlapping) of `length` frames in a sequence of n frames that avoid every blocked half-open interval."""
+    stride = length if stride is None else stride
+    if stride < 1:
+        raise ValueError(f"window stride must be >= 1, got {stride}")
     starts = []
     t = MIN_START
     blocked = sorted(blocked)
@@ -261,7 +264,7 @@ def free_window_starts(n: int, blocked: list[tuple[int, int]], length: int) -> l
             t = max(b[1] for b in clash)
             continue
         starts.append(t)
-        t += length
+        t += stride
     return starts
 
 
@@ -276,11 +279,13 @@ class ValidationWindow:
 
 
 def validation_windows(
-    dataset_dir: Path | None = None, actions=ACTIONS, per_action: int = 4, test_rows=None, log=None
+    dataset_dir: Path | None = None, actions=ACTIONS, per_action: int = 4, test_rows=None, log=None,
+    stride: int | None = None,
 ) -> list[ValidationWindow]:
     """Deterministic S5 windows of 150 frames, `per_action` per action (fewer if the free frames do not allow),
-    disjoint from every test window of h36m_test_windows.csv. Candidates are tiled per file; the chosen ones
-    alternate between subactions and are spread evenly over each file's candidates."""
+    disjoint from every test window of h36m_test_windows.csv. Candidates are tiled per file (every `stride`
+    frames; by default windows do not overlap each other); the chosen ones alternate between subactions and are
+    spread evenly over each file's candidates."""
     dataset_dir = Path(dataset_dir) if dataset_dir else default_dataset_dir()
     rows = read_test_windows() if test_rows is None else test_rows
     blocked = test_intervals(rows)
@@ -294,7 +299,7 @@ def validation_windows(
             if (VALIDATION_SUBJECT, a, sub) not in seqs:
                 continue
             s25[sub] = downsample(seqs[(VALIDATION_SUBJECT, a, sub)])
-            cands[sub] = free_window_starts(s25[sub].shape[0], blocked.get((a, sub), []), length)
+            cands[sub] = free_window_starts(s25[sub].shape[0], blocked.get((a, sub), []), length, stride)
         # round-robin over subactions, each file's candidates taken spread out (evenly spaced indices)
         picks: list[tuple[int, int]] = []
         order = {sub: _spread(len(c)) for sub, c in cands.items()}

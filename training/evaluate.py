@@ -145,11 +145,11 @@ def summarize(per_action: dict[str, dict]) -> dict:
 def load_model(path: str):
     """A model from an exported weights file (.safetensors) or a training checkpoint (.pt)."""
     if path.endswith(".pt"):
-        from .train import build_model, load_checkpoint
+        from .train import build_model, checkpoint_weights, load_checkpoint
 
         ck = load_checkpoint(Path(path))
         model = build_model(ck["config"])
-        model.load_state_dict(ck["model"])
+        model.load_state_dict(checkpoint_weights(ck))
         model.eval()
         return model
     from .export import load_weights
@@ -173,6 +173,9 @@ def main(argv=None) -> int:
     p.add_argument("--weights", required=True, nargs="+", help=".safetensors weights or .pt checkpoints")
     p.add_argument("--data-dir", default=None)
     p.add_argument("--val-per-action", type=int, default=4)
+    p.add_argument("--val-stride", type=int, default=None,
+                   help="frames between validation window starts (default 150: no overlap); e.g. 50 with a large "
+                   "--val-per-action gives a denser set for a final choice between candidates")
     p.add_argument("--json", action="store_true")
     args = p.parse_args(argv)
     models = []
@@ -189,7 +192,9 @@ def main(argv=None) -> int:
         dims_used=np.array(first.dims_used, dtype=np.int64),
     )
     data_dir = Path(args.data_dir) if args.data_dir else None
-    windows = h36m.validation_windows(data_dir, actions, args.val_per_action, log=lambda m: None)
+    windows = h36m.validation_windows(
+        data_dir, actions, args.val_per_action, log=lambda m: None, stride=args.val_stride
+    )
     v = Validator(windows, stats, actions, int(first.config["seed_frames"]), int(first.config["horizon"]))
     base = v.baseline()
     results = [v(m) for m in models]

@@ -11,12 +11,18 @@ Checkpoints (atomic) hold model, optimizer and RNG states, so `--resume` continu
 checkpoint with the best validation score (reference-variant NPSS over the S5 validation windows, mean over
 actions; ties broken by Euler error at 80 ms). A blow-up of the closed-loop loss (non-finite, or 10x its
 recent median) rolls back to the last checkpoint and halves the learning rate.
+
+`--ema D` keeps an exponential moving average of the weights (decay D per iteration); validation, `best.pt`
+selection and export then use the averaged weights, which smooth out the iteration-to-iteration wander of the
+closed-loop error. `--branch-from RUN/x.pt` starts a new run from another run's checkpoint (weights, optimizer,
+iteration, RNG), so its lambda and learning-rate schedules continue from there under the new run's settings.
 """
 
 from __future__ import annotations
 
 import argparse
 import collections
+import copy
 import datetime
 import json
 import math
@@ -100,10 +106,15 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--clip", type=float, default=5.0)
     g.add_argument("--blowup-factor", type=float, default=10.0, help="closed-loop loss > this x recent median = blow-up")
     g.add_argument("--max-rollbacks", type=int, default=20, help="stop with an error after this many rollbacks")
+    g.add_argument("--ema", type=float, default=0.0,
+                   help="weight moving-average decay per iteration (0 = off); validation, best.pt and export use it")
     g.add_argument("--seed", type=int, default=1234)
     g = p.add_argument_group("run")
     g.add_argument("--run-dir", default=None)
     g.add_argument("--resume", action="store_true", help="continue from RUN_DIR/last.pt")
+    g.add_argument("--branch-from", default=None, metavar="CHECKPOINT",
+                   help="start this new run from another run's checkpoint (model config, weights, optimizer, "
+                   "iteration and RNG from it; every other setting from this command line)")
     g.add_argument("--log-every", type=int, default=10)
     g.add_argument("--val-every", type=int, default=100)
     g.add_argument("--checkpoint-every", type=int, default=100)
@@ -299,6 +310,11 @@ def load_checkpoint(path: Path) -> dict:
     return torch.load(path, map_location="cpu", weights_only=False)
 
 
+def checkpoint_weights(ck: dict) -> dict:
+    """The state dict a checkpoint's model is validated and exported with: the weight average if the run kept one."""
+    return ck["ema"] if ck.get("ema") is not None else ck["model"]
+
+
 class Logger:
     """Progress lines to stdout and RUN_DIR/train.log; structured records to RUN_DIR/metrics.jsonl."""
 
@@ -357,6 +373,13 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
                 saved[k] = getattr(args, k)
         saved["resume"] = True
         args = argparse.Namespace(**{**vars(args), **saved})
+    branch_state = None
+    if getattr(args, "branch_from", None) and resume_state is None:
+        if ckpt_path.exists():
+            raise SystemExit(f"error: {ckpt_path} exists: --resume it, or branch into a new --run-dir")
+        if not Path(args.branch_from).is_file():
+            raise SystemExit(f"error: --branch-from {args.branch_from} does not exist")
+        branch_state = load_checkpoint(Path(args.branch_from))
     torch.set_num_threads(args.threads)
     log = Logger(run_dir, quiet)
     command = resume_state["command"] if resume_state else "python -m training.train " + shlex.join(argv)
@@ -368,7 +391,14 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
     if val_windows is None:
         val_windows = h36m.validation_windows(args.data_dir, actions, args.val_per_action, log=log)
     validator = Validator(val_windows, dataset.stats, actions, args.seed_frames, args.horizon)
-    config = model_config(args, dataset.stats.dims_used)
+    if branch_state is not None:
+        config = branch_state["config"]  # the model is the parent's; its size flags do not apply
+        if config.get("actions") is not None and list(config["actions"]) != actions:
+            raise SystemExit(f"error: --branch-from model is conditioned on {config['actions']}, not --actions {actions}")
+    elif resume_state is not None:
+        config = resume_state["config"]
+    else:
+        config = model_config(args, dataset.stats.dims_used)
     if resume_state is None:
         torch.manual_seed(args.seed)
     model = build_model(config, dropout=args.dropout)
@@ -381,12 +411,23 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
     # dataset.actions == config["actions"] (both in h36m.md order), so batch action indices are one-hot indices
 
     state = {"iteration": 0, "lr_scale": 1.0, "cl_history": [], "best": None, "best_iteration": None, "rollbacks": 0}
+    parent = None
+    if branch_state is not None:
+        model.load_state_dict(branch_state["model"])
+        opt.load_state_dict(branch_state["optimizer"])
+        for g in opt.param_groups:  # this run's optimiser settings, the parent's running averages
+            g.update(alpha=args.rms_decay, eps=args.rms_eps, momentum=args.momentum)
+        bs = branch_state["state"]
+        state.update(iteration=bs["iteration"], lr_scale=bs["lr_scale"], cl_history=list(bs["cl_history"]))
+        parent = {"checkpoint": str(args.branch_from), "iteration": bs["iteration"], "command": branch_state["command"]}
+        log(f"branched from {args.branch_from} at iteration {bs['iteration']} (parent: {branch_state['command']})")
     if resume_state is not None:
         model.load_state_dict(resume_state["model"])
         opt.load_state_dict(resume_state["optimizer"])
         rng.bit_generator.state = resume_state["np_rng"]
         torch.set_rng_state(resume_state["torch_rng"])
         state = dict(resume_state["state"])
+        parent = resume_state.get("parent")
         log(f"resumed at iteration {state['iteration']} (lr scale {state['lr_scale']}, best {state['best_iteration']})")
     else:
         log(f"model {args.model}: {parameter_count(model):,} parameters; config {json.dumps(config)}")
@@ -394,9 +435,21 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
         log(f"validation zero-velocity: {fmt_val(base)}")
         log.record(kind="baseline", **base)
 
+    # Weight average (--ema): starts from the current weights (or the saved average on resume).
+    ema_model = None
+    if args.ema > 0:
+        ema_model = copy.deepcopy(model).eval()
+        for p_ in ema_model.parameters():
+            p_.requires_grad_(False)
+        saved_ema = (resume_state or branch_state or {}).get("ema")
+        if saved_ema is not None:
+            ema_model.load_state_dict(saved_ema)
+
     def snapshot() -> dict:
         return {
             "model": model.state_dict(),
+            "ema": ema_model.state_dict() if ema_model is not None else None,
+            "parent": parent,
             "optimizer": opt.state_dict(),
             "np_rng": rng.bit_generator.state,
             "torch_rng": torch.get_rng_state(),
@@ -458,6 +511,8 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
             good = load_checkpoint(ckpt_path)
             model.load_state_dict(good["model"])
             opt.load_state_dict(good["optimizer"])
+            if ema_model is not None and good.get("ema") is not None:
+                ema_model.load_state_dict(good["ema"])
             state["iteration"] = good["state"]["iteration"]
             state["lr_scale"] *= 0.5
             log(f"rolled back to it {state['iteration']} ({ckpt_path.name}), lr scale now {state['lr_scale']}")
@@ -467,6 +522,10 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
         total.backward()
         gnorm = float(torch.nn.utils.clip_grad_norm_(model.parameters(), args.clip))
         opt.step()
+        if ema_model is not None:
+            with torch.no_grad():
+                for pe, p_ in zip(ema_model.parameters(), model.parameters()):
+                    pe.lerp_(p_, 1.0 - args.ema)
         state["iteration"] = it
         last_ol, last_cl = ol_v, cl_v
         if lam > 0 and math.isfinite(cl_v):
@@ -487,7 +546,9 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
             acc = {"ol": 0.0, "cl": 0.0, "n": 0, "ncl": 0}
         state["cl_history"] = list(history)
         if it % args.val_every == 0 or it == args.iterations:
-            val = validator(model)
+            val = validator(ema_model if ema_model is not None else model)
+            if ema_model is not None:
+                val["raw_npss_ref"] = validator(model)["npss_ref"]
             is_best = better(val, state["best"])
             if is_best:
                 state["best"] = {k: v for k, v in val.items()}
@@ -507,9 +568,11 @@ def fmt_val(v: dict | None) -> str:
     """One-line validation summary."""
     if not v:
         return "n/a"
+    raw = f" (raw weights {v['raw_npss_ref']:.4f})" if "raw_npss_ref" in v else ""
     s = (
         f"npss_ref {v['npss_ref']:.4f} npss_paper {v['npss_paper']:.4f} "
         f"euler@80 {v['euler_80']:.4f} euler@1000 {v['euler_1000']:.4f} speed {v.get('speed_ratio', float('nan')):.2f}"
+        + raw
     )
     pa = v.get("per_action", {})
     if "walking" in pa:
@@ -527,7 +590,7 @@ def export(out: str, ckpt_file: str, dtype: str, argv: list[str]) -> dict:
 
     ck = load_checkpoint(Path(ckpt_file))
     model = build_model(ck["config"])
-    model.load_state_dict(ck["model"])
+    model.load_state_dict(checkpoint_weights(ck))
     model.eval()
     st = ck["state"]
     args = ck["args"]
@@ -542,6 +605,10 @@ def export(out: str, ckpt_file: str, dtype: str, argv: list[str]) -> dict:
         "seed": int(args["seed"]),
         "checkpoint": os.path.basename(ckpt_file),
     }
+    if ck.get("ema") is not None:
+        prov["weights"] = f"moving average of the training weights, decay {args['ema']} per iteration"
+    if ck.get("parent"):
+        prov["branched_from"] = ck["parent"]
     if best and st.get("best_iteration") == st["iteration"]:
         prov["best_validation"] = {
             "iteration": st["best_iteration"],

@@ -41,6 +41,10 @@ def test_free_window_starts_avoid_blocked_intervals():
         for b0, b1 in blocked:
             assert s + 150 <= b0 or s >= b1
     assert all(b - a >= 150 for a, b in zip(starts, starts[1:])), "windows do not overlap each other"
+    dense = data.free_window_starts(900, blocked, 150, stride=50)
+    assert set(starts) <= set(dense) and len(dense) > len(starts)
+    for s in dense:
+        assert all(s + 150 <= b0 or s >= b1 for b0, b1 in blocked)
 
 
 def test_spread_is_a_permutation():

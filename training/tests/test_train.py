@@ -138,3 +138,32 @@ def test_evaluate_cli_scores_an_exported_file(tmp_path, capsys):
     assert abs(sweep[str(out)]["npss_ref"] - sweep[ckpt]["npss_ref"]) < 1e-9
     assert evaluate.main(["--weights", str(out), ckpt, "--val-per-action", "1"]) == 0
     assert "pick (lowest mean reference NPSS)" in capsys.readouterr().out
+
+
+def test_ema_branch_and_export_use_the_average(tmp_path):
+    ds = synthetic_dataset()
+    sched = ["--schedule-scale", "0.004", "--checkpoint-every", "1"]
+    run(tmp_path / "parent", ["--iterations", "2"] + sched, ds)
+    # the branch continues the parent's iteration count (so its schedules), with its own settings
+    out = run(tmp_path / "child", ["--iterations", "4", "--ema", "0.5", "--branch-from",
+                                   str(tmp_path / "parent" / "last.pt")] + sched, ds)
+    assert out["iteration"] == 4
+    ck = torch.load(tmp_path / "child" / "last.pt", weights_only=False)
+    assert ck["parent"]["iteration"] == 2 and ck["ema"] is not None
+    # the average differs from the raw weights after training steps, and lags them
+    raw, avg = ck["model"], ck["ema"]
+    assert any(not torch.equal(raw[k], avg[k]) for k in raw)
+    assert "raw_npss_ref" in ck["state"]["best"]
+    out_file = tmp_path / "w.safetensors"
+    assert train.main(["--export", str(out_file), "--from", str(tmp_path / "child" / "last.pt"), "--dtype", "float32"]) == 0
+    model = load_weights(out_file)
+    sd = model.state_dict()
+    for k in avg:
+        if k in sd:
+            assert torch.allclose(sd[k].float(), avg[k].float()), k
+    assert model.provenance["branched_from"]["iteration"] == 2
+    # resuming the branch keeps its average; a second branch into an existing run dir is refused
+    resumed = run(tmp_path / "child", ["--resume", "--iterations", "5"], ds)
+    assert resumed["iteration"] == 5
+    with pytest.raises(SystemExit, match="exists"):
+        run(tmp_path / "child", ["--iterations", "6", "--branch-from", str(tmp_path / "parent" / "last.pt")], ds)
