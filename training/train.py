@@ -234,6 +234,8 @@ class Validator:
                  horizon: int = h36m.HORIZON):
         self.actions = [a for a in actions if any(w.action == a for w in windows)]
         self.windows = [w for w in windows if w.action in self.actions]
+        if not self.windows:
+            raise ValueError(f"no validation windows for the actions {actions}")
         self.stats = stats
         full = np.stack([w.frames for w in self.windows])  # [N, 150, F]
         split = h36m.SEED_FRAMES
@@ -390,11 +392,15 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
         dataset = h36m.load_training_set(args.data_dir, actions, log=log)
     if val_windows is None:
         val_windows = h36m.validation_windows(args.data_dir, actions, args.val_per_action, log=log)
-    validator = Validator(val_windows, dataset.stats, actions, args.seed_frames, args.horizon)
+    try:
+        validator = Validator(val_windows, dataset.stats, actions, args.seed_frames, args.horizon)
+    except ValueError as e:
+        raise SystemExit(f"error: {e}") from None
     if branch_state is not None:
         config = branch_state["config"]  # the model is the parent's; its size flags do not apply
-        if config.get("actions") is not None and list(config["actions"]) != actions:
-            raise SystemExit(f"error: --branch-from model is conditioned on {config['actions']}, not --actions {actions}")
+        missing = [a for a in actions if config.get("actions") is not None and a not in config["actions"]]
+        if missing:
+            raise SystemExit(f"error: --branch-from model is conditioned on {config['actions']}, not on {missing}")
     elif resume_state is not None:
         config = resume_state["config"]
     else:
@@ -408,7 +414,12 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
     model.train()
     opt = make_optimizer(model, args)
     rng = np.random.default_rng(args.seed)
-    # dataset.actions == config["actions"] (both in h36m.md order), so batch action indices are one-hot indices
+    # Batch action indices index dataset.actions; the model's one-hot indexes config["actions"]. They are the same
+    # list except when a branch fine-tunes a multi-action model on some of its actions.
+    label_map = np.array(
+        [config["actions"].index(a) for a in dataset.actions] if config.get("actions") else [0] * len(dataset.actions),
+        dtype=np.int64,
+    )
 
     state = {"iteration": 0, "lr_scale": 1.0, "cl_history": [], "best": None, "best_iteration": None, "rollbacks": 0}
     parent = None
@@ -477,7 +488,7 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
             g["lr"] = lr
         frames_np, acts_np = dataset.sample_batch(rng, args.batch, seed_frames + horizon + 1)
         frames = torch.from_numpy(frames_np)
-        acts = torch.from_numpy(acts_np)
+        acts = torch.from_numpy(label_map[acts_np])
         if args.loss == "auto-conditioning":
             ol_loss = auto_conditioning_loss(model, frames, acts, seed_frames, horizon, args.ac_length)
             cl_loss = torch.tensor(float("nan"))

@@ -167,3 +167,34 @@ def test_ema_branch_and_export_use_the_average(tmp_path):
     assert resumed["iteration"] == 5
     with pytest.raises(SystemExit, match="exists"):
         run(tmp_path / "child", ["--iterations", "6", "--branch-from", str(tmp_path / "parent" / "last.pt")], ds)
+
+
+def test_branch_fine_tunes_a_multi_action_model_on_one_action(tmp_path, monkeypatch):
+    ds = synthetic_dataset()
+    sched = ["--schedule-scale", "0.004", "--checkpoint-every", "1"]
+    run(tmp_path / "parent", ["--iterations", "2"] + sched, ds)
+    walking = data.TrainingSet(actions=("walking",), stats=ds[0].stats,
+                               by_action=[ds[0].by_action[data.ACTIONS.index("walking")]])
+    wins = [data.ValidationWindow(action="walking", subaction=1, start=0, frames=ds[1][0].frames)]
+    argv = ["--run-dir", str(tmp_path / "walk")] + SMALL + ["--iterations", "4", "--actions", "walking",
+                                                          "--branch-from", str(tmp_path / "parent" / "last.pt")] + sched
+    args = train.build_parser().parse_args(argv)
+    labels = []
+    real_terms = train.multi_objective_terms
+    def spy(model, frames, actions, *a):
+        labels.append(actions.clone())
+        return real_terms(model, frames, actions, *a)
+    monkeypatch.setattr(train, "multi_objective_terms", spy)
+    out = train.train(args, argv, dataset=walking, val_windows=wins, quiet=True)
+    assert out["iteration"] == 4 and labels
+    # the one-hot the model sees is walking's index among its 15 labels, not the dataset's index 0
+    assert all((l == data.ACTIONS.index("walking")).all() for l in labels)
+    ck = torch.load(tmp_path / "walk" / "last.pt", weights_only=False)
+    assert ck["config"]["actions"] == list(data.ACTIONS)  # still the 15-label model
+    assert list(ck["state"]["best"]["per_action"]) == ["walking"]
+    # a model conditioned on walking alone cannot be fine-tuned on smoking
+    run(tmp_path / "walk_only", ["--iterations", "1", "--actions", "walking"], (walking, wins))
+    smoke_wins = [data.ValidationWindow(action="smoking", subaction=1, start=0, frames=ds[1][0].frames)]
+    with pytest.raises(SystemExit, match="conditioned"):
+        run(tmp_path / "bad", ["--iterations", "3", "--actions", "smoking", "--branch-from",
+                               str(tmp_path / "walk_only" / "last.pt")], (ds[0], smoke_wins))
