@@ -14,8 +14,10 @@ recent median) rolls back to the last checkpoint and halves the learning rate.
 
 `--ema D` keeps an exponential moving average of the weights (decay D per iteration); validation, `best.pt`
 selection and export then use the averaged weights, which smooth out the iteration-to-iteration wander of the
-closed-loop error. `--branch-from RUN/x.pt` starts a new run from another run's checkpoint (weights, optimizer,
-iteration, RNG), so its lambda and learning-rate schedules continue from there under the new run's settings.
+closed-loop error. `--branch-from RUN/x.pt` starts a new run from another run's checkpoint (its weights, or their
+average if it kept one; optimizer state; iteration), so the lambda and learning-rate schedules continue from there
+under the new run's settings and seed. With `--actions` naming some of a multi-action model's actions, the branch
+fine-tunes it on them (the model keeps all its labels).
 """
 
 from __future__ import annotations
@@ -88,6 +90,8 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--data-dir", default=None, help="H3.6M dataset dir (default $MOTION_DATA_DIR/h3.6m/dataset)")
     g.add_argument("--actions", default="all", help="'all' or comma-separated action labels")
     g.add_argument("--val-per-action", type=int, default=4)
+    g.add_argument("--val-stride", type=int, default=None,
+                   help="frames between validation window starts (default: windows do not overlap)")
     g.add_argument("--seed-frames", type=int, default=h36m.SEED_FRAMES, help="seed length S of training windows")
     g.add_argument("--horizon", type=int, default=h36m.HORIZON, help="predicted frames T of training windows")
     g = p.add_argument_group("optimisation")
@@ -391,7 +395,9 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
     if dataset is None:
         dataset = h36m.load_training_set(args.data_dir, actions, log=log)
     if val_windows is None:
-        val_windows = h36m.validation_windows(args.data_dir, actions, args.val_per_action, log=log)
+        val_windows = h36m.validation_windows(
+            args.data_dir, actions, args.val_per_action, log=log, stride=getattr(args, "val_stride", None)
+        )
     try:
         validator = Validator(val_windows, dataset.stats, actions, args.seed_frames, args.horizon)
     except ValueError as e:
@@ -424,7 +430,7 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
     state = {"iteration": 0, "lr_scale": 1.0, "cl_history": [], "best": None, "best_iteration": None, "rollbacks": 0}
     parent = None
     if branch_state is not None:
-        model.load_state_dict(branch_state["model"])
+        model.load_state_dict(checkpoint_weights(branch_state))  # the parent's average if it kept one
         opt.load_state_dict(branch_state["optimizer"])
         for g in opt.param_groups:  # this run's optimiser settings, the parent's running averages
             g.update(alpha=args.rms_decay, eps=args.rms_eps, momentum=args.momentum)
@@ -452,7 +458,7 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
         ema_model = copy.deepcopy(model).eval()
         for p_ in ema_model.parameters():
             p_.requires_grad_(False)
-        saved_ema = (resume_state or branch_state or {}).get("ema")
+        saved_ema = (resume_state or {}).get("ema")  # a branch starts its average at its (averaged) start weights
         if saved_ema is not None:
             ema_model.load_state_dict(saved_ema)
 
