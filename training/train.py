@@ -42,6 +42,7 @@ from . import data as h36m
 from . import evaluate
 from .features import DerivativeHistory
 from .models import build_model, make_config, parameter_count
+from .spectral import spectral_loss
 
 CHECKPOINT = "last.pt"
 BEST = "best.pt"
@@ -99,6 +100,9 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--batch", type=int, default=32)
     g.add_argument("--loss", default="multi-objective", choices=["multi-objective", "auto-conditioning"])
     g.add_argument("--ac-length", type=int, default=5, help="auto-conditioning: ground-truth/self-fed block length")
+    g.add_argument("--spectral-weight", type=float, default=0.0,
+                   help="adds this x the closed loop's NPSS (reference variant, on Euler angles) to the loss "
+                   "while lambda > 0; 0 = the paper's loss")
     g.add_argument("--schedule-scale", type=float, default=1.0, help="scales the lambda and lr step iterations")
     g.add_argument("--lr", type=float, default=2e-4)
     g.add_argument("--lr-decay", type=float, default=0.6)
@@ -191,8 +195,10 @@ def sample_eps(model, batch: int) -> torch.Tensor | None:
     return None
 
 
-def multi_objective_terms(model, frames: torch.Tensor, actions: torch.Tensor, seed_frames: int, horizon: int):
-    """Open-loop mean squared error over all steps and closed-loop mean squared error over the horizon.
+def multi_objective_terms(model, frames: torch.Tensor, actions: torch.Tensor, seed_frames: int, horizon: int,
+                          spectral: bool = False):
+    """Open-loop mean squared error over all steps and closed-loop mean squared error over the horizon; with
+    `spectral`, also the closed loop's NPSS (reference variant, `training/spectral.py`), else None.
 
     frames [B, seed+horizon+1, O]: open loop reads frames 0..S+T-1 and predicts 1..S+T; the closed loop is
     seeded with 0..S-1 and predicts S..S+T-1 from its own outputs. The plan covers S+T steps in both."""
@@ -202,7 +208,8 @@ def multi_objective_terms(model, frames: torch.Tensor, actions: torch.Tensor, se
     ol_loss = ((ol - frames[:, 1 : steps + 1]) ** 2).mean()
     cl = model.closed_loop(frames[:, :seed_frames], horizon, actions, eps)
     cl_loss = ((cl - frames[:, seed_frames:steps]) ** 2).mean()
-    return ol_loss, cl_loss
+    spec = spectral_loss(model, cl, frames[:, seed_frames:steps]) if spectral else None
+    return ol_loss, cl_loss, spec
 
 
 def auto_conditioning_loss(model, frames: torch.Tensor, actions: torch.Tensor, seed_frames: int, horizon: int, length: int):
@@ -500,8 +507,12 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
             cl_loss = torch.tensor(float("nan"))
             total = ol_loss
         elif lam > 0:
-            ol_loss, cl_loss = multi_objective_terms(model, frames, acts, seed_frames, horizon)
+            w_spec = getattr(args, "spectral_weight", 0.0)
+            ol_loss, cl_loss, spec = multi_objective_terms(model, frames, acts, seed_frames, horizon, w_spec > 0)
             total = ol_loss + lam * cl_loss
+            if spec is not None:
+                total = total + w_spec * spec
+                acc["spec"] = acc.get("spec", 0.0) + spec.item()
         else:
             steps = seed_frames + horizon
             eps = sample_eps(model, frames.shape[0])
@@ -558,8 +569,12 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
             t_last = now
             mol = acc["ol"] / max(1, acc["n"])
             mcl = acc["cl"] / acc["ncl"] if acc["ncl"] else float("nan")
-            log(f"it {it:6d} open-loop {mol:.5f} closed-loop {mcl:.5f} lambda {lam:.1f} lr {lr:.3g} |g| {gnorm:.3g} {spi:.2f} s/it")
-            log.record(kind="train", iteration=it, ol=mol, cl=mcl, lam=lam, lr=lr, grad_norm=gnorm, s_per_it=spi)
+            extra, rec = "", {}
+            if "spec" in acc:
+                rec["spectral"] = acc["spec"] / max(1, acc["ncl"])
+                extra = f" npss {rec['spectral']:.4f}"
+            log(f"it {it:6d} open-loop {mol:.5f} closed-loop {mcl:.5f}{extra} lambda {lam:.1f} lr {lr:.3g} |g| {gnorm:.3g} {spi:.2f} s/it")
+            log.record(kind="train", iteration=it, ol=mol, cl=mcl, lam=lam, lr=lr, grad_norm=gnorm, s_per_it=spi, **rec)
             acc = {"ol": 0.0, "cl": 0.0, "n": 0, "ncl": 0}
         state["cl_history"] = list(history)
         if it % args.val_every == 0 or it == args.iterations:

@@ -198,3 +198,15 @@ def test_branch_fine_tunes_a_multi_action_model_on_one_action(tmp_path, monkeypa
     with pytest.raises(SystemExit, match="conditioned"):
         run(tmp_path / "bad", ["--iterations", "3", "--actions", "smoking", "--branch-from",
                                str(tmp_path / "walk_only" / "last.pt")], (ds[0], smoke_wins))
+
+
+def test_spectral_weight_adds_the_closed_loop_npss_to_the_loss(tmp_path):
+    import json
+
+    ds = synthetic_dataset()
+    extra = ["--iterations", "3", "--schedule-scale", "0.004", "--spectral-weight", "0.5"]
+    out = run(tmp_path / "spec", extra, ds)
+    assert out["iteration"] == 3
+    recs = [json.loads(l) for l in open(tmp_path / "spec" / "metrics.jsonl")]
+    spec = [r["spectral"] for r in recs if r["kind"] == "train" and "spectral" in r]
+    assert spec and all(np.isfinite(spec)) and all(0 < v < 10 for v in spec)
