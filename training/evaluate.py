@@ -142,6 +142,22 @@ def summarize(per_action: dict[str, dict]) -> dict:
     }
 
 
+def paired_bootstrap(gt_euler: np.ndarray, preds_euler: list[np.ndarray], window_actions: list[str], reps: int,
+                     seed: int = 0) -> np.ndarray:
+    """Mean-over-actions reference NPSS of every prediction set under `reps` bootstrap resamples of the windows
+    (drawn with replacement within each action, the same draw for every prediction set, so differences are
+    paired). Inputs: Euler sequences [N, T, D]; returns [reps, len(preds_euler)]."""
+    acts = sorted(set(window_actions))
+    idx = {a: np.array([i for i, w in enumerate(window_actions) if w == a]) for a in acts}
+    rng = np.random.default_rng(seed)
+    out = np.empty((reps, len(preds_euler)))
+    for r in range(reps):
+        sel = {a: rng.choice(idx[a], size=len(idx[a]), replace=True) for a in acts}
+        for j, pe in enumerate(preds_euler):
+            out[r, j] = np.mean([npss(gt_euler[sel[a]], pe[sel[a]], "reference") for a in acts])
+    return out
+
+
 def load_model(path: str):
     """A model from an exported weights file (.safetensors) or a training checkpoint (.pt)."""
     if path.endswith(".pt"):
@@ -176,6 +192,9 @@ def main(argv=None) -> int:
     p.add_argument("--val-stride", type=int, default=None,
                    help="frames between validation window starts (default 150: no overlap); e.g. 50 with a large "
                    "--val-per-action gives a denser set for a final choice between candidates")
+    p.add_argument("--bootstrap", type=int, default=0, metavar="REPS",
+                   help="with several files: paired bootstrap over the windows (REPS resamples) of each file's mean "
+                   "reference NPSS minus the first file's: 95%% interval and how often it is lower")
     p.add_argument("--json", action="store_true")
     args = p.parse_args(argv)
     models = []
@@ -212,6 +231,15 @@ def main(argv=None) -> int:
             print(f"{path}: {fmt_val(res)}")
         best = min(range(len(models)), key=lambda i: results[i]["npss_ref"])
         print(f"pick (lowest mean reference NPSS): {args.weights[best]}")
+        if args.bootstrap > 0:
+            ge = to_euler(v.gt_full)
+            boots = paired_bootstrap(ge, [to_euler(v.predict(m)) for m in models], v.window_actions, args.bootstrap)
+            print(f"paired bootstrap over the windows ({args.bootstrap} resamples), mean reference NPSS minus "
+                  f"{args.weights[0]}'s:")
+            for j, path in enumerate(args.weights[1:], start=1):
+                d = boots[:, j] - boots[:, 0]
+                print(f"  {path}: {results[j]['npss_ref'] - results[0]['npss_ref']:+.4f}, 95% interval "
+                      f"[{np.percentile(d, 2.5):+.4f}, {np.percentile(d, 97.5):+.4f}], lower in {np.mean(d < 0):.0%}")
         return 0
     res = results[0]
     print(f"model:         {fmt_val(res)}")

@@ -259,8 +259,12 @@ class Validator:
         """Zero-velocity scores of the same windows."""
         return self._score(evaluate.zero_velocity(self.seed_full, self.gt_full.shape[1]))
 
-    @torch.no_grad()
     def __call__(self, model) -> dict:
+        return self._score(self.predict(model))
+
+    @torch.no_grad()
+    def predict(self, model) -> np.ndarray:
+        """The model's closed-loop predictions of every window's horizon, full frames [N, horizon, F] (eps = 0)."""
         was_training = model.training
         model.eval()
         try:
@@ -272,7 +276,7 @@ class Validator:
             pred = model.closed_loop(self.seed_norm, horizon, acts, eps).double().numpy()
         finally:
             model.train(was_training)
-        return self._score(self.stats.unnormalize(pred))
+        return self.stats.unnormalize(pred)
 
     def _score(self, pred_full: np.ndarray) -> dict:
         per_action = {}

@@ -36,3 +36,16 @@ def test_npss_matches_the_evaluation_code_and_has_finite_gradients():
     assert torch.isfinite(p.grad).all() and p.grad.abs().sum() > 0
     # a perfect prediction scores 0
     assert spectral.npss_reference(torch.from_numpy(ge), torch.from_numpy(ge)).item() < 1e-12
+
+
+def test_paired_bootstrap_orders_a_better_and_a_worse_prediction():
+    rng = np.random.default_rng(2)
+    gt = evaluate.to_euler(random_frames(rng, n=12))
+    acts = ["walking"] * 6 + ["eating"] * 6
+    close = gt + rng.normal(scale=0.01, size=gt.shape)
+    far = gt + rng.normal(scale=0.5, size=gt.shape)
+    boots = evaluate.paired_bootstrap(gt, [close, far, close], acts, reps=50)
+    assert boots.shape == (50, 3)
+    assert (boots[:, 1] > boots[:, 0]).all()  # the noisier prediction is worse in every resample
+    assert np.array_equal(boots[:, 2], boots[:, 0])  # the same prediction, the same draw: paired
+    assert np.isfinite(boots).all()
