@@ -13,8 +13,8 @@ from __future__ import annotations
 
 import torch
 
-#: float32 epsilon of the evaluation code's expmap2rotmat.
-EXPMAP_EPS = 1.1920929e-07
+from .evaluate import EXPMAP_EPS
+
 _TINY = 1e-12
 
 

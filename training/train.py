@@ -121,8 +121,8 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--run-dir", default=None)
     g.add_argument("--resume", action="store_true", help="continue from RUN_DIR/last.pt")
     g.add_argument("--branch-from", default=None, metavar="CHECKPOINT",
-                   help="start this new run from another run's checkpoint (model config, weights, optimizer, "
-                   "iteration and RNG from it; every other setting from this command line)")
+                   help="start this new run from another run's checkpoint (model config, weights, optimizer state and "
+                   "iteration from it; every other setting, and the RNG seed, from this command line)")
     g.add_argument("--log-every", type=int, default=10)
     g.add_argument("--val-every", type=int, default=100)
     g.add_argument("--checkpoint-every", type=int, default=100)
@@ -391,7 +391,7 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
         saved["resume"] = True
         args = argparse.Namespace(**{**vars(args), **saved})
     branch_state = None
-    if getattr(args, "branch_from", None) and resume_state is None:
+    if args.branch_from and resume_state is None:
         if ckpt_path.exists():
             raise SystemExit(f"error: {ckpt_path} exists: --resume it, or branch into a new --run-dir")
         if not Path(args.branch_from).is_file():
@@ -407,7 +407,7 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
         dataset = h36m.load_training_set(args.data_dir, actions, log=log)
     if val_windows is None:
         val_windows = h36m.validation_windows(
-            args.data_dir, actions, args.val_per_action, log=log, stride=getattr(args, "val_stride", None)
+            args.data_dir, actions, args.val_per_action, log=log, stride=args.val_stride
         )
     try:
         validator = Validator(val_windows, dataset.stats, actions, args.seed_frames, args.horizon)
@@ -511,7 +511,7 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
             cl_loss = torch.tensor(float("nan"))
             total = ol_loss
         elif lam > 0:
-            w_spec = getattr(args, "spectral_weight", 0.0)
+            w_spec = args.spectral_weight
             ol_loss, cl_loss, spec = multi_objective_terms(model, frames, acts, seed_frames, horizon, w_spec > 0)
             total = ol_loss + lam * cl_loss
             if spec is not None:
