@@ -183,13 +183,13 @@ def main(argv=None) -> int:
     import sys
 
     from . import data as h36m
-    from .train import Validator, fmt_val
+    from .train import Validator, fmt_val, positive_int
 
     p = argparse.ArgumentParser(prog="python -m training.evaluate", description=main.__doc__)
     p.add_argument("--weights", required=True, nargs="+", help=".safetensors weights or .pt checkpoints")
     p.add_argument("--data-dir", default=None)
     p.add_argument("--val-per-action", type=int, default=4)
-    p.add_argument("--val-stride", type=int, default=None,
+    p.add_argument("--val-stride", type=positive_int, default=None,
                    help="frames between validation window starts (default 150: no overlap); e.g. 50 with a large "
                    "--val-per-action gives a denser set for a final choice between candidates")
     p.add_argument("--bootstrap", type=int, default=0, metavar="REPS",
@@ -216,7 +216,8 @@ def main(argv=None) -> int:
     )
     v = Validator(windows, stats, actions, int(first.config["seed_frames"]), int(first.config["horizon"]))
     base = v.baseline()
-    results = [v(m) for m in models]
+    preds = [v.predict(m) for m in models]
+    results = [v.score(pred) for pred in preds]
     if args.json:
         out = {"zero_velocity": base, "windows": len(v.windows)}
         if len(models) == 1:
@@ -233,7 +234,7 @@ def main(argv=None) -> int:
         print(f"pick (lowest mean reference NPSS): {args.weights[best]}")
         if args.bootstrap > 0:
             ge = to_euler(v.gt_full)
-            boots = paired_bootstrap(ge, [to_euler(v.predict(m)) for m in models], v.window_actions, args.bootstrap)
+            boots = paired_bootstrap(ge, [to_euler(pred) for pred in preds], v.window_actions, args.bootstrap)
             print(f"paired bootstrap over the windows ({args.bootstrap} resamples), mean reference NPSS minus "
                   f"{args.weights[0]}'s:")
             for j, path in enumerate(args.weights[1:], start=1):

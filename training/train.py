@@ -76,6 +76,14 @@ def lr_at(iteration: int, base: float, decay: float, every: int) -> float:
 # ------------------------------------------------------------------------------------------ arguments
 
 
+def positive_int(text: str) -> int:
+    """argparse type: an integer >= 1."""
+    value = int(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be >= 1, got {value}")
+    return value
+
+
 def build_parser() -> argparse.ArgumentParser:
     """All command-line flags."""
     p = argparse.ArgumentParser(prog="python -m training.train", description=__doc__.split("\n\n")[0])
@@ -91,7 +99,7 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--data-dir", default=None, help="H3.6M dataset dir (default $MOTION_DATA_DIR/h3.6m/dataset)")
     g.add_argument("--actions", default="all", help="'all' or comma-separated action labels")
     g.add_argument("--val-per-action", type=int, default=4)
-    g.add_argument("--val-stride", type=int, default=None,
+    g.add_argument("--val-stride", type=positive_int, default=None,
                    help="frames between validation window starts (default: windows do not overlap)")
     g.add_argument("--seed-frames", type=int, default=h36m.SEED_FRAMES, help="seed length S of training windows")
     g.add_argument("--horizon", type=int, default=h36m.HORIZON, help="predicted frames T of training windows")
@@ -257,10 +265,10 @@ class Validator:
 
     def baseline(self) -> dict:
         """Zero-velocity scores of the same windows."""
-        return self._score(evaluate.zero_velocity(self.seed_full, self.gt_full.shape[1]))
+        return self.score(evaluate.zero_velocity(self.seed_full, self.gt_full.shape[1]))
 
     def __call__(self, model) -> dict:
-        return self._score(self.predict(model))
+        return self.score(self.predict(model))
 
     @torch.no_grad()
     def predict(self, model) -> np.ndarray:
@@ -278,7 +286,8 @@ class Validator:
             model.train(was_training)
         return self.stats.unnormalize(pred)
 
-    def _score(self, pred_full: np.ndarray) -> dict:
+    def score(self, pred_full: np.ndarray) -> dict:
+        """Protocol scores of full-frame predictions [N, horizon, F] of these windows (per action and mean)."""
         per_action = {}
         for a in self.actions:
             idx = [i for i, wa in enumerate(self.window_actions) if wa == a]
@@ -396,7 +405,12 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
             raise SystemExit(f"error: {ckpt_path} exists: --resume it, or branch into a new --run-dir")
         if not Path(args.branch_from).is_file():
             raise SystemExit(f"error: --branch-from {args.branch_from} does not exist")
-        branch_state = load_checkpoint(Path(args.branch_from))
+        try:
+            branch_state = load_checkpoint(Path(args.branch_from))
+        except Exception as e:  # torch.load raises many types for a file that is not a checkpoint
+            raise SystemExit(f"error: --branch-from {args.branch_from}: not a training checkpoint ({e})") from None
+        if not all(k in branch_state for k in ("model", "optimizer", "state", "config", "command")):
+            raise SystemExit(f"error: --branch-from {args.branch_from}: not a checkpoint of training.train")
     torch.set_num_threads(args.threads)
     log = Logger(run_dir, quiet)
     command = resume_state["command"] if resume_state else "python -m training.train " + shlex.join(argv)

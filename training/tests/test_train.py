@@ -210,3 +210,14 @@ def test_spectral_weight_adds_the_closed_loop_npss_to_the_loss(tmp_path):
     recs = [json.loads(l) for l in open(tmp_path / "spec" / "metrics.jsonl")]
     spec = [r["spectral"] for r in recs if r["kind"] == "train" and "spectral" in r]
     assert spec and all(np.isfinite(spec)) and all(0 < v < 10 for v in spec)
+
+
+def test_branch_from_a_file_that_is_not_a_checkpoint_is_a_clear_error(tmp_path):
+    ds = synthetic_dataset()
+    bad = tmp_path / "not_a_checkpoint.pt"
+    bad.write_bytes(b"hello")
+    with pytest.raises(SystemExit, match="not a training checkpoint"):
+        run(tmp_path / "child", ["--iterations", "1", "--branch-from", str(bad)], ds)
+    assert not (tmp_path / "child" / "last.pt").exists()
+    with pytest.raises(SystemExit):
+        train.build_parser().parse_args(["--val-stride", "0"])
