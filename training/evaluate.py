@@ -195,6 +195,9 @@ def main(argv=None) -> int:
     p.add_argument("--bootstrap", type=int, default=0, metavar="REPS",
                    help="with several files: paired bootstrap over the windows (REPS resamples) of each file's mean "
                    "reference NPSS minus the first file's: 95%% interval and how often it is lower")
+    p.add_argument("--noise-seed", type=int, default=None, metavar="N",
+                   help="sample the plan noise eps ~ N(0, I) per window from seed N, as `motion-cli eval` does "
+                   "(default: eps = 0, the plan's mean)")
     p.add_argument("--json", action="store_true")
     args = p.parse_args(argv)
     models = []
@@ -216,7 +219,7 @@ def main(argv=None) -> int:
     )
     v = Validator(windows, stats, actions, int(first.config["seed_frames"]), int(first.config["horizon"]))
     base = v.baseline()
-    preds = [v.predict(m) for m in models]
+    preds = [v.predict(m, args.noise_seed) for m in models]
     results = [v.score(pred) for pred in preds]
     if args.json:
         out = {"zero_velocity": base, "windows": len(v.windows)}

@@ -111,6 +111,9 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--spectral-weight", type=float, default=0.0,
                    help="adds this x the closed loop's NPSS (reference variant, on Euler angles) to the loss "
                    "while lambda > 0; 0 = the paper's loss")
+    g.add_argument("--spectral-balance", type=float, default=0.0, metavar="R",
+                   help="instead of a fixed --spectral-weight: each iteration, scale the spectral term's gradient to "
+                   "R x the norm of the squared-error terms' gradient (one more backward pass through the closed loop)")
     g.add_argument("--schedule-scale", type=float, default=1.0, help="scales the lambda and lr step iterations")
     g.add_argument("--lr", type=float, default=2e-4)
     g.add_argument("--lr-decay", type=float, default=0.6)
@@ -124,6 +127,9 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--max-rollbacks", type=int, default=20, help="stop with an error after this many rollbacks")
     g.add_argument("--ema", type=float, default=0.0,
                    help="weight moving-average decay per iteration (0 = off); validation, best.pt and export use it")
+    g.add_argument("--ema-start", type=int, default=0, metavar="IT",
+                   help="with --ema: before this iteration the average just follows the weights (a fresh run's first "
+                   "iterations would otherwise stay in the average for thousands of iterations)")
     g.add_argument("--seed", type=int, default=1234)
     g = p.add_argument_group("run")
     g.add_argument("--run-dir", default=None)
@@ -240,6 +246,24 @@ def auto_conditioning_loss(model, frames: torch.Tensor, actions: torch.Tensor, s
     return ((pred - frames[:, 1 : steps + 1]) ** 2).mean()
 
 
+def balanced_backward(model, mse: torch.Tensor, spec: torch.Tensor, ratio: float) -> float:
+    """Sets the parameters' gradients to grad(mse) + w grad(spec) with w chosen so that |w grad(spec)| = ratio
+    |grad(mse)| (global L2 norms): the spectral term then steers the update without taking it over, however its
+    scale drifts during training (a fixed weight of 0.25 gave it 5-10x the squared error's gradient norm).
+    Returns the effective weight w."""
+    params = [p for p in model.parameters() if p.requires_grad]
+    g_mse = torch.autograd.grad(mse, params, retain_graph=True, allow_unused=True)
+    g_spec = torch.autograd.grad(spec, params, allow_unused=True)
+    g_mse = [torch.zeros_like(p) if g is None else g for p, g in zip(params, g_mse)]
+    g_spec = [torch.zeros_like(p) if g is None else g for p, g in zip(params, g_spec)]
+    n_mse = torch.sqrt(sum((g.double() ** 2).sum() for g in g_mse))
+    n_spec = torch.sqrt(sum((g.double() ** 2).sum() for g in g_spec))
+    w = float(ratio * n_mse / n_spec) if float(n_spec) > 0 else 0.0
+    for p, a, b in zip(params, g_mse, g_spec):
+        p.grad = a + w * b
+    return w
+
+
 # ------------------------------------------------------------------------------------------ validation
 
 
@@ -271,8 +295,10 @@ class Validator:
         return self.score(self.predict(model))
 
     @torch.no_grad()
-    def predict(self, model) -> np.ndarray:
-        """The model's closed-loop predictions of every window's horizon, full frames [N, horizon, F] (eps = 0)."""
+    def predict(self, model, noise_seed: int | None = None) -> np.ndarray:
+        """The model's closed-loop predictions of every window's horizon, full frames [N, horizon, F]. The plan noise
+        is eps = 0 by default; with `noise_seed`, one eps ~ N(0, I) per window drawn from that seed (what
+        `motion-cli eval` does, which samples the plan noise)."""
         was_training = model.training
         model.eval()
         try:
@@ -280,7 +306,12 @@ class Validator:
             acts = torch.tensor(
                 [model.actions.index(a) for a in self.window_actions] if model.actions else [0] * len(self.windows)
             )
-            eps = torch.zeros(len(self.windows), model.plan_size) if hasattr(model, "plan") else None
+            eps = None
+            if hasattr(model, "plan"):
+                eps = torch.zeros(len(self.windows), model.plan_size)
+                if noise_seed is not None:
+                    gen = torch.Generator().manual_seed(noise_seed)
+                    eps = torch.randn(len(self.windows), model.plan_size, generator=gen)
             pred = model.closed_loop(self.seed_norm, horizon, acts, eps).double().numpy()
         finally:
             model.train(was_training)
@@ -520,16 +551,19 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
         frames_np, acts_np = dataset.sample_batch(rng, args.batch, seed_frames + horizon + 1)
         frames = torch.from_numpy(frames_np)
         acts = torch.from_numpy(label_map[acts_np])
+        spec = None
         if args.loss == "auto-conditioning":
             ol_loss = auto_conditioning_loss(model, frames, acts, seed_frames, horizon, args.ac_length)
             cl_loss = torch.tensor(float("nan"))
             total = ol_loss
         elif lam > 0:
             w_spec = args.spectral_weight
-            ol_loss, cl_loss, spec = multi_objective_terms(model, frames, acts, seed_frames, horizon, w_spec > 0)
+            want_spec = w_spec > 0 or args.spectral_balance > 0
+            ol_loss, cl_loss, spec = multi_objective_terms(model, frames, acts, seed_frames, horizon, want_spec)
             total = ol_loss + lam * cl_loss
             if spec is not None:
-                total = total + w_spec * spec
+                if args.spectral_balance <= 0:
+                    total = total + w_spec * spec
                 acc["spec"] = acc.get("spec", 0.0) + spec.item()
         else:
             steps = seed_frames + horizon
@@ -565,13 +599,17 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
             log.record(kind="rollback", iteration=it, to=state["iteration"], ol=ol_v, cl=cl_v, lr_scale=state["lr_scale"])
             continue
         opt.zero_grad(set_to_none=True)
-        total.backward()
+        if spec is not None and args.spectral_balance > 0:
+            acc["w_spec"] = acc.get("w_spec", 0.0) + balanced_backward(model, total, spec, args.spectral_balance)
+        else:
+            total.backward()
         gnorm = float(torch.nn.utils.clip_grad_norm_(model.parameters(), args.clip))
         opt.step()
         if ema_model is not None:
             with torch.no_grad():
+                follow = 1.0 - args.ema if it >= args.ema_start else 1.0
                 for pe, p_ in zip(ema_model.parameters(), model.parameters()):
-                    pe.lerp_(p_, 1.0 - args.ema)
+                    pe.lerp_(p_, follow)
         state["iteration"] = it
         last_ol, last_cl = ol_v, cl_v
         if lam > 0 and math.isfinite(cl_v):
@@ -591,6 +629,9 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
             if "spec" in acc:
                 rec["spectral"] = acc["spec"] / max(1, acc["ncl"])
                 extra = f" npss {rec['spectral']:.4f}"
+                if "w_spec" in acc:
+                    rec["spectral_weight"] = acc["w_spec"] / max(1, acc["ncl"])
+                    extra += f" (weight {rec['spectral_weight']:.3g})"
             log(f"it {it:6d} open-loop {mol:.5f} closed-loop {mcl:.5f}{extra} lambda {lam:.1f} lr {lr:.3g} |g| {gnorm:.3g} {spi:.2f} s/it")
             log.record(kind="train", iteration=it, ol=mol, cl=mcl, lam=lam, lr=lr, grad_norm=gnorm, s_per_it=spi, **rec)
             acc = {"ol": 0.0, "cl": 0.0, "n": 0, "ncl": 0}
@@ -677,6 +718,9 @@ def export(out: str, ckpt_file: str, dtype: str, argv: list[str]) -> dict:
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     args = build_parser().parse_args(argv)
+    if args.spectral_weight > 0 and args.spectral_balance > 0:
+        print("error: give --spectral-weight or --spectral-balance, not both", file=sys.stderr)
+        return 2
     if args.export:
         if not args.from_ckpt:
             print("error: --export needs --from CHECKPOINT", file=sys.stderr)

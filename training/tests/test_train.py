@@ -221,3 +221,41 @@ def test_branch_from_a_file_that_is_not_a_checkpoint_is_a_clear_error(tmp_path):
     assert not (tmp_path / "child" / "last.pt").exists()
     with pytest.raises(SystemExit):
         train.build_parser().parse_args(["--val-stride", "0"])
+
+
+def test_balanced_backward_scales_the_spectral_gradient_to_the_ratio():
+    torch.manual_seed(0)
+    model = torch.nn.Sequential(torch.nn.Linear(4, 3), torch.nn.Tanh(), torch.nn.Linear(3, 2))
+    x = torch.randn(5, 4)
+    y = model(x)
+    mse, spec = (y ** 2).mean(), 30.0 * y[:, 0].sin().sum()
+    params = list(model.parameters())
+    g_mse = torch.autograd.grad(mse, params, retain_graph=True)
+    g_spec = torch.autograd.grad(spec, params, retain_graph=True)
+    w = train.balanced_backward(model, mse, spec, 0.3)
+    norm = lambda gs: float(torch.sqrt(sum((g ** 2).sum() for g in gs)))
+    assert abs(w * norm(g_spec) - 0.3 * norm(g_mse)) < 1e-6 * norm(g_mse)
+    for p, a, b in zip(params, g_mse, g_spec):
+        assert torch.allclose(p.grad, a + w * b, atol=1e-7)
+
+
+def test_spectral_balance_trains_and_logs_its_weight(tmp_path):
+    import json
+
+    ds = synthetic_dataset()
+    extra = ["--iterations", "3", "--schedule-scale", "0.004", "--spectral-balance", "0.5"]
+    out = run(tmp_path / "bal", extra, ds)
+    assert out["iteration"] == 3
+    recs = [json.loads(l) for l in open(tmp_path / "bal" / "metrics.jsonl")]
+    ws = [r["spectral_weight"] for r in recs if r["kind"] == "train" and "spectral_weight" in r]
+    assert ws and all(np.isfinite(ws)) and all(w > 0 for w in ws)
+    assert train.main(["--spectral-weight", "0.1", "--spectral-balance", "0.5"]) == 2
+
+
+def test_ema_start_makes_the_average_follow_the_weights_until_then(tmp_path):
+    ds = synthetic_dataset()
+    for start, same in ((100, True), (0, False)):
+        run(tmp_path / f"s{start}", ["--iterations", "3", "--ema", "0.9", "--ema-start", str(start)], ds)
+        ck = train.load_checkpoint(tmp_path / f"s{start}" / "last.pt")
+        equal = all(torch.equal(ck["ema"][k], v) for k, v in ck["model"].items())
+        assert equal == same
