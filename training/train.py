@@ -143,7 +143,8 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--threads", type=int, default=1, help="torch threads (1: OpenMP barriers stall badly on a shared CPU)")
     g = p.add_argument_group("export")
     g.add_argument("--export", default=None, metavar="OUT.safetensors")
-    g.add_argument("--from", dest="from_ckpt", default=None, metavar="CHECKPOINT")
+    g.add_argument("--from", dest="from_ckpt", default=None, nargs="+", metavar="CHECKPOINT",
+                   help="checkpoint(s) to export; several (of one model, e.g. branches of one parent) are averaged")
     g.add_argument("--dtype", default="float16", choices=["float32", "float16", "bfloat16"])
     return p
 
@@ -675,13 +676,28 @@ def fmt_val(v: dict | None) -> str:
 # ------------------------------------------------------------------------------------------ export
 
 
-def export(out: str, ckpt_file: str, dtype: str, argv: list[str]) -> dict:
-    """Write the weights file of a checkpoint's model with provenance. Returns the provenance."""
+def average_checkpoints(ckpt_files: list[str]) -> tuple[dict, dict, list[dict]]:
+    """The first checkpoint and the mean (in float64) of the weights of all of them (a "model soup": checkpoints
+    of one model, e.g. branches of a common parent). Each contributes its averaged weights if it kept some.
+    Raises ValueError naming the file whose model config differs from the first's."""
+    cks = [load_checkpoint(Path(f)) for f in ckpt_files]
+    for f, ck in zip(ckpt_files[1:], cks[1:]):
+        if ck["config"] != cks[0]["config"]:
+            raise ValueError(f"{f}: model config differs from {ckpt_files[0]}'s; only checkpoints of one model "
+                             "can be averaged")
+    weights = [checkpoint_weights(ck) for ck in cks]
+    mean = {k: (sum(w[k].double() for w in weights) / len(weights)).to(weights[0][k].dtype) for k in weights[0]}
+    return cks[0], mean, cks
+
+
+def export(out: str, ckpt_files: list[str], dtype: str, argv: list[str]) -> dict:
+    """Write the weights file of a checkpoint's model with provenance; with several checkpoints, of the mean of
+    their weights (`average_checkpoints`). Returns the provenance."""
     from .export import save_weights
 
-    ck = load_checkpoint(Path(ckpt_file))
+    ck, weights, cks = average_checkpoints(ckpt_files)
     model = build_model(ck["config"])
-    model.load_state_dict(checkpoint_weights(ck))
+    model.load_state_dict(weights)
     model.eval()
     st = ck["state"]
     args = ck["args"]
@@ -694,12 +710,20 @@ def export(out: str, ckpt_file: str, dtype: str, argv: list[str]) -> dict:
         "command": ck["command"],
         "export_command": "python -m training.train " + shlex.join(argv),
         "seed": int(args["seed"]),
-        "checkpoint": os.path.basename(ckpt_file),
+        "checkpoint": os.path.basename(ckpt_files[0]),
     }
     if ck.get("ema") is not None:
         prov["weights"] = f"moving average of the training weights, decay {args['ema']} per iteration"
     if ck.get("parent"):
         prov["branched_from"] = ck["parent"]
+    if len(cks) > 1:
+        prov["weights"] = f"mean of the weights of {len(cks)} checkpoints (each its moving average if it kept one)"
+        prov["averaged"] = [
+            {"checkpoint": f, "iteration": int(c["state"]["iteration"]), "command": c["command"],
+             **({"branched_from": c["parent"]} if c.get("parent") else {})}
+            for f, c in zip(ckpt_files, cks)
+        ]
+        best = None  # the mean was not validated during training
     if best and st.get("best_iteration") == st["iteration"]:
         prov["best_validation"] = {
             "iteration": st["best_iteration"],
@@ -725,11 +749,16 @@ def main(argv: list[str] | None = None) -> int:
         if not args.from_ckpt:
             print("error: --export needs --from CHECKPOINT", file=sys.stderr)
             return 2
-        if not Path(args.from_ckpt).is_file():
-            print(f"error: checkpoint {args.from_ckpt} does not exist", file=sys.stderr)
+        for f in args.from_ckpt:
+            if not Path(f).is_file():
+                print(f"error: checkpoint {f} does not exist", file=sys.stderr)
+                return 2
+        try:
+            prov = export(args.export, args.from_ckpt, args.dtype, argv)
+        except ValueError as e:
+            print(f"error: {e}", file=sys.stderr)
             return 2
-        prov = export(args.export, args.from_ckpt, args.dtype, argv)
-        print(f"wrote {args.export} ({args.dtype}) from {args.from_ckpt}: iteration {prov['iterations']}")
+        print(f"wrote {args.export} ({args.dtype}) from {', '.join(args.from_ckpt)}: iteration {prov['iterations']}")
         return 0
     train(args, argv)
     return 0

@@ -259,3 +259,30 @@ def test_ema_start_makes_the_average_follow_the_weights_until_then(tmp_path):
         ck = train.load_checkpoint(tmp_path / f"s{start}" / "last.pt")
         equal = all(torch.equal(ck["ema"][k], v) for k, v in ck["model"].items())
         assert equal == same
+
+
+def test_export_of_several_checkpoints_writes_the_mean_of_their_weights(tmp_path):
+    ds = synthetic_dataset()
+    sched = ["--schedule-scale", "0.004", "--checkpoint-every", "1"]
+    run(tmp_path / "parent", ["--iterations", "2"] + sched, ds)
+    parent = str(tmp_path / "parent" / "last.pt")
+    for name, seed in (("a", "5"), ("b", "6")):
+        run(tmp_path / name, ["--iterations", "3", "--seed", seed, "--branch-from", parent] + sched, ds)
+    files = [str(tmp_path / n / "last.pt") for n in ("a", "b")]
+    out = tmp_path / "soup.safetensors"
+    assert train.main(["--export", str(out), "--from", *files, "--dtype", "float32"]) == 0
+    model = load_weights(out)
+    wa, wb = (torch.load(f, weights_only=False)["model"] for f in files)
+    assert any(not torch.equal(wa[k], wb[k]) for k in wa)
+    sd = model.state_dict()
+    for k in wa:
+        if k in sd:
+            assert torch.allclose(sd[k].float(), (wa[k].double() + wb[k].double()).div(2).float(), atol=1e-7), k
+    prov = model.provenance
+    assert [a["checkpoint"] for a in prov["averaged"]] == files and "best_validation" not in prov
+    assert prov["averaged"][0]["branched_from"]["iteration"] == 2
+    # checkpoints of different models cannot be averaged: a one-line error naming the file, exit 2
+    run(tmp_path / "wide", ["--iterations", "1", "--hidden", "12"] + sched, ds)
+    other = str(tmp_path / "wide" / "last.pt")
+    assert train.main(["--export", str(tmp_path / "bad.safetensors"), "--from", files[0], other]) == 2
+    assert not (tmp_path / "bad.safetensors").exists()
