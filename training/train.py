@@ -6,6 +6,7 @@ published step schedule, RMSprop, global gradient-norm clipping, step learning-r
 
     python -m training.train --run-dir training/runs/NAME [options]      # train (or --resume)
     python -m training.train --export OUT.safetensors --from RUN/best.pt --dtype float16
+    python -m training.train --export OUT.safetensors --from A/best.pt B/best.pt ...   # mean of their weights
 
 Checkpoints (atomic) hold model, optimizer and RNG states, so `--resume` continues exactly. `best.pt` is the
 checkpoint with the best validation score (reference-variant NPSS over the S5 validation windows, mean over
@@ -17,7 +18,9 @@ selection and export then use the averaged weights, which smooth out the iterati
 closed-loop error. `--branch-from RUN/x.pt` starts a new run from another run's checkpoint (its weights, or their
 average if it kept one; optimizer state; iteration), so the lambda and learning-rate schedules continue from there
 under the new run's settings and seed. With `--actions` naming some of a multi-action model's actions, the branch
-fine-tunes it on them (the model keeps all its labels).
+fine-tunes it on them (the model keeps all its labels). `--spectral-weight W` adds W x the closed loop's NPSS to
+the loss; `--spectral-balance R` instead scales that term's gradient to R x the squared error's every iteration.
+Exporting several checkpoints of one model (e.g. sibling branches) writes the mean of their weights.
 """
 
 from __future__ import annotations
@@ -677,8 +680,9 @@ def fmt_val(v: dict | None) -> str:
 
 
 def average_checkpoints(ckpt_files: list[str]) -> tuple[dict, dict, list[dict]]:
-    """The first checkpoint and the mean (in float64) of the weights of all of them (a "model soup": checkpoints
-    of one model, e.g. branches of a common parent). Each contributes its averaged weights if it kept some.
+    """The first checkpoint, the mean (in float64) of the weights of all of them (a "model soup": checkpoints of one
+    model, e.g. branches of a common parent) and all the checkpoints. Each contributes its averaged weights if it
+    kept some.
     Raises ValueError naming the file whose model config differs from the first's."""
     cks = [load_checkpoint(Path(f)) for f in ckpt_files]
     for f, ck in zip(ckpt_files[1:], cks[1:]):
