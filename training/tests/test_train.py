@@ -200,16 +200,23 @@ def test_branch_fine_tunes_a_multi_action_model_on_one_action(tmp_path, monkeypa
                                str(tmp_path / "walk_only" / "last.pt")], (ds[0], smoke_wins))
 
 
-def test_spectral_weight_adds_the_closed_loop_npss_to_the_loss(tmp_path):
+@pytest.mark.parametrize("flag", ["--spectral-weight", "--spectral-balance"])
+def test_spectral_term_trains_and_logs_the_closed_loop_npss(tmp_path, flag):
     import json
 
     ds = synthetic_dataset()
-    extra = ["--iterations", "3", "--schedule-scale", "0.004", "--spectral-weight", "0.5"]
-    out = run(tmp_path / "spec", extra, ds)
+    out = run(tmp_path / "spec", ["--iterations", "3", "--schedule-scale", "0.004", flag, "0.5"], ds)
     assert out["iteration"] == 3
     recs = [json.loads(l) for l in open(tmp_path / "spec" / "metrics.jsonl")]
     spec = [r["spectral"] for r in recs if r["kind"] == "train" and "spectral" in r]
     assert spec and all(np.isfinite(spec)) and all(0 < v < 10 for v in spec)
+    # the balanced variant logs the weight it ended up using
+    ws = [r["spectral_weight"] for r in recs if r["kind"] == "train" and "spectral_weight" in r]
+    assert (len(ws) > 0) == (flag == "--spectral-balance") and all(np.isfinite(ws)) and all(w > 0 for w in ws)
+
+
+def test_spectral_weight_and_balance_together_are_refused():
+    assert train.main(["--spectral-weight", "0.1", "--spectral-balance", "0.5"]) == 2
 
 
 def test_branch_from_a_file_that_is_not_a_checkpoint_is_a_clear_error(tmp_path):
@@ -237,19 +244,6 @@ def test_balanced_backward_scales_the_spectral_gradient_to_the_ratio():
     assert abs(w * norm(g_spec) - 0.3 * norm(g_mse)) < 1e-6 * norm(g_mse)
     for p, a, b in zip(params, g_mse, g_spec):
         assert torch.allclose(p.grad, a + w * b, atol=1e-7)
-
-
-def test_spectral_balance_trains_and_logs_its_weight(tmp_path):
-    import json
-
-    ds = synthetic_dataset()
-    extra = ["--iterations", "3", "--schedule-scale", "0.004", "--spectral-balance", "0.5"]
-    out = run(tmp_path / "bal", extra, ds)
-    assert out["iteration"] == 3
-    recs = [json.loads(l) for l in open(tmp_path / "bal" / "metrics.jsonl")]
-    ws = [r["spectral_weight"] for r in recs if r["kind"] == "train" and "spectral_weight" in r]
-    assert ws and all(np.isfinite(ws)) and all(w > 0 for w in ws)
-    assert train.main(["--spectral-weight", "0.1", "--spectral-balance", "0.5"]) == 2
 
 
 def test_ema_start_makes_the_average_follow_the_weights_until_then(tmp_path):
