@@ -312,10 +312,9 @@ class Validator:
             )
             eps = None
             if hasattr(model, "plan"):
-                eps = torch.zeros(len(self.windows), model.plan_size)
-                if noise_seed is not None:
-                    gen = torch.Generator().manual_seed(noise_seed)
-                    eps = torch.randn(len(self.windows), model.plan_size, generator=gen)
+                shape = (len(self.windows), model.plan_size)
+                eps = torch.zeros(shape) if noise_seed is None else \
+                    torch.randn(shape, generator=torch.Generator().manual_seed(noise_seed))
             pred = model.closed_loop(self.seed_norm, horizon, acts, eps).double().numpy()
         finally:
             model.train(was_training)
@@ -367,8 +366,14 @@ def atomic_save(obj, path: Path) -> None:
 
 
 def load_checkpoint(path: Path) -> dict:
-    """A checkpoint written by this module."""
-    return torch.load(path, map_location="cpu", weights_only=False)
+    """A checkpoint written by this module. Raises ValueError naming the file if it is not one."""
+    try:
+        ck = torch.load(path, map_location="cpu", weights_only=False)
+    except Exception as e:  # torch.load raises many types for a file that is not a checkpoint
+        raise ValueError(f"{path}: not a training checkpoint ({e})") from None
+    if not isinstance(ck, dict) or not {"config", "model", "state", "args"} <= ck.keys():
+        raise ValueError(f"{path}: not a training checkpoint (no config, model, state and args)")
+    return ck
 
 
 def checkpoint_weights(ck: dict) -> dict:
@@ -426,7 +431,10 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
     if args.resume:
         if not ckpt_path.is_file():
             raise SystemExit(f"error: --resume but {ckpt_path} does not exist")
-        resume_state = load_checkpoint(ckpt_path)
+        try:
+            resume_state = load_checkpoint(ckpt_path)
+        except ValueError as e:
+            raise SystemExit(f"error: --resume: {e}") from None
         given = explicit_args(argv)
         saved = dict(resume_state["args"])
         for k in RESUME_OVERRIDABLE:
@@ -442,8 +450,8 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
             raise SystemExit(f"error: --branch-from {args.branch_from} does not exist")
         try:
             branch_state = load_checkpoint(Path(args.branch_from))
-        except Exception as e:  # torch.load raises many types for a file that is not a checkpoint
-            raise SystemExit(f"error: --branch-from {args.branch_from}: not a training checkpoint ({e})") from None
+        except ValueError as e:
+            raise SystemExit(f"error: --branch-from {e}") from None
         if not all(k in branch_state for k in ("model", "optimizer", "state", "config", "command")):
             raise SystemExit(f"error: --branch-from {args.branch_from}: not a checkpoint of training.train")
     torch.set_num_threads(args.threads)

@@ -280,3 +280,8 @@ def test_export_of_several_checkpoints_writes_the_mean_of_their_weights(tmp_path
     other = str(tmp_path / "wide" / "last.pt")
     assert train.main(["--export", str(tmp_path / "bad.safetensors"), "--from", files[0], other]) == 2
     assert not (tmp_path / "bad.safetensors").exists()
+    # nor with a file that is not a checkpoint
+    junk = tmp_path / "junk.pt"
+    junk.write_bytes(b"junk")
+    assert train.main(["--export", str(tmp_path / "bad.safetensors"), "--from", files[0], str(junk)]) == 2
+    assert not (tmp_path / "bad.safetensors").exists()
