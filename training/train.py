@@ -365,14 +365,18 @@ def atomic_save(obj, path: Path) -> None:
         raise
 
 
+#: What every checkpoint of `train` holds (load_checkpoint refuses a file without them).
+CHECKPOINT_KEYS = frozenset({"config", "model", "optimizer", "state", "args", "command"})
+
+
 def load_checkpoint(path: Path) -> dict:
     """A checkpoint written by this module. Raises ValueError naming the file if it is not one."""
     try:
         ck = torch.load(path, map_location="cpu", weights_only=False)
     except Exception as e:  # torch.load raises many types for a file that is not a checkpoint
         raise ValueError(f"{path}: not a training checkpoint ({e})") from None
-    if not isinstance(ck, dict) or not {"config", "model", "state", "args"} <= ck.keys():
-        raise ValueError(f"{path}: not a training checkpoint (no config, model, state and args)")
+    if not isinstance(ck, dict) or not CHECKPOINT_KEYS <= ck.keys():
+        raise ValueError(f"{path}: not a training checkpoint (needs {', '.join(sorted(CHECKPOINT_KEYS))})")
     return ck
 
 
@@ -452,8 +456,6 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
             branch_state = load_checkpoint(Path(args.branch_from))
         except ValueError as e:
             raise SystemExit(f"error: --branch-from {e}") from None
-        if not all(k in branch_state for k in ("model", "optimizer", "state", "config", "command")):
-            raise SystemExit(f"error: --branch-from {args.branch_from}: not a checkpoint of training.train")
     torch.set_num_threads(args.threads)
     log = Logger(run_dir, quiet)
     command = resume_state["command"] if resume_state else "python -m training.train " + shlex.join(argv)
