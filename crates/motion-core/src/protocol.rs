@@ -22,6 +22,11 @@ pub const SEED_FRAMES: usize = 50;
 pub const LONG_TERM_HORIZON: usize = 100;
 /// The test subject.
 pub const TEST_SUBJECT: &str = "S5";
+/// Every subject of the data release, training subjects and [`TEST_SUBJECT`] (h36m.md).
+pub const SUBJECTS: [&str; 7] = ["S1", "S5", "S6", "S7", "S8", "S9", "S11"];
+/// The protocol's frame rate divided into the data's: each 25 Hz frame's root delta spans this
+/// many 50 Hz source frames when the root is integrated ([`crate::root`]).
+pub const ROOT_STEP_25HZ: usize = 2;
 /// The actions without test windows: their S5 files are absent from the data release here.
 pub const ACTIONS_WITHOUT_WINDOWS: [&str; 4] =
     ["directions", "discussion", "sittingdown", "waiting"];

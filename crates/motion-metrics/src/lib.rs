@@ -25,6 +25,7 @@ pub mod error;
 pub mod euler_error;
 pub mod ndms;
 pub mod npss;
+pub mod plausibility;
 
 pub use apd::{apd, apd_batch};
 pub use error::MetricError;
@@ -33,3 +34,4 @@ pub use euler_error::{
 };
 pub use ndms::{NdmsConfig, NdmsDatabase, NdmsReport, NnMethod};
 pub use npss::{npss, npss_reference, npss_windows, Npss, SpectrumPower, NPSS_WINDOWS_25HZ};
+pub use plausibility::{ActionReference, PlausibilityReport};

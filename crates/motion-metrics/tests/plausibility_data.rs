@@ -1,0 +1,104 @@
+//! The plausibility reference statistics on the H3.6M data (`MOTION_DATA_DIR`, default
+//! `<repo>/../shared/data`); skipped with a visible message when the data is absent.
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Instant;
+
+use motion_core::protocol::{dataset_dir, load_action_windows, ACTIONS, LONG_TERM_HORIZON};
+use motion_metrics::plausibility::{
+    action_reference, horizon_windows, measure_sequences, PlausibilityReport, ReferenceError,
+};
+
+fn dataset() -> Option<PathBuf> {
+    let root = std::env::var_os("MOTION_DATA_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data"));
+    let dataset = dataset_dir(&root);
+    if dataset.join("S5/walking_1.txt.gz").is_file() {
+        Some(dataset)
+    } else {
+        eprintln!(
+            "SKIPPED: plausibility reference statistics need the H3.6M data at {} (set MOTION_DATA_DIR)",
+            dataset.display()
+        );
+        None
+    }
+}
+
+#[test]
+fn every_action_has_reference_statistics_and_real_motion_is_within_them() {
+    let Some(dataset) = dataset() else { return };
+    let started = Instant::now();
+    for action in ACTIONS {
+        let reference = match action_reference(&dataset, action) {
+            Ok(r) => r,
+            // discussion has no S5 file in this release: a clear error, not a panic.
+            Err(ReferenceError::NoData { problem, .. }) => {
+                eprintln!("{action:<16} no reference: {problem}");
+                continue;
+            }
+            Err(e) => panic!("{action}: {e}"),
+        };
+        let p95: Vec<String> = horizon_windows(300)
+            .iter()
+            .map(|w| {
+                let p = reference.drift_p95(w);
+                format!(
+                    "{}-{} s {:.0} mm {:.1}°",
+                    w.start_s, w.end_s, p.hip_height_mm, p.lean_deg
+                )
+            })
+            .collect();
+        eprintln!(
+            "{action:<16} S5 speed {:7.1} mm/s ({} steps)  drift p95 over {} windows: {}",
+            reference.s5_mean_speed_mm_s,
+            reference.s5_frame_steps,
+            reference.drift_windows(),
+            p95.join(", ")
+        );
+        assert!(reference.s5_mean_speed_mm_s > 10.0, "{action}");
+        assert!(reference.drift_windows() > 20, "{action}");
+        // Cached: the second call is the same object.
+        assert!(Arc::ptr_eq(
+            &reference,
+            &action_reference(&dataset, action).unwrap()
+        ));
+        // The real continuations of the S5 test windows move like S5 and mostly stay within the
+        // drift p95 (S5 is part of the reference).
+        let windows = load_action_windows(&dataset, action, LONG_TERM_HORIZON).unwrap();
+        if windows.is_empty() {
+            continue;
+        }
+        let pairs: Vec<_> = windows
+            .iter()
+            .map(|w| (w.seed.view(), w.ground_truth.view()))
+            .collect();
+        let report = PlausibilityReport::new(
+            &measure_sequences(&pairs).unwrap(),
+            LONG_TERM_HORIZON,
+            &reference,
+        );
+        for w in &report.speed_ratio.windows {
+            let ratio = w.ratio.unwrap();
+            assert!((0.2..5.0).contains(&ratio), "{action} {w:?}");
+        }
+        for w in &report.drift.windows {
+            assert!(w.hip_height_within_p95.unwrap() >= 0.5, "{action} {w:?}");
+            assert!(w.lean_within_p95.unwrap() >= 0.5, "{action} {w:?}");
+        }
+    }
+    eprintln!(
+        "reference statistics of every action: {:.1} s",
+        started.elapsed().as_secs_f64()
+    );
+}
+
+#[test]
+fn an_unknown_action_is_a_typed_error() {
+    let err = action_reference(Path::new("/nonexistent"), "flying").unwrap_err();
+    assert!(matches!(err, ReferenceError::UnknownAction { .. }));
+    assert!(err.to_string().contains("walking"), "{err}");
+    // A dataset without files: no data, naming the directory.
+    let err = action_reference(Path::new("/nonexistent"), "walking").unwrap_err();
+    assert!(err.to_string().starts_with("/nonexistent:"), "{err}");
+}
