@@ -309,3 +309,102 @@ fn plot_draws_every_action_and_a_bad_extension_fails_before_work() {
     assert!(stderr.contains("walking.jpg") && stderr.contains(".svg or .png"));
     assert!(!bad.exists());
 }
+
+#[test]
+fn a_horizon_past_12_s_exits_2_in_one_line() {
+    let root = empty_dataset("long-horizon");
+    let (code, stdout, stderr) = eval(&[
+        &"--data",
+        &root,
+        &"--model",
+        &fixture_model(),
+        &"--horizon",
+        &"301",
+    ]);
+    assert_eq!(code, 2, "{stderr}");
+    assert!(stdout.is_empty());
+    assert!(stderr.contains("--horizon must be 1..=300"), "{stderr}");
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+}
+
+#[test]
+fn a_12_s_horizon_scores_ground_truth_where_the_files_cover_it() {
+    let data = data_dir();
+    if !data.join("h3.6m/dataset/S5/greeting_2.txt.gz").is_file() {
+        eprintln!("SKIPPED: eval --horizon 300 needs the H3.6M data (set MOTION_DATA_DIR)");
+        return;
+    }
+    let (code, stdout, stderr) = eval(&[
+        &"--data",
+        &data,
+        &"--model",
+        &fixture_model(),
+        &"--actions",
+        &"greeting",
+        &"--horizon",
+        &"300",
+        &"--json",
+    ]);
+    assert_eq!(code, 0, "eval failed: {stderr}");
+    let report: Value = serde_json::from_str(&stdout).expect("one JSON object");
+    let greeting = &report["actions"][0];
+    let coverage = &greeting["ground_truth_coverage"];
+    let frames: Vec<u64> = coverage["frames_per_window"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_u64().unwrap())
+        .collect();
+    // greeting window 1 starts at frame 1448 of a 1600-frame file: 152 frames of truth.
+    assert_eq!(frames.len(), 8);
+    assert_eq!(frames[1], 152);
+    let per_second: Vec<u64> = coverage["windows_per_second"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_u64().unwrap())
+        .collect();
+    assert_eq!(per_second.len(), 12);
+    assert_eq!(per_second[0], 8);
+    assert!(per_second[11] < 8);
+    assert_eq!(
+        coverage["npss_whole_frames"].as_u64().unwrap(),
+        *frames.iter().min().unwrap()
+    );
+    let covered = *frames.iter().max().unwrap() as usize;
+    for who in ["model", "zero_velocity"] {
+        let m = &greeting[who];
+        assert_eq!(
+            m["euler_error_per_frame"].as_array().unwrap().len(),
+            covered
+        );
+        for w in ["0-1 s", "1-2 s", "2-4 s", "4-8 s", "8-12 s"] {
+            assert!(num(&m["npss_reference"]["windows"][w]) >= 0.0, "{who} {w}");
+        }
+        // NDMS covers the whole horizon: 0.4 s bins of 12 s.
+        assert_eq!(m["ndms"]["bins"].as_array().unwrap().len(), 30);
+        // The plausibility measures cover the whole horizon, in four windows.
+        let speed = m["speed_ratio"]["windows"].as_array().unwrap();
+        assert_eq!(speed.len(), 4);
+        assert_eq!(num(&speed[3]["end_s"]), 12.0);
+        assert_eq!(speed[3]["sequences"], 8);
+        assert_eq!(m["drift"]["windows"].as_array().unwrap().len(), 4);
+        assert_eq!(m["foot_contact"]["windows"].as_array().unwrap().len(), 4);
+        num(&m["drift"]["windows"][0]["hip_height_p95_mm"]);
+    }
+    // The frozen baseline does not move in the root frame.
+    assert_eq!(
+        num(&greeting["zero_velocity"]["speed_ratio"]["windows"][2]["ratio"]),
+        0.0
+    );
+    // The real continuation: the windows each file covers.
+    let real = &greeting["ground_truth"];
+    let last = &real["speed_ratio"]["windows"][3];
+    assert_eq!(
+        last["sequences"].as_u64().unwrap(),
+        frames.iter().filter(|&&f| f >= 300).count() as u64
+    );
+    assert!(num(&real["speed_ratio"]["windows"][0]["ratio"]) > 0.3);
+    // The last-second speed of the truth: over the windows covering the whole horizon.
+    assert!(num(&real["mean_joint_speed_last_1s"]["pose"]) > 1.0);
+}

@@ -471,3 +471,177 @@ fn plot_draws_the_per_horizon_results() {
     assert_usage_error(&output, "scores.jpg");
     assert!(!bad.exists());
 }
+
+#[test]
+fn plausibility_of_s5_walking_real_vs_zero_velocity() {
+    let root = data_root();
+    let dataset = dataset_dir(&root);
+    if !dataset.join("S5/walking_1.txt.gz").is_file() {
+        eprintln!(
+            "SKIPPED: speed_ratio, drift and foot_contact need the H3.6M data at {} (set MOTION_DATA_DIR)",
+            dataset.display()
+        );
+        return;
+    }
+    let dir = Scratch::new("plausibility");
+    let windows = load_action_windows(&dataset, "walking", LONG_TERM_HORIZON).unwrap();
+    let seeds: Vec<_> = windows.iter().map(|w| w.seed.view()).collect();
+    let gt: Vec<_> = windows.iter().map(|w| w.ground_truth.view()).collect();
+    let zv: Vec<Array2<f64>> = windows
+        .iter()
+        .map(|w| zero_velocity(w.seed.view(), LONG_TERM_HORIZON))
+        .collect();
+    let zv: Vec<_> = zv.iter().map(|z| z.view()).collect();
+    let [seed, real_path, frozen_path] =
+        [("seed", &seeds), ("gt", &gt), ("zv", &zv)].map(|(name, list)| {
+            let path = dir.path(&format!("{name}.npy"));
+            write_npy(&path, &ndarray::stack(Axis(0), list).unwrap()).unwrap();
+            path
+        });
+    let run = |pred: &Path, metric: &str| {
+        json_of(&score(&[
+            "--pred",
+            p(pred),
+            "--seed",
+            p(&seed),
+            "--action",
+            "walking",
+            "--data",
+            p(&root),
+            "--metric",
+            metric,
+            "--json",
+        ]))
+    };
+    let real = run(&real_path, "speed_ratio,drift,foot_contact");
+    let frozen = run(&frozen_path, "all");
+    for report in [&real, &frozen] {
+        for key in ["speed_ratio", "drift", "foot_contact"] {
+            let windows = report[key]["windows"].as_array().unwrap();
+            // 100 frames: the 0-2 s and 2-4 s windows.
+            assert_eq!(windows.len(), 2, "{key}");
+            assert_eq!(windows[1]["start_s"], 2.0);
+            assert_eq!(windows[1]["end_s"], 4.0);
+            assert_eq!(windows[1]["sequences"], 8);
+        }
+    }
+    let ratio = |r: &Value, i: usize| r["speed_ratio"]["windows"][i]["ratio"].as_f64().unwrap();
+    eprintln!(
+        "S5 walking speed_ratio: real {:.3} {:.3}, zero-velocity {:.3} {:.3}",
+        ratio(&real, 0),
+        ratio(&real, 1),
+        ratio(&frozen, 0),
+        ratio(&frozen, 1)
+    );
+    assert!((0.5..2.0).contains(&ratio(&real, 0)));
+    assert_eq!(ratio(&frozen, 0), 0.0);
+    let drift = &real["drift"]["windows"][0];
+    assert!(drift["hip_height_p95_mm"].as_f64().unwrap() > 0.0);
+    assert!(drift["hip_height_within_p95"].as_f64().unwrap() >= 0.5);
+    assert!(
+        real["speed_ratio"]["reference_mean_speed_mm_s"]
+            .as_f64()
+            .unwrap()
+            > 100.0
+    );
+    // `all` with --action and --seed includes them; the table prints them too.
+    let text = score(&[
+        "--pred",
+        p(&frozen_path),
+        "--seed",
+        p(&seed),
+        "--action",
+        "walking",
+        "--data",
+        p(&root),
+    ]);
+    let stdout = String::from_utf8_lossy(&text.stdout);
+    assert!(stdout.contains("speed_ratio"), "{stdout}");
+    assert!(stdout.contains("foot_contact"), "{stdout}");
+}
+
+#[test]
+fn plausibility_needs_action_seed_and_data() {
+    let dir = Scratch::new("plausibility-bad");
+    let pred = dir.path("pred.npy");
+    write_npy(&pred, &Array3::<f64>::zeros((2, 10, 99))).unwrap();
+    let seed = dir.path("seed.npy");
+    write_npy(&seed, &Array3::<f64>::zeros((2, 5, 99))).unwrap();
+    assert_usage_error(
+        &score(&["--pred", p(&pred), "--seed", p(&seed), "--metric", "drift"]),
+        "needs --action",
+    );
+    assert_usage_error(
+        &score(&[
+            "--pred",
+            p(&pred),
+            "--action",
+            "walking",
+            "--metric",
+            "speed_ratio",
+        ]),
+        "needs --seed",
+    );
+    assert_usage_error(
+        &score(&[
+            "--pred",
+            p(&pred),
+            "--seed",
+            p(&seed),
+            "--action",
+            "jogging",
+        ]),
+        "unknown action `jogging`",
+    );
+    let nowhere = dir.path("nowhere");
+    let out = score(&[
+        "--pred",
+        p(&pred),
+        "--seed",
+        p(&seed),
+        "--action",
+        "walking",
+        "--data",
+        p(&nowhere),
+        "--metric",
+        "foot_contact",
+    ]);
+    assert_usage_error(&out, "does not exist");
+    assert_eq!(String::from_utf8_lossy(&out.stderr).lines().count(), 1);
+    // A data root without the action's files: one line naming the directory.
+    let empty = dir.path("data");
+    std::fs::create_dir_all(empty.join("h3.6m/dataset/S5")).unwrap();
+    assert_usage_error(
+        &score(&[
+            "--pred",
+            p(&pred),
+            "--seed",
+            p(&seed),
+            "--action",
+            "walking",
+            "--data",
+            p(&empty),
+            "--metric",
+            "speed_ratio",
+        ]),
+        "no S5 file of walking",
+    );
+    // Seeds must pair with predictions.
+    let one_seed = dir.path("one_seed.npy");
+    write_npy(&one_seed, &Array3::<f64>::zeros((1, 5, 99))).unwrap();
+    assert_usage_error(
+        &score(&[
+            "--pred",
+            p(&pred),
+            "--seed",
+            p(&one_seed),
+            "--action",
+            "walking",
+            "--data",
+            p(&empty),
+            "--metric",
+            "drift",
+        ]),
+        "one sequence per --pred sequence",
+    );
+}

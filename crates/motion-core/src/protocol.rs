@@ -250,6 +250,26 @@ pub fn load_action_windows(
     action: &str,
     horizon: usize,
 ) -> Result<Vec<WindowData>, FormatError> {
+    load_windows(dataset, action, horizon, false)
+}
+
+/// [`load_action_windows`] for horizons past what every file holds (long-horizon evaluation):
+/// each window's `ground_truth` is its file's frames from `predict_start`, at most `horizon`
+/// (shorter where the file ends first). Errors as [`load_action_windows`] otherwise.
+pub fn load_action_windows_covered(
+    dataset: &Path,
+    action: &str,
+    horizon: usize,
+) -> Result<Vec<WindowData>, FormatError> {
+    load_windows(dataset, action, horizon, true)
+}
+
+fn load_windows(
+    dataset: &Path,
+    action: &str,
+    horizon: usize,
+    cut_at_file_end: bool,
+) -> Result<Vec<WindowData>, FormatError> {
     let mut loaded: Vec<(u8, PathBuf, Array2<f64>)> = Vec::new();
     let mut out = Vec::new();
     for window in test_windows(action) {
@@ -262,6 +282,12 @@ pub fn load_action_windows(
             .iter()
             .find(|(sub, _, _)| *sub == window.subaction)
             .expect("loaded above");
+        let available = frames.nrows().saturating_sub(window.predict_start);
+        let horizon = if cut_at_file_end {
+            horizon.min(available)
+        } else {
+            horizon
+        };
         out.push(cut_window(frames.view(), window, horizon, path)?);
     }
     Ok(out)

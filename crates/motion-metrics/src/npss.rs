@@ -52,6 +52,21 @@ pub const NPSS_WINDOWS_25HZ: [NpssWindow; 3] = [
     },
 ];
 
+/// Windows past the paper's 4 s for 12 s horizons (paper 002): 4-8 s and 8-12 s at 25 Hz, frames
+/// 100-199 and 200-299.
+pub const NPSS_LONG_WINDOWS_25HZ: [NpssWindow; 2] = [
+    NpssWindow {
+        label: "4-8 s",
+        start: 100,
+        end: 200,
+    },
+    NpssWindow {
+        label: "8-12 s",
+        start: 200,
+        end: 300,
+    },
+];
+
 /// The NPSS of one window.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct WindowScore {

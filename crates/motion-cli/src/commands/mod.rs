@@ -3,6 +3,7 @@ pub mod bench;
 pub mod convert;
 pub mod eval;
 pub mod info;
+pub mod plausibility;
 pub mod predict;
 pub mod render;
 pub mod score;

@@ -53,8 +53,32 @@ pub enum NnChoice {
     PoseBound,
 }
 
+/// The long help after the options.
+const LONG_HELP: &str = "\
+Plausibility without ground truth (--action NAME, --seed, H3.6M 99-dim exp-map frames at 25 Hz; \
+definitions in motion_metrics::plausibility), per window 0-2, 2-4, 4-8, 8-12 s after the seed \
+(cut at the horizon):
+  speed_ratio   mean joint speed in the root frame / the action's mean over its S5 files;
+  drift         largest hip height change (mm) and torso lean change (Hips->Neck, degrees from \
+vertical) since the seed's last frame, root integrated over seed + prediction; beside it the 95th \
+percentile over real 12 s windows of the action (every subject) and the fraction of sequences \
+within it;
+  foot_contact  fraction of frames with both feet (ankle and toe joints) more than 100 mm above \
+the seed's lowest foot joint.
+The reference statistics are read from the H3.6M data (--data, $MOTION_DATA_DIR, ../shared/data). \
+The seed gives the drift's starting frame and the floor of foot_contact: --seed holds one \
+sequence (N x T_s x 99) per --pred sequence, e.g. the 50 frames `predict` was seeded with.
+
+Examples:
+  motion-cli score --gt gt.npy --pred pred.npy --metric npss,euler --json
+  motion-cli score --pred pred.npy --seed seed.npy --action walking --metric speed_ratio,drift,foot_contact
+  motion-cli score --pred pred.npy --seed seed.npy --db S5/walking_1.txt.gz --action walking   # all
+
+Exit status 2 for bad input (unreadable file, shapes, unknown action or metric, missing data).";
+
 /// Arguments of `motion-cli score`.
 #[derive(clap::Args, Debug)]
+#[command(after_long_help = LONG_HELP)]
 pub struct Args {
     /// Ground truth: .npy (N x T x D), exp-map text (.txt/.txt.gz) or BVH files, or folders of them.
     #[arg(long, num_args = 1..)]
@@ -63,7 +87,8 @@ pub struct Args {
     /// NDMS words are κ = 8 frames at 25 Hz, so give 25 Hz frames.
     #[arg(long, required = true, num_args = 1..)]
     pub pred: Vec<PathBuf>,
-    /// Comma list of npss, npss-reference, euler, ndms, apd, or all (= every metric the inputs allow).
+    /// Comma list of npss, npss-reference, euler, ndms, apd, speed_ratio, drift, foot_contact,
+    /// or all (= every metric the inputs allow; the last three when --action and --seed are given).
     #[arg(long, default_value = "all", value_delimiter = ',')]
     pub metric: Vec<String>,
     /// NDMS reference sequences (the word database). Exp-map text files are taken as the dataset's
@@ -71,9 +96,18 @@ pub struct Args {
     #[arg(long, num_args = 1..)]
     pub db: Vec<PathBuf>,
     /// Observed frames before each prediction (N x T_s x D): NDMS then prepends their last κ-1
-    /// frames so that the first word straddles the seam.
+    /// frames so that the first word straddles the seam; drift starts from their last frame and
+    /// foot_contact's floor is their lowest foot joint (both need it).
     #[arg(long, num_args = 1..)]
     pub seed: Vec<PathBuf>,
+    /// The action the predictions should show (H3.6M name): speed_ratio and drift compare them
+    /// with that action's real data.
+    #[arg(long, value_name = "NAME")]
+    pub action: Option<String>,
+    /// H3.6M data root (holding h3.6m/dataset) for the reference statistics of --action.
+    /// Default: $MOTION_DATA_DIR, then ../shared/data.
+    #[arg(long, value_name = "DIR")]
+    pub data: Option<PathBuf>,
     /// How to read the numbers (default: expmap for 99- and 117-dim data, raw otherwise). NDMS
     /// words of H3.6M exp-maps use a rigid body frame (FK of integrated root deltas is tilted);
     /// raw positions (4-D, N x T x J x 3) are taken as gravity-aligned, y up (metrics.md's recipe).
@@ -103,14 +137,20 @@ enum Metric {
     Euler,
     Ndms,
     Apd,
+    SpeedRatio,
+    Drift,
+    FootContact,
 }
 
-const ALL_METRICS: [Metric; 5] = [
+const ALL_METRICS: [Metric; 8] = [
     Metric::Npss,
     Metric::NpssReference,
     Metric::Euler,
     Metric::Ndms,
     Metric::Apd,
+    Metric::SpeedRatio,
+    Metric::Drift,
+    Metric::FootContact,
 ];
 
 impl Metric {
@@ -121,7 +161,18 @@ impl Metric {
             Metric::Euler => "euler",
             Metric::Ndms => "ndms",
             Metric::Apd => "apd",
+            Metric::SpeedRatio => "speed_ratio",
+            Metric::Drift => "drift",
+            Metric::FootContact => "foot_contact",
         }
+    }
+
+    /// Measured against the action's real data from the seed (no ground truth).
+    fn is_plausibility(self) -> bool {
+        matches!(
+            self,
+            Metric::SpeedRatio | Metric::Drift | Metric::FootContact
+        )
     }
 }
 
@@ -149,6 +200,11 @@ pub fn run(args: Args) -> Result<()> {
         crate::plot::check_extension(plot)?;
     }
     let requested = parse_metrics(&args.metric)?;
+    let action = args
+        .action
+        .as_deref()
+        .map(super::plausibility::known_action)
+        .transpose()?;
     let pred_raw = load_group(&args.pred, "--pred")?;
     let space = args.input_space.unwrap_or_else(|| default_space(&pred_raw));
     let pred = classify_group(pred_raw, space, "--pred")?;
@@ -183,6 +239,8 @@ pub fn run(args: Args) -> Result<()> {
         Metric::Npss | Metric::NpssReference | Metric::Euler => gt.is_some(),
         Metric::Ndms => !args.db.is_empty(),
         Metric::Apd => pred.has_samples,
+        m if m.is_plausibility() => action.is_some() && seed.is_some(),
+        _ => unreachable!("every metric is listed"),
     };
     let metrics: Vec<Metric> = match requested {
         None => ALL_METRICS.into_iter().filter(|&m| available(m)).collect(),
@@ -192,6 +250,12 @@ pub fn run(args: Args) -> Result<()> {
                     let need = match m {
                         Metric::Ndms => "--db reference sequences",
                         Metric::Apd => "samples in --pred (N x S x T x D)",
+                        m if m.is_plausibility() && action.is_none() => {
+                            "--action NAME (the action whose real data is the reference)"
+                        }
+                        m if m.is_plausibility() => {
+                            "--seed (the frames before each prediction: drift's start, the floor of foot_contact)"
+                        }
                         _ => "--gt",
                     };
                     return Err(usage(format!("metric {} needs {need}", m.name())));
@@ -202,7 +266,7 @@ pub fn run(args: Args) -> Result<()> {
     };
     if metrics.is_empty() {
         return Err(usage(
-            "nothing to score: give --gt (NPSS, Euler error), --db (NDMS) or samples in --pred (APD)",
+            "nothing to score: give --gt (NPSS, Euler error), --db (NDMS), samples in --pred (APD) or --action with --seed (speed_ratio, drift, foot_contact)",
         ));
     }
 
@@ -248,6 +312,38 @@ pub fn run(args: Args) -> Result<()> {
         report.insert("apd".into(), json!(mean));
         report.insert("apd_per_sequence".into(), json!(per));
     }
+    let mut plausibility_table = None;
+    if metrics.iter().any(|m| m.is_plausibility()) {
+        let (action, seed) = (
+            action.expect("checked above"),
+            seed.as_ref().expect("checked above"),
+        );
+        let dataset = super::eval::selection::resolve_dataset(args.data.as_deref())?;
+        let plausibility = score_plausibility(&dataset, action, &pred, seed)?;
+        report.insert("action".into(), json!(action));
+        for (metric, key, value) in [
+            (
+                Metric::SpeedRatio,
+                "speed_ratio",
+                serde_json::to_value(&plausibility.speed_ratio)?,
+            ),
+            (
+                Metric::Drift,
+                "drift",
+                serde_json::to_value(&plausibility.drift)?,
+            ),
+            (
+                Metric::FootContact,
+                "foot_contact",
+                serde_json::to_value(&plausibility.foot_contact)?,
+            ),
+        ] {
+            if metrics.contains(&metric) {
+                report.insert(key.into(), value);
+            }
+        }
+        plausibility_table = Some(super::plausibility::table(&plausibility));
+    }
 
     let report = Value::Object(report);
     if let Some(plot) = &args.plot {
@@ -265,6 +361,9 @@ pub fn run(args: Args) -> Result<()> {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
         print!("{}", human_table(&report));
+        if let Some(table) = plausibility_table {
+            print!("{table}");
+        }
     }
     Ok(())
 }
@@ -279,9 +378,12 @@ fn parse_metrics(list: &[String]) -> Result<Option<Vec<Metric>>> {
             "euler" => out.push(Metric::Euler),
             "ndms" => out.push(Metric::Ndms),
             "apd" => out.push(Metric::Apd),
+            "speed_ratio" | "speed-ratio" => out.push(Metric::SpeedRatio),
+            "drift" => out.push(Metric::Drift),
+            "foot_contact" | "foot-contact" => out.push(Metric::FootContact),
             other => {
                 return Err(usage(format!(
-                "unknown metric {other:?} (expected npss, npss-reference, euler, ndms, apd or all)"
+                "unknown metric {other:?} (expected npss, npss-reference, euler, ndms, apd, speed_ratio, drift, foot_contact or all)"
             )))
             }
         }
@@ -766,6 +868,47 @@ fn score_ndms(
         },
         "nearest_neighbour": match method { NnMethod::BruteForce => "brute-force", NnMethod::PcaKdTree => "pca-kd-tree", NnMethod::PoseBound => "pose-bound" },
     }))
+}
+
+// ---------- plausibility (speed_ratio, drift, foot_contact) ----------
+
+/// The plausibility report of every prediction sample after its sequence's seed.
+fn score_plausibility(
+    dataset: &Path,
+    action: &str,
+    pred: &Batch,
+    seed: &Batch,
+) -> Result<motion_metrics::PlausibilityReport> {
+    for batch in [pred, seed] {
+        if batch.joints.is_some() || batch.data.dim().3 != H36M_FRAME_DIMS {
+            return Err(usage(format!(
+                "speed_ratio, drift and foot_contact read H3.6M exp-map frames (99 dims, 25 Hz); {} has shape {:?}",
+                batch.what,
+                batch.data.shape()
+            )));
+        }
+    }
+    let (n, s, t, _) = pred.data.dim();
+    if seed.data.dim().0 != n || seed.has_samples {
+        return Err(usage(format!(
+            "--seed {} must hold one sequence per --pred sequence ({n}); found shape {:?}",
+            seed.what,
+            seed.data.shape()
+        )));
+    }
+    let reference = super::plausibility::reference(dataset, action)?;
+    let pairs: Vec<_> = (0..n)
+        .flat_map(|i| {
+            (0..s).map(move |k| {
+                (
+                    seed.data.slice(s![i, 0, .., ..]),
+                    pred.data.slice(s![i, k, .., ..]),
+                )
+            })
+        })
+        .collect();
+    let measures = super::plausibility::measure(&pairs, &pred.what)?;
+    Ok(super::plausibility::report(&measures, t, &reference))
 }
 
 // ---------- output ----------

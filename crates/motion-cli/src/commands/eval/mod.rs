@@ -26,16 +26,19 @@ use serde_json::{json, Map, Value};
 use motion_core::formats::h36m_text::{downsample_protocol, read_expmap_text};
 use motion_core::model::{BatchGenerator, MotionModel, Network, Noise};
 use motion_core::protocol::{
-    load_action_windows, sequence_file, zero_velocity, ACTIONS, LONG_TERM_HORIZON, SEED_FRAMES,
-    TEST_SUBJECT,
+    load_action_windows_covered, sequence_file, zero_velocity, ACTIONS, LONG_TERM_HORIZON,
+    SEED_FRAMES, TEST_SUBJECT,
 };
 use motion_core::skeleton::{H36M_FRAME_DIMS, H36M_PROTOCOL_FPS};
+use motion_metrics::plausibility::MAX_HORIZON_FRAMES;
+use motion_metrics::PlausibilityReport;
 use motion_metrics::{euler_error_at_horizons, EULER_HORIZONS_MS};
 
+use super::plausibility;
 use super::UsageError;
 use crate::model_source;
 use npy_stream::NpyStream;
-use scoring::{ActionTruth, NpssScores, Scores, Speed};
+use scoring::{ActionTruth, Coverage, NpssScores, Scores, Speed};
 use selection::{Planned, Selection};
 
 /// Test windows per action in the protocol.
@@ -58,6 +61,21 @@ arbitrary tilt of the starting frame; mean and 0.4 s bins); APD with 2+ samples;
 and the mean joint speed of the last second vs the ground truth (to catch freezing). Beside them: \
 paper 000 Tables 4-7 and paper 003 Tables 1-2.
 
+Plausibility without ground truth (motion_metrics::plausibility), per window 0-2, 2-4, 4-8, 8-12 s \
+of the horizon, for the model, the zero-velocity baseline and the real S5 continuation (the \
+floor and the ceiling): speed_ratio (joint speed in the root frame / the action's S5 mean), \
+drift (largest hip height and torso lean change since the last seed frame, beside the p95 over \
+real 12 s windows of the action, every subject) and foot_contact (fraction of frames with both \
+feet over 100 mm above the seed's lowest foot joint).
+
+Horizons past 100 frames (up to 300 = 12 s, paper 002's): some S5 files end before the window's \
+horizon does. The metrics that need ground truth (Euler error, NPSS) then use the part each file \
+covers: the Euler error of a frame is the mean over the windows covering it, NPSS whole is over \
+the frames all 8 windows cover, each NPSS window (adding 4-8 s and 8-12 s) over the windows \
+covering it; the report gives the windows covering each second. NDMS, APD and the plausibility \
+measures of the model and the baseline cover the whole horizon; the real continuation's \
+plausibility counts the windows whose file covers each window.
+
 With K samples: the Euler error is the mean over all 8 x K sequences; NPSS scores each sample \
 index as a set of 8 windows and averages over the K sets; NDMS is f_sim over all words of all \
 8 x K forecasts; APD is per window over its K samples, then the mean over windows.
@@ -66,6 +84,7 @@ Examples:
   motion-cli eval --data ../shared/data --actions walking,eating,smoking --samples 5
   motion-cli eval --model weights/vgru_d_multi.safetensors --actions all --json > eval.json
   motion-cli eval --actions walking --save-predictions walking.npy
+  motion-cli eval --actions walking,greeting --horizon 300 --samples 5   # 12 s
 
 Exit status 2 for bad input (unknown action, missing data directory, unreadable model).";
 
@@ -84,7 +103,8 @@ pub struct Args {
     /// evaluated on).
     #[arg(long, value_delimiter = ',', default_value = "all")]
     pub actions: Vec<String>,
-    /// Predicted frames per window at 25 Hz (1..=100; 100 = 4 s, the long-term protocol).
+    /// Predicted frames per window at 25 Hz (1..=300; 100 = 4 s, the long-term protocol; 300 =
+    /// 12 s, paper 002's horizon, where ground-truth metrics use what the S5 files cover).
     #[arg(long, default_value_t = LONG_TERM_HORIZON)]
     pub horizon: usize,
     /// Samples per window (stochastic models draw a new plan noise for each).
@@ -110,9 +130,9 @@ pub struct Args {
 
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
-    if !(1..=LONG_TERM_HORIZON).contains(&args.horizon) {
+    if !(1..=MAX_HORIZON_FRAMES).contains(&args.horizon) {
         return Err(UsageError(format!(
-            "--horizon must be 1..={LONG_TERM_HORIZON} frames (the test windows guarantee {LONG_TERM_HORIZON} frames after the seed), got {}",
+            "--horizon must be 1..={MAX_HORIZON_FRAMES} frames (12 s at 25 Hz; the test windows guarantee {LONG_TERM_HORIZON} frames of ground truth), got {}",
             args.horizon
         ))
         .into());
@@ -148,9 +168,10 @@ pub fn run(args: Args) -> Result<()> {
     let progress = progress_bar(selection.planned.len() * WINDOWS_PER_ACTION, args.json);
     let mut generator = BatchGenerator::new(Arc::clone(&model), WINDOWS_PER_ACTION * samples);
     let mut results = Vec::new();
+    let mut plausibility_rows = Vec::new();
     for planned in &selection.planned {
         progress.set_message(format!("{}: loading", planned.action));
-        let windows = load_action_windows(&dataset, planned.action, horizon)?;
+        let windows = load_action_windows_covered(&dataset, planned.action, horizon)?;
         if windows.len() != WINDOWS_PER_ACTION {
             return Err(anyhow::anyhow!(
                 "{}: {} test windows, the protocol has {WINDOWS_PER_ACTION}",
@@ -159,8 +180,9 @@ pub fn run(args: Args) -> Result<()> {
             ));
         }
         let references = reference_sequences(&dataset, planned.action)?;
-        let truth = ActionTruth::new(windows, &references)?;
+        let truth = ActionTruth::new(windows, &references, horizon)?;
         drop(references);
+        let reference = plausibility::reference(&dataset, planned.action)?;
 
         progress.set_message(format!("{}: predicting", planned.action));
         let predictions = predict(
@@ -176,14 +198,36 @@ pub fn run(args: Args) -> Result<()> {
         }
         progress.set_message(format!("{}: scoring", planned.action));
         let model_scores = truth.score(predictions.view(), || progress.inc(1))?;
-        drop(predictions);
         let baseline = zero_velocity_predictions(&truth, horizon);
         let baseline_scores = truth.score(baseline.view(), || {})?;
+        let measured = Plausibility {
+            model: plausibility_of(&truth, &predictions, &reference, "the model's predictions")?,
+            zero_velocity: plausibility_of(&truth, &baseline, &reference, "zero-velocity")?,
+            real: {
+                let pairs: Vec<_> = truth
+                    .windows()
+                    .iter()
+                    .map(|w| (w.seed.view(), w.ground_truth.view()))
+                    .collect();
+                plausibility::report(
+                    &plausibility::measure(&pairs, planned.action)?,
+                    horizon,
+                    &reference,
+                )
+            },
+        };
+        drop(predictions);
+        plausibility_rows.push(plausibility::comparison_rows(
+            &measured.model,
+            &measured.zero_velocity,
+            &measured.real,
+        ));
         results.push(action_json(
             planned,
             &truth,
             &model_scores,
             &baseline_scores,
+            &measured,
             samples,
             horizon,
         ));
@@ -209,7 +253,7 @@ pub fn run(args: Args) -> Result<()> {
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
-        print!("{}", report::table(&report));
+        print!("{}", report::table(&report, &plausibility_rows));
     }
     Ok(())
 }
@@ -303,6 +347,65 @@ fn predict(
     Ok(out)
 }
 
+/// The plausibility reports of one action: model, zero-velocity baseline, real continuation.
+struct Plausibility {
+    model: PlausibilityReport,
+    zero_velocity: PlausibilityReport,
+    real: PlausibilityReport,
+}
+
+/// The plausibility report of `8 x K x horizon x 99` predictions after their windows' seeds.
+fn plausibility_of(
+    truth: &ActionTruth,
+    predictions: &Array4<f64>,
+    reference: &motion_metrics::ActionReference,
+    what: &str,
+) -> Result<PlausibilityReport> {
+    let (_, samples, horizon, _) = predictions.dim();
+    let pairs: Vec<_> = truth
+        .windows()
+        .iter()
+        .enumerate()
+        .flat_map(|(w, window)| {
+            (0..samples).map(move |k| (window.seed.view(), predictions.slice(s![w, k, .., ..])))
+        })
+        .collect();
+    Ok(plausibility::report(
+        &plausibility::measure(&pairs, what)?,
+        horizon,
+        reference,
+    ))
+}
+
+/// The `speed_ratio`, `drift` and `foot_contact` keys of one report (the shapes `score` prints).
+fn plausibility_json(report: &PlausibilityReport) -> Result<Map<String, Value>> {
+    let mut out = Map::new();
+    out.insert(
+        "speed_ratio".into(),
+        serde_json::to_value(&report.speed_ratio)?,
+    );
+    out.insert("drift".into(), serde_json::to_value(&report.drift)?);
+    out.insert(
+        "foot_contact".into(),
+        serde_json::to_value(&report.foot_contact)?,
+    );
+    Ok(out)
+}
+
+fn coverage_json(coverage: &Coverage) -> Value {
+    let npss: Map<String, Value> = coverage
+        .npss_windows
+        .iter()
+        .map(|(label, n)| (label.clone(), json!(n)))
+        .collect();
+    json!({
+        "frames_per_window": coverage.frames_per_window,
+        "windows_per_second": coverage.windows_per_second,
+        "npss_whole_frames": coverage.npss_whole_frames,
+        "npss_windows": npss,
+    })
+}
+
 /// The zero-velocity baseline of every window: `8 x 1 x horizon x 99`.
 fn zero_velocity_predictions(truth: &ActionTruth, horizon: usize) -> Array4<f64> {
     let windows = truth.windows();
@@ -368,21 +471,37 @@ fn action_json(
     truth: &ActionTruth,
     model: &Scores,
     baseline: &Scores,
+    plausibility: &Plausibility,
     samples: usize,
     horizon: usize,
 ) -> Value {
-    json!({
+    let mut result = json!({
         "action": planned.action,
         "label": planned.label,
         "windows": truth.windows().len(),
         "samples": samples,
         "horizon": horizon,
+        "ground_truth_coverage": coverage_json(&truth.coverage()),
         "ndms_database_words": truth.database_words(),
         "model": scores_json(model),
         "zero_velocity": scores_json(baseline),
-        "ground_truth": { "mean_joint_speed_last_1s": speed_json(&truth.speed_last_second) },
+        "ground_truth": {
+            "mean_joint_speed_last_1s": truth.speed_last_second.as_ref().map(speed_json),
+        },
         "published": published::for_action(planned.action),
-    })
+    });
+    // speed_ratio, drift, foot_contact: model, zero-velocity and the real continuation
+    // (`ground_truth`) in the shapes of `score`. (A `classifier` key goes beside them.)
+    for (who, report) in [
+        ("model", &plausibility.model),
+        ("zero_velocity", &plausibility.zero_velocity),
+        ("ground_truth", &plausibility.real),
+    ] {
+        if let (Some(object), Ok(keys)) = (result[who].as_object_mut(), plausibility_json(report)) {
+            object.extend(keys);
+        }
+    }
+    result
 }
 
 /// Means over the evaluated actions of the headline numbers, for model and baseline.
@@ -449,7 +568,9 @@ fn full_report(
             "ndms": "database = every motion word (kappa 8, stride 1) of the action's S5 files at 25 Hz; queries = forecasts with the last 7 seed frames prepended; exact nearest neighbour (brute force); bins of 0.4 s by word end",
             "positions": "FK of seed + forecast with the root integrated (each 25 Hz root delta applied twice)",
             "mean_joint_speed_last_1s": "mean displacement per 25 Hz frame (mm) of the 12 NDMS joints over the last 25 frame steps; world = with the root trajectory, pose = root deltas zeroed (body motion only)",
-            "zero_velocity": "the last seed frame repeated, root deltas included (in world positions the frozen pose keeps the last root velocity)",
+            "zero_velocity": "the last seed frame repeated, root deltas included (in world positions the frozen pose keeps the last root velocity, turning included: its drift grows with the horizon)",
+            "ground_truth_coverage": "horizons past 100 frames: a window's ground truth ends with its S5 file; Euler error per frame = mean over the windows covering the frame (dims chosen over each window's covered frames); NPSS whole over the frames all windows cover (npss_whole_frames), each NPSS window over the windows covering it completely (npss_windows); windows_per_second = windows covering each second of the horizon",
+            "plausibility": "speed_ratio, drift, foot_contact (motion_metrics::plausibility) per window 0-2, 2-4, 4-8, 8-12 s for model (all 8 x K), zero_velocity and ground_truth (the real continuation; each window counts the test windows whose file covers it); speed reference = mean root-frame joint speed over the action's S5 files; drift p95 over real 12 s windows of the action, every subject, seeded by the 50 frames before each",
         },
         "actions": results,
         "skipped": selection.skipped.iter().map(|(a, r)| json!({"action": a, "reason": r})).collect::<Vec<_>>(),

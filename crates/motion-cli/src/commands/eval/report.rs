@@ -11,6 +11,18 @@ fn cell(v: &Value) -> String {
         .map_or_else(|| "-".to_string(), |x| format!("{x:.3}"))
 }
 
+fn cells_int(values: &Value) -> String {
+    values
+        .as_array()
+        .map(|a| {
+            a.iter()
+                .map(|v| v.to_string())
+                .collect::<Vec<_>>()
+                .join(" ")
+        })
+        .unwrap_or_default()
+}
+
 fn cells(values: &Value) -> String {
     values
         .as_array()
@@ -48,12 +60,27 @@ fn action_block(out: &mut String, a: &Value) {
         "  {:<28} {:>8} {:>9}   published\n",
         "", "model", "zero-vel"
     ));
-    let windows = ["0-1 s", "1-2 s", "2-4 s"];
+    let coverage = &a["ground_truth_coverage"];
+    let per_second = cells_int(&coverage["windows_per_second"]);
+    if coverage["windows_per_second"]
+        .as_array()
+        .is_some_and(|s| s.iter().any(|n| n.as_u64() != a["windows"].as_u64()))
+    {
+        out.push_str(&format!(
+            "  ground truth (S5 file ends): windows covering each second {per_second}; NPSS whole over the first {} frames\n",
+            coverage["npss_whole_frames"]
+        ));
+    }
+    let windows = ["0-1 s", "1-2 s", "2-4 s", "4-8 s", "8-12 s"];
     for (key, name, with_published) in [
         ("npss_reference", "NPSS reference Re(DFT)²", true),
         ("npss", "NPSS paper |DFT|²", false),
     ] {
-        let whole_published = if with_published {
+        // The published numbers are over 4 s: beside a longer `whole` they would mislead.
+        let whole_is_4s = coverage["npss_whole_frames"]
+            .as_u64()
+            .is_none_or(|f| f <= 100);
+        let whole_published = if with_published && whole_is_4s {
             published_pairs(&[
                 ("VGRU-d", published::table4_npss("VGRU-d", action)),
                 ("GRU-d", published::table4_npss("GRU-d", action)),
@@ -72,7 +99,7 @@ fn action_block(out: &mut String, a: &Value) {
             if m[key]["windows"].get(w).is_none() {
                 continue;
             }
-            let text = if with_published {
+            let text = if with_published && i < 3 {
                 let p003 = (i == 2)
                     .then(|| {
                         a["published"]["paper003_table1_npss_reference_2_4s"]["Ours (paper 003)"]
@@ -87,9 +114,14 @@ fn action_block(out: &mut String, a: &Value) {
             } else {
                 String::new()
             };
+            let covering = &coverage["npss_windows"][w];
+            let label = match covering.as_u64() {
+                Some(n) if Some(n) != a["windows"].as_u64() => format!("  {w} ({n} windows)"),
+                _ => format!("  {w}"),
+            };
             row(
                 out,
-                &format!("  {w}"),
+                &label,
                 &m[key]["windows"][w],
                 &z[key]["windows"][w],
                 &text,
@@ -169,8 +201,9 @@ fn action_block(out: &mut String, a: &Value) {
     }
 }
 
-/// The report as text.
-pub fn table(report: &Value) -> String {
+/// The report as text; `plausibility` holds each action's plausibility rows (in the order of
+/// `report["actions"]`), made from the same typed reports as the JSON.
+pub fn table(report: &Value, plausibility: &[String]) -> String {
     let mut out = String::new();
     let model = &report["model"];
     let protocol = &report["protocol"];
@@ -193,8 +226,16 @@ pub fn table(report: &Value) -> String {
     if let Some(note) = model["note"].as_str() {
         out.push_str(&format!("note: {note}\n"));
     }
-    for a in report["actions"].as_array().into_iter().flatten() {
+    for (i, a) in report["actions"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .enumerate()
+    {
         action_block(&mut out, a);
+        if let Some(rows) = plausibility.get(i) {
+            out.push_str(rows);
+        }
     }
     let means = &report["mean_over_actions"];
     out.push_str(&format!(

@@ -9,6 +9,14 @@
 //! - NDMS: f_sim over all words of all `8 x K` forecasts (paper 003 eq. 9).
 //! - APD: per window over its `K` samples, then the mean over windows.
 //! - Joint speed: the mean over all `8 x K` forecasts.
+//!
+//! Horizons past the test windows' guaranteed 100 frames (up to 300, 12 s): a window's ground
+//! truth ends where its S5 file does. The Euler error of frame `t` is the mean over the windows
+//! that cover `t` (each window's dims chosen over its covered frames); NPSS `whole` is over the
+//! frames every window covers, and each NPSS window (0-1 .. 8-12 s) over the windows covering
+//! it completely; the ground truth's last-second speed over the windows covering the horizon.
+//! With every window covering the horizon (always up to 100 frames) this is the protocol as
+//! before.
 use std::sync::Arc;
 
 use anyhow::Result;
@@ -19,7 +27,9 @@ use motion_core::protocol::{expmap_batch_to_euler_protocol, WindowData};
 use motion_core::skeleton::H36M_NDMS_JOINTS;
 use motion_core::{RootEncoding, Skeleton};
 use motion_metrics::ndms::{NdmsConfig, NdmsDatabase, NdmsReport};
-use motion_metrics::npss::{Npss, SpectrumPower, NPSS_WINDOWS_25HZ};
+use motion_metrics::npss::{
+    Npss, NpssWindow, SpectrumPower, NPSS_LONG_WINDOWS_25HZ, NPSS_WINDOWS_25HZ,
+};
 use motion_metrics::{apd, euler_error};
 
 /// Source frames per 25 Hz step: protocol frames are every other 50 Hz frame, so each root delta
@@ -31,10 +41,24 @@ const LAST_SECOND_FRAMES: usize = 25;
 /// NPSS on the whole horizon and on the paper's windows that fit in it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct NpssScores {
-    /// Over all predicted frames.
+    /// Over all predicted frames (that every test window's ground truth covers).
     pub whole: f64,
-    /// `(label, value)` for 0-1 s, 1-2 s, 2-4 s (those inside the horizon).
+    /// `(label, value)` for 0-1 s, 1-2 s, 2-4 s, 4-8 s, 8-12 s (those inside the horizon and
+    /// covered by at least one window's ground truth).
     pub windows: Vec<(&'static str, f64)>,
+}
+
+/// How much of the horizon the test windows' ground truth covers.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Coverage {
+    /// Frames of ground truth per test window (at most the horizon).
+    pub frames_per_window: Vec<usize>,
+    /// Per second of the horizon (the last one possibly partial): windows covering all of it.
+    pub windows_per_second: Vec<usize>,
+    /// Frames every window covers: NPSS `whole` is over these.
+    pub npss_whole_frames: usize,
+    /// Per NPSS window label: the test windows covering it (the NPSS of that window is over them).
+    pub npss_windows: Vec<(String, usize)>,
 }
 
 /// Mean joint speed in mm per 25 Hz frame.
@@ -66,23 +90,46 @@ pub struct Scores {
 /// The ground truth side of one action, shared by the model's and the baseline's scoring.
 pub struct ActionTruth {
     windows: Vec<WindowData>,
-    /// Euler sequences of the ground truth, `8 x H x 99`.
-    gt_euler: Array3<f64>,
+    /// The predicted frames per window.
+    horizon: usize,
+    /// Euler sequences of each window's ground truth (`covered x 99`).
+    gt_euler: Vec<Array2<f64>>,
+    /// The frames every window covers (`min(horizon, shortest ground truth)`).
+    common: usize,
     database: NdmsDatabase,
     skeleton: Arc<Skeleton>,
-    /// Mean joint speed of the ground truth over the last second.
-    pub speed_last_second: Speed,
+    /// Mean joint speed of the ground truth over the last second (windows covering the horizon;
+    /// `None` when none does).
+    pub speed_last_second: Option<Speed>,
+}
+
+/// The NPSS windows of a horizon of `frames`.
+fn npss_windows(frames: usize) -> impl Iterator<Item = NpssWindow> {
+    NPSS_WINDOWS_25HZ
+        .into_iter()
+        .chain(NPSS_LONG_WINDOWS_25HZ)
+        .filter(move |w| w.end <= frames)
 }
 
 impl ActionTruth {
-    /// Prepares the windows' ground truth and the NDMS database of `reference_sequences` (the
-    /// action's S5 files at 25 Hz).
-    pub fn new(windows: Vec<WindowData>, reference_sequences: &[Array2<f64>]) -> Result<Self> {
+    /// Prepares the windows' ground truth (each at most `horizon` frames, shorter where its file
+    /// ends) and the NDMS database of `reference_sequences` (the action's S5 files at 25 Hz).
+    pub fn new(
+        windows: Vec<WindowData>,
+        reference_sequences: &[Array2<f64>],
+        horizon: usize,
+    ) -> Result<Self> {
         let skeleton = Arc::new(Skeleton::h36m());
-        let views: Vec<ArrayView2<'_, f64>> =
-            windows.iter().map(|w| w.ground_truth.view()).collect();
-        let gt = ndarray::stack(Axis(0), &views)?;
-        let gt_euler = expmap_batch_to_euler_protocol(gt.view());
+        let gt_euler: Vec<Array2<f64>> = windows
+            .iter()
+            .map(|w| motion_core::protocol::expmap_to_euler_protocol(w.ground_truth.view()))
+            .collect();
+        let common = windows
+            .iter()
+            .map(|w| w.ground_truth.nrows())
+            .min()
+            .unwrap_or(0)
+            .min(horizon);
         let mut positions = Vec::with_capacity(reference_sequences.len());
         for sequence in reference_sequences {
             positions.push(expmap_positions(
@@ -99,17 +146,54 @@ impl ActionTruth {
             motion_metrics::NnMethod::default(),
         )?;
         let mut speeds = Vec::new();
-        for w in &windows {
+        for w in windows.iter().filter(|w| w.ground_truth.nrows() >= horizon) {
             speeds.push(joined_speed(&skeleton, &w.seed, w.ground_truth.view())?);
         }
-        let speed_last_second = mean_speed(&speeds);
+        let speed_last_second = (!speeds.is_empty()).then(|| mean_speed(&speeds));
         Ok(Self {
             windows,
+            horizon,
             gt_euler,
+            common,
             database,
             skeleton,
             speed_last_second,
         })
+    }
+
+    /// Whether every window's ground truth covers the whole horizon.
+    fn fully_covered(&self) -> bool {
+        self.common == self.horizon
+    }
+
+    /// How much of the horizon the ground truth covers.
+    pub fn coverage(&self) -> Coverage {
+        let frames: Vec<usize> = self
+            .windows
+            .iter()
+            .map(|w| w.ground_truth.nrows())
+            .collect();
+        let seconds = self.horizon.div_ceil(LAST_SECOND_FRAMES);
+        let windows_per_second = (0..seconds)
+            .map(|s| {
+                let end = ((s + 1) * LAST_SECOND_FRAMES).min(self.horizon);
+                frames.iter().filter(|&&f| f >= end).count()
+            })
+            .collect();
+        let npss_windows = npss_windows(self.horizon)
+            .map(|w| {
+                (
+                    w.label.to_string(),
+                    frames.iter().filter(|&&f| f >= w.end).count(),
+                )
+            })
+            .collect();
+        Coverage {
+            frames_per_window: frames,
+            windows_per_second,
+            npss_whole_frames: self.common,
+            npss_windows,
+        }
     }
 
     /// The test windows.
@@ -133,32 +217,63 @@ impl ActionTruth {
         debug_assert_eq!(windows, self.windows.len());
 
         // Euler error and NPSS: one set of 8 windows per sample index.
-        let mut euler_sum = vec![0.0; horizon];
+        debug_assert_eq!(horizon, self.horizon);
+        let covered = self
+            .gt_euler
+            .iter()
+            .map(|g| g.nrows())
+            .max()
+            .unwrap_or(0)
+            .min(horizon);
+        let mut euler_sum = vec![0.0; covered];
+        let mut euler_count = vec![0usize; covered];
         let mut npss_sets = Vec::with_capacity(samples);
         let mut reference_sets = Vec::with_capacity(samples);
         let mut npss = Npss::new();
+        let common_gt: Vec<ArrayView2<'_, f64>> = self
+            .gt_euler
+            .iter()
+            .map(|g| g.slice(s![..self.common, ..]))
+            .collect();
+        let common_gt = ndarray::stack(Axis(0), &common_gt)?;
         for k in 0..samples {
             let set = predictions.slice(s![.., k, .., ..]);
             let euler = expmap_batch_to_euler_protocol(set);
-            let per_frame = euler_error(self.gt_euler.view(), euler.view())?;
-            euler_sum
-                .iter_mut()
-                .zip(&per_frame)
-                .for_each(|(s, e)| *s += e);
-            npss_sets.push(npss_scores(
-                &mut npss,
-                &self.gt_euler,
-                &euler,
-                SpectrumPower::Modulus,
-            )?);
-            reference_sets.push(npss_scores(
-                &mut npss,
-                &self.gt_euler,
-                &euler,
-                SpectrumPower::RealPart,
-            )?);
+            if self.fully_covered() {
+                // The protocol: all 8 windows over the whole horizon.
+                let per_frame = euler_error(common_gt.view(), euler.view())?;
+                euler_sum
+                    .iter_mut()
+                    .zip(&per_frame)
+                    .for_each(|(s, e)| *s += e);
+                euler_count.iter_mut().for_each(|c| *c += 1);
+            } else {
+                for (w, gt) in self.gt_euler.iter().enumerate() {
+                    let n = gt.nrows().min(horizon);
+                    let per_frame = euler_error(
+                        gt.slice(s![..n, ..]).insert_axis(Axis(0)),
+                        euler.slice(s![w..w + 1, ..n, ..]),
+                    )?;
+                    for (t, e) in per_frame.iter().enumerate() {
+                        euler_sum[t] += e;
+                        euler_count[t] += 1;
+                    }
+                }
+            }
+            for (power, sets) in [
+                (SpectrumPower::Modulus, &mut npss_sets),
+                (SpectrumPower::RealPart, &mut reference_sets),
+            ] {
+                sets.push(self.npss_scores(&mut npss, &common_gt, &euler, power)?);
+            }
         }
-        let euler_per_frame = euler_sum.iter().map(|s| s / samples as f64).collect();
+        // Fully covered: the sum over samples of the 8-window means, over K; otherwise the sum
+        // of every covering (window, sample), over their count.
+        let euler_per_frame = euler_sum
+            .iter()
+            .zip(&euler_count)
+            .map(|(s, &c)| s / c as f64)
+            .collect();
 
         // Positions: FK of seed + forecast so the root trajectory continues across the seam.
         let prefix = NdmsConfig::h36m().kappa - 1;
@@ -217,19 +332,54 @@ impl ActionTruth {
     }
 }
 
-fn npss_scores(
-    npss: &mut Npss,
-    gt: &Array3<f64>,
-    pred: &Array3<f64>,
-    power: SpectrumPower,
-) -> Result<NpssScores> {
-    let whole = npss.score(gt.view(), pred.view(), power)?;
-    let windows = npss
-        .score_windows(gt.view(), pred.view(), power, &NPSS_WINDOWS_25HZ)?
-        .into_iter()
-        .map(|w| (w.window.label, w.value))
-        .collect();
-    Ok(NpssScores { whole, windows })
+impl ActionTruth {
+    /// NPSS of one sample set (`pred`: `8 x H x 99` Euler): `whole` over the frames every
+    /// window covers (`common_gt`: `8 x common x 99`), each NPSS window over the test windows
+    /// covering it.
+    fn npss_scores(
+        &self,
+        npss: &mut Npss,
+        common_gt: &Array3<f64>,
+        pred: &Array3<f64>,
+        power: SpectrumPower,
+    ) -> Result<NpssScores> {
+        let common = self.common;
+        let pred_common = pred.slice(s![.., ..common, ..]);
+        let whole = npss.score(common_gt.view(), pred_common, power)?;
+        let mut windows = Vec::new();
+        for window in npss_windows(self.horizon) {
+            let range = window.start..window.end;
+            let value = if window.end <= common {
+                npss.score(
+                    common_gt.slice(s![.., range.clone(), ..]),
+                    pred.slice(s![.., range, ..]),
+                    power,
+                )?
+            } else {
+                let covering: Vec<usize> = (0..self.gt_euler.len())
+                    .filter(|&w| self.gt_euler[w].nrows() >= window.end)
+                    .collect();
+                if covering.is_empty() {
+                    continue;
+                }
+                let gt: Vec<_> = covering
+                    .iter()
+                    .map(|&w| self.gt_euler[w].slice(s![range.clone(), ..]))
+                    .collect();
+                let p: Vec<_> = covering
+                    .iter()
+                    .map(|&w| pred.slice(s![w, range.clone(), ..]))
+                    .collect();
+                npss.score(
+                    ndarray::stack(Axis(0), &gt)?.view(),
+                    ndarray::stack(Axis(0), &p)?.view(),
+                    power,
+                )?
+            };
+            windows.push((window.label, value));
+        }
+        Ok(NpssScores { whole, windows })
+    }
 }
 
 /// The mean over sample sets of NPSS scores with the same windows.
