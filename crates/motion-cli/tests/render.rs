@@ -246,3 +246,54 @@ fn exp_map_and_npy_inputs_render_too() {
     assert_eq!(code, 2);
     assert!(stderr.contains("--sample 2 is out of range"), "{stderr}");
 }
+
+/// Exp-map frames (50 Hz) of a still rest pose that stays upright for 50 frames, then tips over:
+/// a root rotation of 0.01 rad per frame about z (57° after 100 frames).
+fn tipping_over(dir: &Path) -> PathBuf {
+    let frames =
+        ndarray::Array2::from_shape_fn(
+            (150, 99),
+            |(t, d)| {
+                if d == 5 && t >= 50 {
+                    0.01
+                } else {
+                    0.0
+                }
+            },
+        );
+    let path = dir.join("tipping.npy");
+    motion_core::formats::npy::write_npy(&path, &frames).unwrap();
+    path
+}
+
+#[test]
+fn a_growing_lean_is_drawn_unless_upright_is_asked_for() {
+    let dir = scratch("lean");
+    let input = tipping_over(&dir);
+    let out = dir.join("lean.svg");
+    // Default: the first frame is upright, so nothing is turned and the fall is drawn.
+    let (code, stdout, stderr) = motion_cli(&[&"render", &input, &"--out", &out, &"--json"]);
+    assert_eq!(code, 0, "{stderr}");
+    let report: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(report["upright"], "first frame");
+    let (code, _, stderr) = motion_cli(&[&"render", &input, &"--out", &out]);
+    assert_eq!(code, 0, "{stderr}");
+    assert!(!stderr.contains("note:"), "{stderr}");
+    // --upright straightens the average lean of the whole motion, and says so.
+    let (code, _, stderr) = motion_cli(&[&"render", &input, &"--upright", &"--out", &out]);
+    assert_eq!(code, 0, "{stderr}");
+    assert!(
+        stderr.contains("the whole motion is drawn upright (--upright)"),
+        "{stderr}"
+    );
+    // Both at once is a usage error.
+    let (code, _, stderr) = motion_cli(&[
+        &"render",
+        &input,
+        &"--upright",
+        &"--no-upright",
+        &"--out",
+        &out,
+    ]);
+    assert_eq!(code, 2, "{stderr}");
+}

@@ -17,9 +17,7 @@ use serde_json::json;
 use super::UsageError;
 use paint::Picture;
 use raster::write_atomically;
-use scene::{
-    floor_grid, floor_height, load_track, rotate_track, timeline, upright_rotation, Camera,
-};
+use scene::{floor_grid, floor_height, load_track, rotate_track, timeline, Camera, Upright};
 
 /// The long help after the options.
 const LONG_HELP: &str = "\
@@ -34,6 +32,13 @@ one frame that fits the whole trajectory over a floor grid; the .png contact she
 --cells moments, each cell following the character. With --compare, OTHER is drawn over IN in \
 orange (IN in blue); with --seed-frames N, IN's first N frames are drawn grey and the \
 seed/prediction boundary is marked in red.
+
+Lean is never hidden: H3.6M takes start from an unknown root orientation, so a motion may start \
+tilted; by default one rotation, judged on IN's first frame alone (the seed's first frame), \
+turns the whole drawing upright when that frame leans 8-60°, and every later change of lean (a \
+prediction tipping over) is drawn as it is. --upright instead straightens the average lean of \
+the whole motion (for recordings; it can hide what a prediction does); --no-upright draws the \
+coordinates untouched.
 
 Examples:
   motion-cli predict --seed examples/walk_seed.bvh --out pred.bvh
@@ -74,8 +79,12 @@ pub struct Args {
     /// Animation height in pixels.
     #[arg(long, default_value_t = 400)]
     pub height: usize,
-    /// Keep a motion that leans as a whole as it is (by default it is turned upright, about its
-    /// first root position, with --compare turned along; with --seed-frames the seed decides).
+    /// Straighten the whole motion: turn its average lean over all frames upright (opt-in: it
+    /// can hide a lean that grows during a prediction). By default only IN's first frame sets
+    /// the upright reference, so later lean stays visible.
+    #[arg(long, conflicts_with = "no_upright")]
+    pub upright: bool,
+    /// No turn at all: draw the coordinates as they are.
     #[arg(long)]
     pub no_upright: bool,
     /// Print what was written as JSON on stdout.
@@ -153,20 +162,29 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             .into());
         }
     }
-    if !args.no_upright {
-        // Judged on the seed when there is one: a prediction's lean is for the viewer to see.
-        let judged = args.seed_frames.filter(|&n| n > 0).unwrap_or(first.len());
-        if let Some((r, degrees)) = upright_rotation(&first, judged) {
-            let centre = first.root(0);
-            rotate_track(&mut first, &r, centre);
-            if let Some(s) = second.as_mut() {
-                rotate_track(s, &r, centre);
-            }
-            if !args.quiet && !args.json {
-                eprintln!(
-                    "note: {} leans {degrees:.0}° on average; drawn upright (--no-upright keeps it)",
+    let mode = if args.no_upright {
+        Upright::Off
+    } else if args.upright {
+        Upright::WholeMotion
+    } else {
+        Upright::FirstFrame
+    };
+    if let Some((r, degrees)) = mode.rotation(&first) {
+        let centre = first.root(0);
+        rotate_track(&mut first, &r, centre);
+        if let Some(s) = second.as_mut() {
+            rotate_track(s, &r, centre);
+        }
+        if !args.quiet && !args.json {
+            match mode {
+                Upright::WholeMotion => eprintln!(
+                    "note: {} leans {degrees:.0}° on average; the whole motion is drawn upright (--upright)",
                     first.name
-                );
+                ),
+                _ => eprintln!(
+                    "note: {}'s first frame leans {degrees:.0}°; the drawing is turned by that one rotation, later lean is drawn as it is (--no-upright: no turn)",
+                    first.name
+                ),
             }
         }
     }
@@ -207,6 +225,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             "frames": times.len(),
             "fps": first.fps,
             "seed_frames": args.seed_frames,
+            "upright": match mode {
+                Upright::Off => "off",
+                Upright::FirstFrame => "first frame",
+                Upright::WholeMotion => "whole motion",
+            },
             "bytes": bytes.len(),
         });
         println!("{}", serde_json::to_string_pretty(&report)?);

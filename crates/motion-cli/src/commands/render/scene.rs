@@ -225,6 +225,28 @@ fn bones(skeleton: &Skeleton, positions: &Array3<f64>) -> Vec<Bone> {
         .collect()
 }
 
+/// Which frames set the upright reference of a drawing.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Upright {
+    /// No rotation.
+    Off,
+    /// The first frame alone (the seed's first frame): later lean stays visible. The default.
+    FirstFrame,
+    /// The average over every frame: straightens the whole motion (opt-in).
+    WholeMotion,
+}
+
+impl Upright {
+    /// The rotation that turns `track` upright under this choice ([`upright_rotation`]).
+    pub fn rotation(self, track: &Track) -> Option<([[f64; 3]; 3], f64)> {
+        match self {
+            Upright::Off => None,
+            Upright::FirstFrame => upright_rotation(track, 1),
+            Upright::WholeMotion => upright_rotation(track, track.len()),
+        }
+    }
+}
+
 /// Leans below this are a posture, not a tilted recording: left as they are.
 pub const UPRIGHT_MIN_DEGREES: f64 = 8.0;
 
@@ -467,6 +489,52 @@ mod tests {
             assert!(dx.abs() < 1e-9 && (dy - 1000.0).abs() < 1e-9);
         }
         assert!(upright_rotation(&track, 3).is_none());
+    }
+
+    /// A two-joint figure (root, head 1 m above) whose lean about z goes from `from` to `to`
+    /// degrees over `frames` frames.
+    fn leaning(frames: usize, from: f64, to: f64) -> Track {
+        let positions = Array3::from_shape_fn((frames, 2, 3), |(f, j, a)| {
+            let lean = (from + (to - from) * f as f64 / (frames - 1) as f64).to_radians();
+            let head = [1000.0 * lean.sin(), 1000.0 * lean.cos(), 0.0][a];
+            [0.0, 900.0, 0.0][a] + if j == 1 { head } else { 0.0 }
+        });
+        Track {
+            name: "t".into(),
+            bones: Vec::new(),
+            positions,
+            fps: 25.0,
+        }
+    }
+
+    fn lean_of(track: &Track, f: usize) -> f64 {
+        let dx = track.positions[[f, 1, 0]] - track.positions[[f, 0, 0]];
+        let dy = track.positions[[f, 1, 1]] - track.positions[[f, 0, 1]];
+        dx.atan2(dy).to_degrees()
+    }
+
+    #[test]
+    fn by_default_only_the_first_frame_sets_upright_so_a_growing_lean_stays_visible() {
+        // Upright at first, tipping over to 40° later: the default leaves it alone.
+        let track = leaning(50, 0.0, 40.0);
+        assert!(Upright::FirstFrame.rotation(&track).is_none());
+        assert!(Upright::Off.rotation(&track).is_none());
+        // The opt-in straightening of the whole motion turns it by the average (~20°).
+        let (_, degrees) = Upright::WholeMotion.rotation(&track).unwrap();
+        assert!((degrees - 20.0).abs() < 1.0, "{degrees}");
+        // Starting tilted by 20° and tipping to 45°: turned by the first frame's 20° only, so
+        // the last frame still leans 25°.
+        let mut track = leaning(50, 20.0, 45.0);
+        let (r, degrees) = Upright::FirstFrame.rotation(&track).unwrap();
+        assert!((degrees - 20.0).abs() < 1e-9);
+        let centre = track.root(0);
+        rotate_track(&mut track, &r, centre);
+        assert!(lean_of(&track, 0).abs() < 1e-9);
+        assert!(
+            (lean_of(&track, 49) - 25.0).abs() < 1e-9,
+            "{}",
+            lean_of(&track, 49)
+        );
     }
 
     #[test]
