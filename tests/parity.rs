@@ -394,3 +394,62 @@ fn zero_std_on_a_used_dim_is_rejected() {
         "{msg}"
     );
 }
+
+#[test]
+fn action_classifier_matches_pytorch() {
+    use motion::core::model::ActionClassifier;
+    let classifier = ActionClassifier::load(fixture("action_classifier.safetensors")).unwrap();
+    let expected = WeightStore::open(fixture("action_classifier.expected.safetensors")).unwrap();
+    let (shape, windows) = get(&expected, "windows");
+    let windows = ndarray::Array3::from_shape_vec((shape[0], shape[1], shape[2]), windows).unwrap();
+    let logits = classifier.logits(windows.view()).unwrap();
+    assert_close(
+        "logits",
+        logits.as_slice().unwrap(),
+        &get(&expected, "logits").1,
+    );
+    // Same windows as f64 frames, one at a time (chunking must not change a window's result).
+    let probabilities: Vec<f32> = (0..shape[0])
+        .flat_map(|w| {
+            let one = windows.slice(ndarray::s![w..w + 1, .., ..]).mapv(f64::from);
+            classifier
+                .probabilities(one.view())
+                .unwrap()
+                .iter()
+                .map(|&p| p as f32)
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    assert_close(
+        "probabilities",
+        &probabilities,
+        &get(&expected, "probabilities").1,
+    );
+    assert_eq!(classifier.config().layers, 2);
+    assert_eq!(classifier.config().derivative_order, 1);
+    assert!(classifier.config().center);
+}
+
+#[test]
+fn a_classifier_file_is_not_a_predictor_and_vice_versa() {
+    use motion::core::model::ActionClassifier;
+    let msg = MotionModel::load(fixture("action_classifier.safetensors"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        msg.contains("action-classifier") && msg.contains("action_classifier.safetensors"),
+        "{msg}"
+    );
+    let msg = ActionClassifier::load(fixture("vgru_d.safetensors"))
+        .unwrap_err()
+        .to_string();
+    assert!(msg.contains("vgru_d.safetensors"), "{msg}");
+    let (_dir, path) = edited("action_classifier.safetensors", |(t, _)| {
+        t.retain(|(n, _, _)| n != "rnn.1.bias_hh")
+    });
+    let msg = ActionClassifier::load(&path).unwrap_err().to_string();
+    assert!(
+        msg.contains("rnn.1.bias_hh") && msg.contains("edited.safetensors"),
+        "{msg}"
+    );
+}

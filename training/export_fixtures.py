@@ -24,7 +24,8 @@ from safetensors import safe_open
 from safetensors.torch import save
 from torch import nn
 
-from .export import weights_metadata, weights_tensors
+from .classifier import ActionClassifier, make_classifier_config
+from .export import FORMAT, FORMAT_VERSION, weights_metadata, weights_tensors
 from .layers import MLP, BodyGRUCell, GRUCell, LSTMCell
 from .models import H36M_ACTIONS, build_model, make_config
 
@@ -46,6 +47,9 @@ MLP_SIZES = [7, 6, 5]
 
 # Model fixture sizes.
 MODEL_HIDDEN, MODEL_PLAN, SEED_FRAMES, HORIZON = 16, 8, 10, 30
+
+# Action classifier fixture sizes: hidden, layers, window frames, windows.
+CLASSIFIER_HIDDEN, CLASSIFIER_LAYERS, CLASSIFIER_WINDOW, CLASSIFIER_WINDOWS = 16, 2, 12, 3
 
 Fixture = tuple[dict[str, torch.Tensor], dict[str, str]]
 
@@ -150,16 +154,18 @@ PROVENANCE = {
 }
 
 
-def _seed_frames(gen: torch.Generator, mean: torch.Tensor, std: torch.Tensor, used: list[int]) -> torch.Tensor:
+def _seed_frames(
+    gen: torch.Generator, mean: torch.Tensor, std: torch.Tensor, used: list[int], frames: int = SEED_FRAMES
+) -> torch.Tensor:
     """Smooth seed motion for the used dims (sinusoids in normalized units, so the derivative
     features stay motion-like); junk in the dropped dims, which the model must ignore."""
     frame_dims = mean.shape[0]
-    t = torch.arange(SEED_FRAMES, dtype=torch.float32).unsqueeze(1)
+    t = torch.arange(frames, dtype=torch.float32).unsqueeze(1)
     amp = 0.3 + 0.7 * torch.rand(len(used), generator=gen)
     freq = 0.1 + 0.4 * torch.rand(len(used), generator=gen)
     phase = 6.283185 * torch.rand(len(used), generator=gen)
     normalized = amp * torch.sin(freq * t + phase)
-    seed = _uniform(gen, (SEED_FRAMES, frame_dims), 3.0)
+    seed = _uniform(gen, (frames, frame_dims), 3.0)
     seed[:, used] = normalized * std[used] + mean[used]
     return seed
 
@@ -219,6 +225,35 @@ def model_fixture(stem: str, gen: torch.Generator) -> tuple[Fixture, Fixture]:
     return weights, (expected, meta)
 
 
+def classifier_fixture(gen: torch.Generator) -> tuple[Fixture, Fixture]:
+    """``action_classifier.safetensors`` (2 LSTM layers, centered windows, velocity features) and its expected outputs:
+    ``windows [N, T, 99]`` (full frames, junk in dropped dims), ``logits [N, A]``, ``probabilities [N, A]``."""
+    config = make_classifier_config(
+        H36M_DIMS_USED, hidden=CLASSIFIER_HIDDEN, layers=CLASSIFIER_LAYERS, window=CLASSIFIER_WINDOW, center=True
+    )
+    model = ActionClassifier(config)
+    _randomize(model, gen, {"head.weight": 3.0 * CLASSIFIER_HIDDEN**-0.5})
+    used = config["dims_used"]
+    frame_dims = config["frame_dims"]
+    mean = _uniform(gen, (frame_dims,), 1.0)
+    std = torch.ones(frame_dims)
+    std[used] = 0.2 + 0.8 * torch.rand(len(used), generator=gen)
+    model.norm.set_stats(mean, std)
+    tensors = {k: _f32(v) for k, v in model.state_dict().items()}
+    metadata = {
+        "format": FORMAT,
+        "format_version": FORMAT_VERSION,
+        "config": json.dumps(config, sort_keys=True),
+        "provenance": json.dumps(PROVENANCE, sort_keys=True),
+    }
+    windows = torch.stack([_seed_frames(gen, mean, std, used, CLASSIFIER_WINDOW) for _ in range(CLASSIFIER_WINDOWS)])
+    ref = ActionClassifier(config).double().eval()
+    ref.load_state_dict({k: v.to(torch.float64) for k, v in tensors.items()})
+    logits = ref(windows.double())
+    expected = {"windows": windows, "logits": _f32(logits), "probabilities": _f32(torch.softmax(logits, dim=-1))}
+    return (tensors, metadata), (expected, {"weights": "action_classifier.safetensors"})
+
+
 def build_all() -> dict[str, Fixture]:
     """Every fixture file's tensors and metadata, keyed by file name."""
     gen = torch.Generator().manual_seed(SEED)
@@ -227,6 +262,10 @@ def build_all() -> dict[str, Fixture]:
         weights, expected = model_fixture(stem, gen)
         files[f"{stem}.safetensors"] = weights
         files[f"{stem}.expected.safetensors"] = expected
+    # Drawn after the others so their files stay byte-identical.
+    weights, expected = classifier_fixture(gen)
+    files["action_classifier.safetensors"] = weights
+    files["action_classifier.expected.safetensors"] = expected
     return files
 
 

@@ -4,15 +4,21 @@
 //!
 //! `MOTION_DEFAULT_WEIGHTS_FILE=PATH` at build time embeds another file instead (to try a
 //! candidate, or to test the embedding without touching `weights/`).
+//!
+//! The action classifier (`weights/action_classifier.safetensors`, paper 002's evaluation
+//! instrument) is embedded the same way: `cfg(default_classifier)` and `MOTION_DEFAULT_CLASSIFIER`.
 use std::path::{Path, PathBuf};
 
 /// The shipped default model, relative to the workspace root.
 const DEFAULT_WEIGHTS: &str = "weights/vgru_d_multi.safetensors";
+/// The shipped action classifier, relative to the workspace root.
+const DEFAULT_CLASSIFIER: &str = "weights/action_classifier.safetensors";
 /// Build-time override of the embedded file.
 const OVERRIDE_VAR: &str = "MOTION_DEFAULT_WEIGHTS_FILE";
 
 fn main() {
     println!("cargo::rustc-check-cfg=cfg(default_weights)");
+    println!("cargo::rustc-check-cfg=cfg(default_classifier)");
     println!("cargo::rerun-if-changed=build.rs");
     println!("cargo::rerun-if-env-changed={OVERRIDE_VAR}");
     let manifest = std::env::var("CARGO_MANIFEST_DIR").expect("cargo sets CARGO_MANIFEST_DIR");
@@ -35,13 +41,20 @@ fn main() {
         }
         _ => root.join(DEFAULT_WEIGHTS),
     };
+    embed(&file, "default_weights", "MOTION_DEFAULT_WEIGHTS");
+    embed(
+        &root.join(DEFAULT_CLASSIFIER),
+        "default_classifier",
+        "MOTION_DEFAULT_CLASSIFIER",
+    );
+}
+
+/// Sets `cfg(cfg_name)` and the env var `env_name` (the absolute path) when `file` exists.
+fn embed(file: &Path, cfg_name: &str, env_name: &str) {
     if file.is_file() {
-        let absolute = file.canonicalize().unwrap_or(file);
+        let absolute = file.canonicalize().unwrap_or(file.to_path_buf());
         println!("cargo::rerun-if-changed={}", absolute.display());
-        println!("cargo::rustc-cfg=default_weights");
-        println!(
-            "cargo::rustc-env=MOTION_DEFAULT_WEIGHTS={}",
-            absolute.display()
-        );
+        println!("cargo::rustc-cfg={cfg_name}");
+        println!("cargo::rustc-env={env_name}={}", absolute.display());
     }
 }

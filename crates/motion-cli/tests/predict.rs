@@ -428,3 +428,69 @@ fn h36m_take_is_anchored_by_exact_integration() {
         assert!(d < 1e-6, "axis {a}: {d} mm");
     }
 }
+
+fn fixture_classifier() -> PathBuf {
+    repo().join("tests/fixtures/parity/action_classifier.safetensors")
+}
+
+/// Without --action the seed's action is inferred by the classifier and said so; --action wins.
+#[test]
+fn the_action_is_inferred_from_the_seed_when_not_given() {
+    let dir = scratch("infer");
+    let out = dir.join("pred.npy");
+    let (stdout, _) = predict_ok(&[
+        &"--seed",
+        &walk_seed(),
+        &"--classifier",
+        &fixture_classifier(),
+        &"--frames",
+        &"5",
+        &"--out",
+        &out,
+        &"--json",
+    ]);
+    let report: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(report["action_inferred"], true);
+    // The label is what the classifier gives the seed's last window (the model's 10 seed frames).
+    let classifier = motion_core::model::ActionClassifier::load(fixture_classifier()).unwrap();
+    let bvh = read_bvh(walk_seed()).unwrap();
+    let motion = bvh_to_expmap(&bvh, ExpMapTarget::H36m).unwrap();
+    let frames = motion.frames();
+    let n = frames.nrows();
+    let (label, _) = classifier
+        .infer_action(frames.slice(ndarray::s![n - 10.., ..]))
+        .unwrap();
+    assert_eq!(report["action"], label.as_str());
+    assert!(report["notices"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|n| n.as_str().unwrap().contains("inferred from the seed")));
+    let (stdout, _) = predict_ok(&[
+        &"--seed",
+        &walk_seed(),
+        &"--classifier",
+        &fixture_classifier(),
+        &"--action",
+        &"eating",
+        &"--frames",
+        &"5",
+        &"--out",
+        &out,
+        &"--json",
+    ]);
+    let report: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(report["action"], "eating");
+    assert_eq!(report["action_inferred"], false);
+    // A classifier file that is not one: exit 2, one line naming it.
+    let (code, _, stderr) = predict(&[
+        &"--seed",
+        &walk_seed(),
+        &"--classifier",
+        &fixture_model(),
+        &"--out",
+        &out,
+    ]);
+    assert_eq!(code, 2, "{stderr}");
+    assert!(stderr.contains("vgru_d.safetensors"), "{stderr}");
+}

@@ -645,3 +645,89 @@ fn plausibility_needs_action_seed_and_data() {
         "one sequence per --pred sequence",
     );
 }
+
+fn fixture_classifier() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../tests/fixtures/parity/action_classifier.safetensors")
+}
+
+/// `--metric classifier`: the JSON shape of the issue, one window end per hop, probabilities in
+/// [0, 1]; bad input exits 2.
+#[test]
+fn classifier_metric_reports_a_curve() {
+    let dir = Scratch::new("classifier");
+    let pred = Array3::from_shape_fn((3, 100, 99), |(n, t, d)| {
+        0.2 * ((t as f64) * 0.1 + d as f64 + n as f64).sin()
+    });
+    let seed = Array3::from_shape_fn((3, 12, 99), |(n, t, d)| {
+        0.2 * ((t as f64) * 0.1 + d as f64 + n as f64).cos()
+    });
+    write_npy(dir.path("pred.npy"), &pred).unwrap();
+    write_npy(dir.path("seed.npy"), &seed).unwrap();
+    let classifier = fixture_classifier();
+    let (pred_path, seed_path) = (dir.path("pred.npy"), dir.path("seed.npy"));
+    let base = [
+        "--pred",
+        p(&pred_path),
+        "--seed",
+        p(&seed_path),
+        "--classifier",
+        p(&classifier),
+        "--action",
+        "walking",
+    ];
+    let svg = dir.path("curve.svg");
+    let mut args = base.to_vec();
+    args.extend(["--metric", "classifier", "--json", "--plot", p(&svg)]);
+    let report = json_of(&score(&args));
+    let curve = &report["classifier"];
+    assert_eq!(curve["action"], "walking");
+    assert_eq!(curve["window_s"], 12.0 / 25.0);
+    let times: Vec<f64> = curve["times_s"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    assert_eq!(times.len(), 4, "window ends at 1, 2, 3, 4 s: {times:?}");
+    assert!((times[0] - 1.0).abs() < 1e-12);
+    for key in ["prob", "top1"] {
+        for v in curve[key].as_array().unwrap() {
+            assert!((0.0..=1.0).contains(&v.as_f64().unwrap()), "{key}: {v}");
+        }
+    }
+    assert!(std::fs::read_to_string(&svg).unwrap().contains("<svg"));
+    // `all` includes it when --action is given (without --seed: no plausibility, no data needed).
+    let report = json_of(&score(&[
+        "--pred",
+        p(&pred_path),
+        "--classifier",
+        p(&classifier),
+        "--action",
+        "walking",
+        "--json",
+    ]));
+    assert!(report.get("classifier").is_some());
+    // Bad input: an unknown action, a prediction shorter than one window, no --action.
+    let mut args = base.to_vec();
+    args[7] = "flying";
+    assert_eq!(score(&args).status.code(), Some(2));
+    write_npy(dir.path("short.npy"), &Array3::<f64>::zeros((3, 11, 99))).unwrap();
+    let short = dir.path("short.npy");
+    let out = score(&[
+        "--pred",
+        p(&short),
+        "--classifier",
+        p(&classifier),
+        "--action",
+        "walking",
+        "--metric",
+        "classifier",
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
+    let out = score(&["--pred", p(&pred_path), "--metric", "classifier"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--action"));
+}

@@ -1,7 +1,8 @@
 //! # motion-metrics
 //!
-//! NPSS (paper 000), the Euler-angle error of the standard H3.6M protocol, NDMS (paper 003) and
-//! APD, in `f64`, exact to their definitions (`metrics.md`, `h36m.md`).
+//! NPSS (paper 000), the Euler-angle error of the standard H3.6M protocol, NDMS (paper 003),
+//! APD, the action-classifier protocol of paper 002 and plausibility measures without ground
+//! truth, in `f64`, exact to their definitions (`metrics.md`, `h36m.md`).
 //!
 //! Every metric takes ndarray views of the caller's data, checks shapes and finiteness (typed
 //! [`MetricError`]s, never a panic), and parallelizes over sequences with rayon.
@@ -21,6 +22,7 @@
 #![warn(missing_docs)]
 
 pub mod apd;
+pub mod classifier;
 pub mod error;
 pub mod euler_error;
 pub mod ndms;
@@ -28,6 +30,9 @@ pub mod npss;
 pub mod plausibility;
 
 pub use apd::{apd, apd_batch};
+pub use classifier::{
+    classifier_curve, classifier_curve_pairs, classifier_protocol, protocol_hop, ClassifierCurve,
+};
 pub use error::MetricError;
 pub use euler_error::{
     euler_error, euler_error_at_horizons, EULER_HORIZONS_MS, EULER_HORIZON_FRAMES_25HZ,

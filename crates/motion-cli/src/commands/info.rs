@@ -1,10 +1,14 @@
 //! `motion-cli info WEIGHTS [--json]`: describe a motion-weights file (schema: weights/README.md)
 //! — architecture, sizes, parameter count, fps, actions, dims, residual, GRU convention and
-//! training provenance. Loading checks every tensor, so this also validates the file.
+//! training provenance; for an `action-classifier` file its windows, sizes and classes. Loading
+//! checks every tensor, so this also validates the file.
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
-use motion_core::model::{Architecture, MotionModel};
+use motion_core::model::config::architecture_name;
+use motion_core::model::{
+    ActionClassifier, Architecture, MotionModel, WeightStore, CLASSIFIER_ARCHITECTURE,
+};
 use motion_core::nn::GruConvention;
 
 /// Arguments of `motion-cli info`.
@@ -19,7 +23,18 @@ pub struct Args {
 
 /// Runs the command.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let model = MotionModel::load(&args.weights)?;
+    let store = WeightStore::open(&args.weights)?;
+    if architecture_name(&store).ok().as_deref() == Some(CLASSIFIER_ARCHITECTURE) {
+        let classifier = ActionClassifier::from_store(&store)?;
+        let text = if args.json {
+            classifier_json(&classifier)?
+        } else {
+            classifier_text(&classifier)
+        };
+        print!("{text}");
+        return Ok(());
+    }
+    let model = MotionModel::from_store(&store)?;
     let text = if args.json {
         json_summary(&model)?
     } else {
@@ -142,20 +157,7 @@ fn text_summary(model: &MotionModel) -> String {
             c.seed_frames, c.horizon
         ),
     );
-    if model.provenance().is_empty() {
-        line("provenance", "(none recorded)".into());
-    } else {
-        let _ = writeln!(s, "provenance");
-        let width = model
-            .provenance()
-            .keys()
-            .map(String::len)
-            .max()
-            .unwrap_or(0);
-        for (key, value) in model.provenance() {
-            let _ = writeln!(s, "  {key:<width$}  {}", brief(value));
-        }
-    }
+    provenance_lines(&mut s, model.provenance());
     s
 }
 
@@ -186,6 +188,80 @@ fn brief(value: &serde_json::Value) -> String {
             .join(", "),
         other => other.to_string(),
     }
+}
+
+fn provenance_lines(s: &mut String, provenance: &motion_core::model::Provenance) {
+    if provenance.is_empty() {
+        let _ = writeln!(s, "{:<15} (none recorded)", "provenance");
+        return;
+    }
+    let _ = writeln!(s, "provenance");
+    let width = provenance.keys().map(String::len).max().unwrap_or(0);
+    for (key, value) in provenance {
+        let _ = writeln!(s, "  {key:<width$}  {}", brief(value));
+    }
+}
+
+fn classifier_text(classifier: &ActionClassifier) -> String {
+    let c = classifier.config();
+    let mut s = String::new();
+    let mut line = |key: &str, value: String| {
+        let _ = writeln!(s, "{key:<15} {value}");
+    };
+    line("file", classifier.path().display().to_string());
+    line(
+        "architecture",
+        "action-classifier (LSTM over windows + linear head, paper 002 section 4.5)".into(),
+    );
+    line(
+        "sizes",
+        format!(
+            "{} LSTM layers x {} units; input {} = {} dims x (1 + derivative order {})",
+            c.layers,
+            c.hidden,
+            c.input_dims(),
+            c.dims_used.len(),
+            c.derivative_order
+        ),
+    );
+    line(
+        "parameters",
+        thousands(classifier.parameter_count()) + " (computed in f32)",
+    );
+    line(
+        "windows",
+        format!(
+            "{} frames ({} s) at {} Hz; {}",
+            c.window,
+            c.window_seconds(),
+            c.fps,
+            if c.center {
+                "each non-root dim centred on its window mean"
+            } else {
+                "absolute poses"
+            }
+        ),
+    );
+    line(
+        "frames",
+        format!("{} dims, skeleton {}", c.frame_dims, c.skeleton),
+    );
+    line(
+        "classes",
+        format!("{}: {}", c.actions.len(), c.actions.join(", ")),
+    );
+    provenance_lines(&mut s, classifier.provenance());
+    s
+}
+
+fn classifier_json(classifier: &ActionClassifier) -> anyhow::Result<String> {
+    let summary = serde_json::json!({
+        "file": classifier.path().display().to_string(),
+        "parameters": classifier.parameter_count(),
+        "config": classifier.config(),
+        "provenance": classifier.provenance(),
+    });
+    Ok(format!("{}\n", serde_json::to_string_pretty(&summary)?))
 }
 
 fn json_summary(model: &MotionModel) -> anyhow::Result<String> {

@@ -1,5 +1,6 @@
 //! One module per subcommand; each exposes `Args` (clap) and `run(Args) -> anyhow::Result<()>`.
 pub mod bench;
+pub mod classifier;
 pub mod convert;
 pub mod eval;
 pub mod info;

@@ -10,7 +10,7 @@ use std::sync::Arc;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use motion_core::formats::expmap_bvh::ExpMapTarget;
 use motion_core::formats::FileFormat;
-use motion_core::model::{BatchGenerator, ModelConfig, MotionModel, Noise};
+use motion_core::model::{ActionClassifier, BatchGenerator, ModelConfig, MotionModel, Noise};
 use motion_core::root::{delta_between, integrate_root, RootPose};
 use motion_core::skeleton::H36M_SOURCE_FPS;
 use ndarray::{s, Array2, Array3};
@@ -63,9 +63,14 @@ pub struct Args {
     /// Weights file (default: the weights built into this binary).
     #[arg(long, value_name = "W")]
     pub model: Option<PathBuf>,
-    /// Action label to condition on (default: the model's first label).
+    /// Action label to condition on. Default: the seed's action as the built-in action classifier
+    /// (paper 002) sees it in the seed's last 2 s, said in a notice and in --json.
     #[arg(long, value_name = "NAME")]
     pub action: Option<String>,
+    /// Action classifier weights used to infer the seed's action when --action is not given
+    /// (default: the built-in action_classifier.safetensors).
+    #[arg(long, value_name = "FILE")]
+    pub classifier: Option<PathBuf>,
     /// Frames to predict, at the model's frame rate.
     #[arg(long, default_value_t = 100)]
     pub frames: usize,
@@ -108,6 +113,8 @@ struct Job {
     model: Arc<MotionModel>,
     target: ExpMapTarget,
     action: Option<String>,
+    /// Set when the action is to be inferred from each seed (no --action, conditioned model).
+    infer: Option<Arc<ActionClassifier>>,
     frames: usize,
     samples: usize,
     rng_seed: u64,
@@ -119,6 +126,9 @@ struct Job {
 /// What one prediction produced.
 struct Done {
     outputs: Vec<PathBuf>,
+    /// The action the prediction was conditioned on, and whether it was inferred from the seed.
+    action: Option<String>,
+    inferred: bool,
     seed_frames: usize,
     notices: Vec<String>,
 }
@@ -157,9 +167,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .into());
     }
     let model = load_model(args.model.as_deref())?;
+    let action = choose_action(model.config(), args.action.as_deref())?;
+    let infer = if args.action.is_none() && model.config().actions.len() > 1 {
+        inference_classifier(&model, args.classifier.as_deref(), args.quiet || args.json)?
+    } else {
+        None
+    };
     let job = Job {
         target: target_of(model.config(), &describe(args.model.as_deref()))?,
-        action: choose_action(model.config(), args.action.as_deref())?,
+        action,
+        infer,
         model,
         frames: args.frames,
         samples: args.samples,
@@ -188,7 +205,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         if args.json {
             let report = json!({
                 "model": describe(args.model.as_deref()),
-                "action": job.action,
+                "action": done.action,
+                "action_inferred": done.inferred,
                 "fps": job.model.config().fps,
                 "seed": args.seed,
                 "seed_frames": done.seed_frames,
@@ -230,6 +248,65 @@ fn target_of(config: &ModelConfig, model: &str) -> anyhow::Result<ExpMapTarget> 
             ))
             .into()
         })
+}
+
+/// The classifier that infers each seed's action, if it can read the model's frames; otherwise
+/// `None` after a notice (the model's first label is then used, and said so per seed).
+fn inference_classifier(
+    model: &MotionModel,
+    path: Option<&Path>,
+    quiet: bool,
+) -> anyhow::Result<Option<Arc<ActionClassifier>>> {
+    if path.is_none() && !crate::model_source::has_default_classifier() {
+        return Ok(None);
+    }
+    let classifier = crate::model_source::load_classifier(path)?;
+    let (c, m) = (classifier.config(), model.config());
+    let compatible = c.frame_dims == m.frame_dims
+        && (c.fps - m.fps).abs() < 1e-9
+        && c.actions.iter().all(|a| m.action_index(a).is_some());
+    if !compatible {
+        if path.is_some() {
+            return Err(UsageError(format!(
+                "{}: this classifier ({} dims at {} Hz) cannot label the model's seeds ({} dims at {} Hz, actions {})",
+                classifier.path().display(),
+                c.frame_dims,
+                c.fps,
+                m.frame_dims,
+                m.fps,
+                m.actions.join(", ")
+            ))
+            .into());
+        }
+        if !quiet {
+            eprintln!(
+                "note: the built-in action classifier does not fit this model; without --action the model's first label `{}` is used",
+                m.actions.first().map_or("", String::as_str)
+            );
+        }
+        return Ok(None);
+    }
+    Ok(Some(classifier))
+}
+
+/// The action of one prediction: `--action`, or the seed's as the classifier sees it (with a
+/// notice), or the model's first label when no classifier is available (with a notice).
+fn resolve_action(
+    job: &Job,
+    seed: &Array2<f64>,
+    seed_path: &Path,
+) -> anyhow::Result<(Option<String>, bool, Option<String>)> {
+    let Some(classifier) = &job.infer else {
+        return Ok((job.action.clone(), false, None));
+    };
+    let (label, p) = classifier
+        .infer_action(seed.view())
+        .map_err(|e| UsageError(format!("{}: action classifier: {e}", seed_path.display())))?;
+    let notice = format!(
+        "{}: action `{label}` inferred from the seed (classifier probability {p:.2}; --action NAME overrides)",
+        seed_path.display()
+    );
+    Ok((Some(label), true, Some(notice)))
 }
 
 /// `--action`, checked, or the model's first label (None for unconditioned models).
@@ -292,7 +369,9 @@ fn predict_one(
         ))
         .into());
     }
-    let predictions = generate(job, &model_input(&seed.frames, start, end, job.target))?;
+    let input = model_input(&seed.frames, start, end, job.target);
+    let (action, inferred, action_notice) = resolve_action(job, &input, seed_path)?;
+    let predictions = generate(job, action.as_deref(), &input)?;
     // What is written runs from the seed window's start (or, with --prediction-only, from the
     // first predicted frame) to the last predicted frame, cut from the seed file's frames up to
     // `end` followed by a continuation (a prediction, or the file's own frames for --truth).
@@ -322,10 +401,14 @@ fn predict_one(
         let real = [written(seed.frames.slice(s![end..truth_end, ..]), format)];
         outputs.extend(write_clips(truth, format, &clips(&real))?);
     }
+    let mut notices = seed.notices;
+    notices.extend(action_notice);
     Ok(Done {
         outputs,
+        action,
+        inferred,
         seed_frames: needed,
-        notices: seed.notices,
+        notices,
     })
 }
 
@@ -386,14 +469,14 @@ fn clip_window(
 }
 
 /// `job.samples` predictions of `job.frames` frames each: `[samples, frames, frame_dims]`.
-fn generate(job: &Job, seed: &Array2<f64>) -> anyhow::Result<Array3<f64>> {
+fn generate(job: &Job, action: Option<&str>, seed: &Array2<f64>) -> anyhow::Result<Array3<f64>> {
     let config = job.model.config();
     let n = job.samples;
     let mut generator = BatchGenerator::new(Arc::clone(&job.model), n);
     let seeds = seed
         .broadcast((n, seed.nrows(), seed.ncols()))
         .expect("broadcast");
-    let actions: Vec<&str> = job.action.as_deref().into_iter().collect();
+    let actions: Vec<&str> = action.into_iter().collect();
     let noise: Vec<Noise<'_>> = (0..n as u64)
         .map(|i| Noise::Seed(job.rng_seed.wrapping_add(i)))
         .collect();
@@ -507,7 +590,12 @@ fn run_batch(args: &Args, job: &Job) -> anyhow::Result<()> {
                 if !args.quiet && !args.json {
                     done.notices.iter().for_each(|n| eprintln!("{n}"));
                 }
-                entries.push(json!({"seed": seed, "outputs": done.outputs}));
+                entries.push(json!({
+                    "seed": seed,
+                    "outputs": done.outputs,
+                    "action": done.action,
+                    "action_inferred": done.inferred,
+                }));
             }
             Err(err) => {
                 let message = super::error_chain(err);
@@ -522,7 +610,8 @@ fn run_batch(args: &Args, job: &Job) -> anyhow::Result<()> {
     if args.json {
         let report = json!({
             "model": describe(args.model.as_deref()),
-            "action": job.action,
+            "action": if job.infer.is_some() { Value::Null } else { json!(job.action) },
+            "action_inferred": job.infer.is_some(),
             "fps": job.model.config().fps,
             "predicted_frames": job.frames,
             "samples": job.samples,

@@ -55,6 +55,14 @@ pub enum NnChoice {
 
 /// The long help after the options.
 const LONG_HELP: &str = "\
+The action-classifier protocol of paper 002 (--metric classifier --action NAME; definition in \
+motion_metrics::classifier): a recurrent classifier of 2 s windows (the built-in \
+action_classifier.safetensors, or --classifier FILE) slides over each prediction, windows ending \
+every second after the seed (the first windows take the seed's last frames when --seed is given, \
+else the first window ends at 2 s); per window end it reports the mean probability of NAME and the \
+fraction of predictions classified as NAME (top-1). Real motion keeps it high; motion that \
+freezes or degrades loses it. Frames: H3.6M 99-dim exp-map at 25 Hz.
+
 Plausibility without ground truth (--action NAME, --seed, H3.6M 99-dim exp-map frames at 25 Hz; \
 definitions in motion_metrics::plausibility), per window 0-2, 2-4, 4-8, 8-12 s after the seed \
 (cut at the horizon):
@@ -71,6 +79,7 @@ sequence (N x T_s x 99) per --pred sequence, e.g. the 50 frames `predict` was se
 
 Examples:
   motion-cli score --gt gt.npy --pred pred.npy --metric npss,euler --json
+  motion-cli score --pred pred.npy --seed seed.npy --action walking --metric classifier --plot walking.svg
   motion-cli score --pred pred.npy --seed seed.npy --action walking --metric speed_ratio,drift,foot_contact
   motion-cli score --pred pred.npy --seed seed.npy --db S5/walking_1.txt.gz --action walking   # all
 
@@ -87,8 +96,9 @@ pub struct Args {
     /// NDMS words are κ = 8 frames at 25 Hz, so give 25 Hz frames.
     #[arg(long, required = true, num_args = 1..)]
     pub pred: Vec<PathBuf>,
-    /// Comma list of npss, npss-reference, euler, ndms, apd, speed_ratio, drift, foot_contact,
-    /// or all (= every metric the inputs allow; the last three when --action and --seed are given).
+    /// Comma list of npss, npss-reference, euler, ndms, apd, classifier, speed_ratio, drift,
+    /// foot_contact, or all (= every metric the inputs allow; classifier when --action is given,
+    /// the last three when --action and --seed are given).
     #[arg(long, default_value = "all", value_delimiter = ',')]
     pub metric: Vec<String>,
     /// NDMS reference sequences (the word database). Exp-map text files are taken as the dataset's
@@ -104,6 +114,10 @@ pub struct Args {
     /// with that action's real data.
     #[arg(long, value_name = "NAME")]
     pub action: Option<String>,
+    /// Action classifier weights for --metric classifier (default: the built-in
+    /// action_classifier.safetensors, paper 002's protocol).
+    #[arg(long, value_name = "FILE")]
+    pub classifier: Option<PathBuf>,
     /// H3.6M data root (holding h3.6m/dataset) for the reference statistics of --action.
     /// Default: $MOTION_DATA_DIR, then ../shared/data.
     #[arg(long, value_name = "DIR")]
@@ -137,17 +151,19 @@ enum Metric {
     Euler,
     Ndms,
     Apd,
+    Classifier,
     SpeedRatio,
     Drift,
     FootContact,
 }
 
-const ALL_METRICS: [Metric; 8] = [
+const ALL_METRICS: [Metric; 9] = [
     Metric::Npss,
     Metric::NpssReference,
     Metric::Euler,
     Metric::Ndms,
     Metric::Apd,
+    Metric::Classifier,
     Metric::SpeedRatio,
     Metric::Drift,
     Metric::FootContact,
@@ -161,6 +177,7 @@ impl Metric {
             Metric::Euler => "euler",
             Metric::Ndms => "ndms",
             Metric::Apd => "apd",
+            Metric::Classifier => "classifier",
             Metric::SpeedRatio => "speed_ratio",
             Metric::Drift => "drift",
             Metric::FootContact => "foot_contact",
@@ -239,6 +256,7 @@ pub fn run(args: Args) -> Result<()> {
         Metric::Npss | Metric::NpssReference | Metric::Euler => gt.is_some(),
         Metric::Ndms => !args.db.is_empty(),
         Metric::Apd => pred.has_samples,
+        Metric::Classifier => action.is_some(),
         m if m.is_plausibility() => action.is_some() && seed.is_some(),
         _ => unreachable!("every metric is listed"),
     };
@@ -250,6 +268,7 @@ pub fn run(args: Args) -> Result<()> {
                     let need = match m {
                         Metric::Ndms => "--db reference sequences",
                         Metric::Apd => "samples in --pred (N x S x T x D)",
+                        Metric::Classifier => "--action NAME (the action whose probability is reported)",
                         m if m.is_plausibility() && action.is_none() => {
                             "--action NAME (the action whose real data is the reference)"
                         }
@@ -312,6 +331,15 @@ pub fn run(args: Args) -> Result<()> {
         report.insert("apd".into(), json!(mean));
         report.insert("apd_per_sequence".into(), json!(per));
     }
+    let mut classifier_table = None;
+    if metrics.contains(&Metric::Classifier) {
+        let action = action.expect("checked above");
+        let classifier = crate::model_source::load_classifier(args.classifier.as_deref())?;
+        let curve = score_classifier(&classifier, action, &pred, seed.as_ref())?;
+        report.insert("action".into(), json!(action));
+        classifier_table = Some(super::classifier::table(&curve));
+        report.insert("classifier".into(), serde_json::to_value(&curve)?);
+    }
     let mut plausibility_table = None;
     if metrics.iter().any(|m| m.is_plausibility()) {
         let (action, seed) = (
@@ -350,7 +378,7 @@ pub fn run(args: Args) -> Result<()> {
         let charts = charts(&report);
         if charts.is_empty() {
             return Err(UsageError(format!(
-                "{}: nothing to plot (--plot draws euler, npss and ndms results)",
+                "{}: nothing to plot (--plot draws euler, npss, classifier and ndms results)",
                 plot.display()
             ))
             .into());
@@ -361,6 +389,9 @@ pub fn run(args: Args) -> Result<()> {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
         print!("{}", human_table(&report));
+        if let Some(table) = classifier_table {
+            print!("{table}");
+        }
         if let Some(table) = plausibility_table {
             print!("{table}");
         }
@@ -378,6 +409,7 @@ fn parse_metrics(list: &[String]) -> Result<Option<Vec<Metric>>> {
             "euler" => out.push(Metric::Euler),
             "ndms" => out.push(Metric::Ndms),
             "apd" => out.push(Metric::Apd),
+            "classifier" => out.push(Metric::Classifier),
             "speed_ratio" | "speed-ratio" => out.push(Metric::SpeedRatio),
             "drift" => out.push(Metric::Drift),
             "foot_contact" | "foot-contact" => out.push(Metric::FootContact),
@@ -870,6 +902,56 @@ fn score_ndms(
     }))
 }
 
+// ---------- the action-classifier protocol (paper 002) ----------
+
+/// The classifier curve of every prediction sample (after its sequence's seed, when given).
+fn score_classifier(
+    classifier: &motion_core::model::ActionClassifier,
+    action: &str,
+    pred: &Batch,
+    seed: Option<&Batch>,
+) -> Result<motion_metrics::ClassifierCurve> {
+    let frame_dims = classifier.config().frame_dims;
+    for batch in std::iter::once(pred).chain(seed) {
+        if batch.joints.is_some() || batch.data.dim().3 != frame_dims {
+            return Err(usage(format!(
+                "the action classifier reads H3.6M exp-map frames ({frame_dims} dims, {} Hz); {} has shape {:?}",
+                classifier.config().fps,
+                batch.what,
+                batch.data.shape()
+            )));
+        }
+    }
+    let (n, samples, t, d) = pred.data.dim();
+    if let Some(seed) = seed {
+        if seed.data.dim().0 != n || seed.has_samples {
+            return Err(usage(format!(
+                "--seed {} must hold one sequence per --pred sequence ({n}); found shape {:?}",
+                seed.what,
+                seed.data.shape()
+            )));
+        }
+    }
+    let flat = pred
+        .data
+        .view()
+        .into_shape_with_order((n * samples, t, d))
+        .map_err(|e| usage(format!("{}: {e}", pred.what)))?;
+    let seeds = seed.map(|seed| {
+        let frames = seed.data.dim().2;
+        ndarray::Array3::from_shape_fn((n * samples, frames, d), |(i, f, k)| {
+            seed.data[[i / samples, 0, f, k]]
+        })
+    });
+    super::classifier::curve(
+        classifier,
+        seeds.as_ref().map(|s| s.view()),
+        flat,
+        action,
+        &pred.what,
+    )
+}
+
 // ---------- plausibility (speed_ratio, drift, foot_contact) ----------
 
 /// The plausibility report of every prediction sample after its sequence's seed.
@@ -942,6 +1024,9 @@ fn charts(report: &Value) -> Vec<Chart> {
             y_label: "NPSS".into(),
             series,
         });
+    }
+    if let Some(curve) = report.get("classifier") {
+        charts.push(super::classifier::chart(curve));
     }
     if let Some(bins) = report.get("ndms").and_then(|n| n.get("bins")) {
         charts.push(Chart {

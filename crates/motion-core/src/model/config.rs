@@ -3,7 +3,7 @@ use crate::nn::GruConvention;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
-use super::weights::WeightsError;
+use super::weights::{WeightStore, WeightsError};
 
 /// The metadata `format` value of a motion-weights file.
 pub const FORMAT_NAME: &str = "motion-weights";
@@ -162,4 +162,47 @@ pub fn parse_provenance(json: &str, path: &Path) -> Result<Provenance, WeightsEr
         key: "provenance".into(),
         problem: e.to_string(),
     })
+}
+
+/// Checks the schema's `format` and `format_version` metadata of a motion-weights file (any
+/// architecture, predictor or classifier).
+pub fn check_format(store: &WeightStore) -> Result<(), WeightsError> {
+    let path = store.path().to_path_buf();
+    let format = store.require_metadata("format")?;
+    if format != FORMAT_NAME {
+        return Err(WeightsError::UnknownFormat {
+            path,
+            found: format.to_string(),
+        });
+    }
+    let version = store.require_metadata("format_version")?;
+    if version.trim() != FORMAT_VERSION.to_string() {
+        return Err(WeightsError::UnsupportedVersion {
+            path,
+            found: version.to_string(),
+            supported: FORMAT_VERSION,
+        });
+    }
+    Ok(())
+}
+
+/// The `architecture` field of a `config` metadata value, read without validating the rest (to
+/// tell predictor files from classifier files before parsing them).
+pub fn architecture_name(store: &WeightStore) -> Result<String, WeightsError> {
+    let json = store.require_metadata("config")?;
+    let value: serde_json::Value =
+        serde_json::from_str(json).map_err(|e| WeightsError::BadConfig {
+            path: store.path().to_path_buf(),
+            key: "config".into(),
+            problem: e.to_string(),
+        })?;
+    value
+        .get("architecture")
+        .and_then(|a| a.as_str())
+        .map(str::to_string)
+        .ok_or_else(|| WeightsError::BadConfig {
+            path: store.path().to_path_buf(),
+            key: "config".into(),
+            problem: "no `architecture` string".into(),
+        })
 }

@@ -4,6 +4,8 @@
 //! - [`config`]: the `config` / `provenance` metadata of the schema in `weights/README.md`.
 //! - [`MotionModel`]: a loaded predictor (shared, immutable); [`vgru`] and [`grud`] its networks.
 //! - [`Generator`] (one character) and [`BatchGenerator`] (many in lockstep): closed-loop frames.
+//! - [`ActionClassifier`]: the action classifier of paper 002 (section 4.5), the long-horizon
+//!   evaluation instrument.
 //! - [`random`]: schema-conformant files with random weights (benchmarks, tests).
 //!
 //! ```no_run
@@ -23,6 +25,7 @@
 //! # }
 //! ```
 pub mod batch;
+pub mod classifier;
 pub mod config;
 pub mod generate_error;
 pub mod generator;
@@ -34,6 +37,7 @@ pub mod vgru;
 pub mod weights;
 
 pub use batch::{BatchGenerator, FrameScalar, Noise};
+pub use classifier::{ActionClassifier, ClassifierConfig, ClassifyError, CLASSIFIER_ARCHITECTURE};
 pub use config::{Architecture, ModelConfig, Provenance};
 pub use generate_error::GenerateError;
 pub use generator::Generator;

@@ -3,9 +3,7 @@
 //!
 //! Citation: Gopalakrishnan, Mali, Kifer, Giles, Ororbia, "A Neural Temporal Model for Human
 //! Motion Prediction", CVPR 2019 — paper 000, sections 3.2-3.3.
-use super::config::{
-    parse_provenance, Architecture, ModelConfig, Provenance, FORMAT_NAME, FORMAT_VERSION,
-};
+use super::config::{check_format, parse_provenance, Architecture, ModelConfig, Provenance};
 use super::grud::GruD;
 use super::norm::Normalization;
 use super::vgru::VgruD;
@@ -44,21 +42,7 @@ impl MotionModel {
     /// tensor the configuration implies (presence, dtype, shape, finiteness).
     pub fn from_store(store: &WeightStore) -> Result<Self, WeightsError> {
         let path = store.path().to_path_buf();
-        let format = store.require_metadata("format")?;
-        if format != FORMAT_NAME {
-            return Err(WeightsError::UnknownFormat {
-                path,
-                found: format.to_string(),
-            });
-        }
-        let version = store.require_metadata("format_version")?;
-        if version.trim() != FORMAT_VERSION.to_string() {
-            return Err(WeightsError::UnsupportedVersion {
-                path,
-                found: version.to_string(),
-                supported: FORMAT_VERSION,
-            });
-        }
+        check_format(store)?;
         let config = ModelConfig::from_json(store.require_metadata("config")?, &path)?;
         let provenance = match store.metadata("provenance") {
             Some(json) => parse_provenance(json, &path)?,

@@ -24,14 +24,14 @@ use ndarray::{s, Array2, Array3, Array4};
 use serde_json::{json, Map, Value};
 
 use motion_core::formats::h36m_text::{downsample_protocol, read_expmap_text};
-use motion_core::model::{BatchGenerator, MotionModel, Network, Noise};
+use motion_core::model::{ActionClassifier, BatchGenerator, MotionModel, Network, Noise};
 use motion_core::protocol::{
     load_action_windows_covered, sequence_file, zero_velocity, ACTIONS, LONG_TERM_HORIZON,
     SEED_FRAMES, TEST_SUBJECT,
 };
 use motion_core::skeleton::{H36M_FRAME_DIMS, H36M_PROTOCOL_FPS};
 use motion_metrics::plausibility::MAX_HORIZON_FRAMES;
-use motion_metrics::PlausibilityReport;
+use motion_metrics::{classifier_curve_pairs, protocol_hop, ClassifierCurve, PlausibilityReport};
 use motion_metrics::{euler_error_at_horizons, EULER_HORIZONS_MS};
 
 use super::plausibility;
@@ -116,6 +116,13 @@ pub struct Args {
     /// Write the predictions (actions x 8 x K x horizon x 99, float64, un-normalized exp-map frames).
     #[arg(long, value_name = "FILE.npy")]
     pub save_predictions: Option<PathBuf>,
+    /// Action classifier weights for the paper 002 protocol (default: the built-in
+    /// action_classifier.safetensors).
+    #[arg(long, value_name = "FILE")]
+    pub classifier: Option<PathBuf>,
+    /// Skip the action-classifier protocol (no `classifier` keys or rows).
+    #[arg(long, conflicts_with = "classifier")]
+    pub no_classifier: bool,
     /// Evaluate a single-action model on other actions too.
     #[arg(long)]
     pub any_action: bool,
@@ -147,6 +154,13 @@ pub fn run(args: Args) -> Result<()> {
     let dataset = selection::resolve_dataset(args.data.as_deref())?;
     let model = model_source::load_model(args.model.as_deref())?;
     check_model(&model)?;
+    let classifier = if args.no_classifier {
+        None
+    } else {
+        let classifier = model_source::load_classifier(args.classifier.as_deref())?;
+        check_classifier(&classifier)?;
+        Some(classifier)
+    };
     let selection = selection::select_actions(&args.actions, &model, &dataset, args.any_action)?;
 
     let samples = args.samples;
@@ -200,7 +214,8 @@ pub fn run(args: Args) -> Result<()> {
         let model_scores = truth.score(predictions.view(), || progress.inc(1))?;
         let baseline = zero_velocity_predictions(&truth, horizon);
         let baseline_scores = truth.score(baseline.view(), || {})?;
-        let measured = Plausibility {
+        let mut measured = Plausibility {
+            classifier: None,
             model: plausibility_of(&truth, &predictions, &reference, "the model's predictions")?,
             zero_velocity: plausibility_of(&truth, &baseline, &reference, "zero-velocity")?,
             real: {
@@ -216,11 +231,37 @@ pub fn run(args: Args) -> Result<()> {
                 )
             },
         };
+        progress.set_message(format!("{}: classifying", planned.action));
+        measured.classifier = match &classifier {
+            Some(classifier) => Some(Curves {
+                model: curve_of(classifier, &truth, &predictions, planned.action)?,
+                zero_velocity: curve_of(classifier, &truth, &baseline, planned.action)?,
+                real: {
+                    let pairs: Vec<_> = truth
+                        .windows()
+                        .iter()
+                        .map(|w| (w.seed.view(), w.ground_truth.view()))
+                        .collect();
+                    classifier_curve_pairs(
+                        classifier,
+                        &pairs,
+                        planned.action,
+                        protocol_hop(classifier),
+                    )
+                    .map_err(|e| {
+                        UsageError(format!("{}: action classifier: {e}", planned.action))
+                    })?
+                },
+            }),
+            None => None,
+        };
         drop(predictions);
-        plausibility_rows.push(plausibility::comparison_rows(
-            &measured.model,
-            &measured.zero_velocity,
-            &measured.real,
+        plausibility_rows.push(format!(
+            "{}{}",
+            measured.classifier.as_ref().map_or_else(String::new, |c| {
+                super::classifier::comparison_rows(&c.model, &c.zero_velocity, &c.real)
+            }),
+            plausibility::comparison_rows(&measured.model, &measured.zero_velocity, &measured.real,)
         ));
         results.push(action_json(
             planned,
@@ -347,11 +388,53 @@ fn predict(
     Ok(out)
 }
 
+/// The classifier curves of one action: model, zero-velocity baseline, real continuation.
+struct Curves {
+    model: ClassifierCurve,
+    zero_velocity: ClassifierCurve,
+    real: ClassifierCurve,
+}
+
+/// The classifier curve of `8 x K x horizon x 99` predictions after their windows' seeds.
+fn curve_of(
+    classifier: &ActionClassifier,
+    truth: &ActionTruth,
+    predictions: &Array4<f64>,
+    action: &str,
+) -> Result<ClassifierCurve> {
+    let (windows, samples, horizon, dims) = predictions.dim();
+    let flat = predictions
+        .view()
+        .into_shape_with_order((windows * samples, horizon, dims))
+        .map_err(|e| anyhow::anyhow!("predictions: {e}"))?;
+    let seed_frames = truth.windows()[0].seed.nrows();
+    let seeds = Array3::from_shape_fn((windows * samples, seed_frames, dims), |(i, f, d)| {
+        truth.windows()[i / samples].seed[[f, d]]
+    });
+    super::classifier::curve(classifier, Some(seeds.view()), flat, action, action)
+}
+
+/// `eval` feeds the classifier 25 Hz H3.6M frames.
+fn check_classifier(classifier: &ActionClassifier) -> Result<(), UsageError> {
+    let c = classifier.config();
+    if c.frame_dims != H36M_FRAME_DIMS || (c.fps - 25.0).abs() > 1e-9 {
+        return Err(UsageError(format!(
+            "{}: eval needs an action classifier of {H36M_FRAME_DIMS}-dim frames at 25 Hz; this one reads {} dims at {} Hz",
+            classifier.path().display(),
+            c.frame_dims,
+            c.fps
+        )));
+    }
+    Ok(())
+}
+
 /// The plausibility reports of one action: model, zero-velocity baseline, real continuation.
 struct Plausibility {
     model: PlausibilityReport,
     zero_velocity: PlausibilityReport,
     real: PlausibilityReport,
+    /// The action classifier's curves (absent with `--no-classifier`).
+    classifier: Option<Curves>,
 }
 
 /// The plausibility report of `8 x K x horizon x 99` predictions after their windows' seeds.
@@ -491,14 +574,22 @@ fn action_json(
         "published": published::for_action(planned.action),
     });
     // speed_ratio, drift, foot_contact: model, zero-velocity and the real continuation
-    // (`ground_truth`) in the shapes of `score`. (A `classifier` key goes beside them.)
-    for (who, report) in [
-        ("model", &plausibility.model),
-        ("zero_velocity", &plausibility.zero_velocity),
-        ("ground_truth", &plausibility.real),
+    // (`ground_truth`) in the shapes of `score`, and the classifier curve beside them.
+    let curves = plausibility.classifier.as_ref();
+    for (who, report, curve) in [
+        ("model", &plausibility.model, curves.map(|c| &c.model)),
+        (
+            "zero_velocity",
+            &plausibility.zero_velocity,
+            curves.map(|c| &c.zero_velocity),
+        ),
+        ("ground_truth", &plausibility.real, curves.map(|c| &c.real)),
     ] {
         if let (Some(object), Ok(keys)) = (result[who].as_object_mut(), plausibility_json(report)) {
             object.extend(keys);
+            if let Some(Ok(value)) = curve.map(serde_json::to_value) {
+                object.insert("classifier".into(), value);
+            }
         }
     }
     result
