@@ -115,6 +115,8 @@ struct Job {
     action: Option<String>,
     /// Set when the action is to be inferred from each seed (no --action, conditioned model).
     infer: Option<Arc<ActionClassifier>>,
+    /// No --action and no classifier: `action` is the model's first label (said in a notice).
+    defaulted: bool,
     frames: usize,
     samples: usize,
     rng_seed: u64,
@@ -169,14 +171,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let model = load_model(args.model.as_deref())?;
     let action = choose_action(model.config(), args.action.as_deref())?;
     let infer = if args.action.is_none() && model.config().actions.len() > 1 {
-        inference_classifier(&model, args.classifier.as_deref(), args.quiet || args.json)?
+        inference_classifier(&model, args.classifier.as_deref())?
     } else {
         None
     };
+    let defaulted = args.action.is_none() && infer.is_none() && model.config().actions.len() > 1;
     let job = Job {
         target: target_of(model.config(), &describe(args.model.as_deref()))?,
         action,
         infer,
+        defaulted,
         model,
         frames: args.frames,
         samples: args.samples,
@@ -251,14 +255,13 @@ fn target_of(config: &ModelConfig, model: &str) -> anyhow::Result<ExpMapTarget> 
 }
 
 /// The classifier that infers each seed's action, if it can read the model's frames; otherwise
-/// `None` after a notice (the model's first label is then used, and said so per seed).
+/// `None` (the model's first label is then used, and each seed's notice says so).
 fn inference_classifier(
     model: &MotionModel,
     path: Option<&Path>,
-    quiet: bool,
 ) -> anyhow::Result<Option<Arc<ActionClassifier>>> {
     if path.is_none() && !crate::model_source::has_default_classifier() {
-        return Ok(None);
+        return Ok(None); // each seed's notice says which label is used
     }
     let classifier = crate::model_source::load_classifier(path)?;
     let (c, m) = (classifier.config(), model.config());
@@ -278,13 +281,7 @@ fn inference_classifier(
             ))
             .into());
         }
-        if !quiet {
-            eprintln!(
-                "note: the built-in action classifier does not fit this model; without --action the model's first label `{}` is used",
-                m.actions.first().map_or("", String::as_str)
-            );
-        }
-        return Ok(None);
+        return Ok(None); // each seed's notice says which label is used
     }
     Ok(Some(classifier))
 }
@@ -297,7 +294,14 @@ fn resolve_action(
     seed_path: &Path,
 ) -> anyhow::Result<(Option<String>, bool, Option<String>)> {
     let Some(classifier) = &job.infer else {
-        return Ok((job.action.clone(), false, None));
+        let notice = job.defaulted.then(|| {
+            format!(
+                "{}: no --action and no action classifier: conditioned on the model's first label `{}`",
+                seed_path.display(),
+                job.action.as_deref().unwrap_or("")
+            )
+        });
+        return Ok((job.action.clone(), false, notice));
     };
     let (label, p) = classifier
         .infer_action(seed.view())

@@ -46,8 +46,9 @@ const MAX_WINDOW: usize = 100_000;
 /// Full-frame dims holding the root's per-frame deltas (never centered).
 const ROOT_DELTA_DIMS: usize = 6;
 
-/// Windows classified per task when a batch is split over threads.
-const CHUNK: usize = 64;
+/// Most windows classified per task when a batch is split over threads (larger batches make the
+/// LSTM's products more efficient; a batch is split into one task per thread up to this size).
+const MAX_CHUNK: usize = 512;
 
 /// The `config` JSON object of an `action-classifier` file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -303,12 +304,13 @@ impl ActionClassifier {
             }
         }
         let classes = self.config.actions.len();
-        let starts: Vec<usize> = (0..n).step_by(CHUNK).collect();
+        let chunk = n.div_ceil(rayon::current_num_threads()).clamp(1, MAX_CHUNK);
+        let starts: Vec<usize> = (0..n).step_by(chunk).collect();
         let chunks: Vec<Vec<f32>> = starts
             .par_iter()
             .map(|&s| {
-                let chunk = windows.slice(s![s..(s + CHUNK).min(n), .., ..]);
-                crate::nn::parallel::serial(|| self.run_chunk(chunk))
+                let part = windows.slice(s![s..(s + chunk).min(n), .., ..]);
+                crate::nn::parallel::serial(|| self.run_chunk(part))
             })
             .collect();
         let flat: Vec<f32> = chunks.concat();

@@ -1,7 +1,7 @@
 //! LSTM cell in PyTorch's convention (`torch.nn.LSTMCell`), gate order i, f, g, o:
 //! `c' = f ⊙ c + i ⊙ g`, `h' = o ⊙ tanh(c')` with `i, f, o = σ(·)`, `g = tanh(·)` of
 //! `W x + b_i + U h + b_h`. Built for the DAE-LSTM of paper 002.
-use super::activation::{sigmoid, tanh};
+use super::gates::{sigmoid_fast, tanh_fast};
 use super::gemm::MatMul;
 use super::packed::PackedMatrix;
 use crate::model::weights::{WeightStore, WeightsError};
@@ -87,16 +87,20 @@ impl LstmCell {
         }
         MatMul::dense(batch, self.config.inputs, g).run(x, &self.weight_ih, gates, true);
         MatMul::dense(batch, hid, g).run(h, &self.weight_hh, gates, true);
-        for b in 0..batch {
-            let gate = &gates[b * g..(b + 1) * g];
+        // Element-wise half with the branch-free exponential of `gates` (vectorizes; within
+        // 2.4e-7 of f64, see `gates::exp_fast`).
+        for ((gate, h_row), c_row) in gates
+            .chunks_exact(g)
+            .zip(h[..batch * hid].chunks_exact_mut(hid))
+            .zip(c[..batch * hid].chunks_exact_mut(hid))
+        {
+            let (i_f, g_o) = gate.split_at(2 * hid);
+            let (gi, gf) = i_f.split_at(hid);
+            let (gg, go) = g_o.split_at(hid);
             for j in 0..hid {
-                let i = sigmoid(gate[j]);
-                let f = sigmoid(gate[hid + j]);
-                let gg = tanh(gate[2 * hid + j]);
-                let o = sigmoid(gate[3 * hid + j]);
-                let cell = f * c[b * hid + j] + i * gg;
-                c[b * hid + j] = cell;
-                h[b * hid + j] = o * tanh(cell);
+                let cell = sigmoid_fast(gf[j]) * c_row[j] + sigmoid_fast(gi[j]) * tanh_fast(gg[j]);
+                c_row[j] = cell;
+                h_row[j] = sigmoid_fast(go[j]) * tanh_fast(cell);
             }
         }
     }
