@@ -4,6 +4,8 @@
 //! words of a few actions) queried by 100 words, and, when MOTION_DATA_DIR holds H3.6M, the S5
 //! walking words queried by the 8 zero-velocity forecasts.
 //!
+//! Paper 002's action-classifier protocol on one action of a 12 s `eval` (40 x 300 frames).
+//!
 //! Run: `cargo bench --bench motion -- metrics`
 use std::hint::black_box;
 use std::path::PathBuf;
@@ -200,8 +202,41 @@ fn bench_ndms_h36m(c: &mut Criterion) {
     bench_ndms_pair(c, "s5_all_actions", &all, &queries);
 }
 
+/// Paper 002's classifier protocol on one action of `eval --horizon 300 --samples 5`: 40
+/// predictions of 300 frames after 50-frame seeds (12 windows each), with the built-in-size
+/// classifier when `weights/action_classifier.safetensors` exists (else the small fixture). Compare
+/// with `motion-cli eval --actions all --horizon 300 --samples 5 [--no-classifier]` times.
+fn bench_classifier_protocol(c: &mut Criterion) {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let shipped = root.join("weights/action_classifier.safetensors");
+    let path = if shipped.is_file() {
+        shipped
+    } else {
+        root.join("tests/fixtures/parity/action_classifier.safetensors")
+    };
+    let classifier = motion::core::model::ActionClassifier::load(&path).expect("classifier");
+    let seeds = smooth(40, 50, 99, 3).mapv(|v| 0.3 * v);
+    let preds = smooth(40, 300, 99, 4).mapv(|v| 0.3 * v);
+    let mut group = c.benchmark_group("metrics/classifier_protocol");
+    group.sample_size(10);
+    group.throughput(Throughput::Elements(40 * 12));
+    group.bench_function("40x300_frames", |b| {
+        b.iter(|| {
+            motion::metrics::classifier_protocol(
+                &classifier,
+                Some(seeds.view()),
+                black_box(preds.view()),
+                "walking",
+            )
+            .unwrap()
+        })
+    });
+    group.finish();
+}
+
 /// Registers this module's benchmarks.
 pub fn benches(c: &mut Criterion) {
+    bench_classifier_protocol(c);
     bench_npss_and_euler(c);
     bench_apd(c);
     bench_ndms_synthetic(c);
