@@ -25,7 +25,9 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 use super::batch::FrameScalar;
-use super::config::{check_format, parse_provenance, Provenance, DERIVATIVE_PADDING};
+use super::config::{
+    check_format, parse_provenance, validate_dims_used, Provenance, DERIVATIVE_PADDING,
+};
 use super::norm::Normalization;
 use super::weights::{WeightStore, WeightsError};
 use crate::derivatives::DerivativeBuffer;
@@ -90,15 +92,7 @@ impl ClassifierConfig {
                 self.architecture
             ));
         }
-        if self.dims_used.is_empty() {
-            return Err("dims_used is empty".into());
-        }
-        if let Some(&d) = self.dims_used.iter().find(|&&d| d >= self.frame_dims) {
-            return Err(format!(
-                "dims_used holds {d}, beyond frame_dims {}",
-                self.frame_dims
-            ));
-        }
+        validate_dims_used(&self.dims_used, self.frame_dims)?;
         if !(1..=MAX_HIDDEN).contains(&self.hidden) {
             return Err(format!(
                 "hidden {} (expected 1..={MAX_HIDDEN})",

@@ -85,20 +85,7 @@ impl ModelConfig {
 
     /// Checks the fields against each other; returns what is wrong.
     pub fn validate(&self) -> Result<(), String> {
-        if self.dims_used.is_empty() {
-            return Err("dims_used is empty".into());
-        }
-        if let Some(&d) = self.dims_used.iter().find(|&&d| d >= self.frame_dims) {
-            return Err(format!(
-                "dims_used holds {d}, beyond frame_dims {}",
-                self.frame_dims
-            ));
-        }
-        let mut sorted = self.dims_used.clone();
-        sorted.sort_unstable();
-        if sorted.windows(2).any(|w| w[0] == w[1]) {
-            return Err("dims_used holds a repeated index".into());
-        }
+        validate_dims_used(&self.dims_used, self.frame_dims)?;
         if self.hidden == 0 {
             return Err("hidden is 0".into());
         }
@@ -205,4 +192,22 @@ pub fn architecture_name(store: &WeightStore) -> Result<String, WeightsError> {
             key: "config".into(),
             problem: "no `architecture` string".into(),
         })
+}
+
+/// Checks `dims_used` against `frame_dims`: not empty, every index inside the frame, no repeats.
+pub fn validate_dims_used(dims_used: &[usize], frame_dims: usize) -> Result<(), String> {
+    if dims_used.is_empty() {
+        return Err("dims_used is empty".into());
+    }
+    if let Some(&d) = dims_used.iter().find(|&&d| d >= frame_dims) {
+        return Err(format!(
+            "dims_used holds {d}, beyond frame_dims {frame_dims}"
+        ));
+    }
+    let mut sorted = dims_used.to_vec();
+    sorted.sort_unstable();
+    if sorted.windows(2).any(|w| w[0] == w[1]) {
+        return Err("dims_used holds a repeated index".into());
+    }
+    Ok(())
 }

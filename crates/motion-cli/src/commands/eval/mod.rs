@@ -214,22 +214,21 @@ pub fn run(args: Args) -> Result<()> {
         let model_scores = truth.score(predictions.view(), || progress.inc(1))?;
         let baseline = zero_velocity_predictions(&truth, horizon);
         let baseline_scores = truth.score(baseline.view(), || {})?;
+        // The real continuation of each window after its seed (files may end before the horizon).
+        let real_pairs: Vec<_> = truth
+            .windows()
+            .iter()
+            .map(|w| (w.seed.view(), w.ground_truth.view()))
+            .collect();
         let mut measured = Plausibility {
             classifier: None,
             model: plausibility_of(&truth, &predictions, &reference, "the model's predictions")?,
             zero_velocity: plausibility_of(&truth, &baseline, &reference, "zero-velocity")?,
-            real: {
-                let pairs: Vec<_> = truth
-                    .windows()
-                    .iter()
-                    .map(|w| (w.seed.view(), w.ground_truth.view()))
-                    .collect();
-                plausibility::report(
-                    &plausibility::measure(&pairs, planned.action)?,
-                    horizon,
-                    &reference,
-                )
-            },
+            real: plausibility::report(
+                &plausibility::measure(&real_pairs, planned.action)?,
+                horizon,
+                &reference,
+            ),
         };
         progress.set_message(format!("{}: classifying", planned.action));
         measured.classifier = match &classifier {
@@ -237,14 +236,9 @@ pub fn run(args: Args) -> Result<()> {
                 model: curve_of(classifier, &truth, &predictions, planned.action)?,
                 zero_velocity: curve_of(classifier, &truth, &baseline, planned.action)?,
                 real: {
-                    let pairs: Vec<_> = truth
-                        .windows()
-                        .iter()
-                        .map(|w| (w.seed.view(), w.ground_truth.view()))
-                        .collect();
                     classifier_curve_pairs(
                         classifier,
-                        &pairs,
+                        &real_pairs,
                         planned.action,
                         protocol_hop(classifier),
                     )
