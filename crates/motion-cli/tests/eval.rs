@@ -407,4 +407,31 @@ fn a_12_s_horizon_scores_ground_truth_where_the_files_cover_it() {
     assert!(num(&real["speed_ratio"]["windows"][0]["ratio"]) > 0.3);
     // The last-second speed of the truth: over the windows covering the whole horizon.
     assert!(num(&real["mean_joint_speed_last_1s"]["pose"]) > 1.0);
+    // Paper 002's classifier curve (the built-in classifier): a window ending every second of the
+    // 12 s, the real continuation counting the windows whose file reaches each end.
+    for who in ["model", "zero_velocity", "ground_truth"] {
+        let curve = &greeting[who]["classifier"];
+        assert_eq!(curve["action"], "greeting", "{who}");
+        assert_eq!(curve["times_s"].as_array().unwrap().len(), 12, "{who}");
+        assert_eq!(num(&curve["times_s"][11]), 12.0);
+    }
+    let curve = |who: &str| &greeting[who]["classifier"];
+    assert_eq!(
+        curve("ground_truth")["sequences_per_window"][11]
+            .as_u64()
+            .unwrap(),
+        frames.iter().filter(|&&f| f >= 300).count() as u64
+    );
+    assert_eq!(curve("model")["sequences_per_window"][11], 8);
+    // Real greeting keeps more of its label over 8-12 s than the frozen baseline.
+    let late = |who: &str| {
+        let prob = curve(who)["prob"].as_array().unwrap();
+        prob[8..].iter().map(num).sum::<f64>() / 4.0
+    };
+    assert!(
+        late("ground_truth") > late("zero_velocity"),
+        "real {} vs zero-velocity {}",
+        late("ground_truth"),
+        late("zero_velocity")
+    );
 }
