@@ -453,3 +453,18 @@ fn a_classifier_file_is_not_a_predictor_and_vice_versa() {
         "{msg}"
     );
 }
+
+#[test]
+fn a_classifier_fits_predictors_with_its_frames_and_actions() {
+    use motion::core::model::ActionClassifier;
+    let classifier = ActionClassifier::load(fixture("action_classifier.safetensors")).unwrap();
+    let vgru = MotionModel::load(fixture("vgru_d.safetensors")).unwrap();
+    assert_eq!(classifier.fits(vgru.config()), Ok(()));
+    // GRU-d fixtures are not action-conditioned.
+    let grud = MotionModel::load(fixture("gru_d.safetensors")).unwrap();
+    let problem = classifier.fits(grud.config()).unwrap_err();
+    assert!(problem.contains("no action"), "{problem}");
+    let mut faster = vgru.config().clone();
+    faster.fps = 50.0;
+    assert!(classifier.fits(&faster).unwrap_err().contains("50 Hz"));
+}

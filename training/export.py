@@ -18,7 +18,7 @@ NORM_TENSORS = ("norm.mean", "norm.std")
 
 
 def weights_tensors(
-    model: MotionModel, dtype: torch.dtype = torch.float32, norm_dtype: torch.dtype = torch.float32
+    model: torch.nn.Module, dtype: torch.dtype = torch.float32, norm_dtype: torch.dtype = torch.float32
 ) -> dict[str, torch.Tensor]:
     """The state dict as stored: parameters in ``dtype``; the normalization statistics in
     ``norm_dtype`` (f32 by default even for f16/bf16 files: they are few numbers and f16 would
@@ -32,7 +32,7 @@ def weights_tensors(
     return tensors
 
 
-def weights_metadata(model: MotionModel, provenance: dict) -> dict[str, str]:
+def weights_metadata(model: torch.nn.Module, provenance: dict) -> dict[str, str]:
     """The ``__metadata__`` string map."""
     return {
         "format": FORMAT,
@@ -43,13 +43,14 @@ def weights_metadata(model: MotionModel, provenance: dict) -> dict[str, str]:
 
 
 def save_weights(
-    model: MotionModel,
+    model: torch.nn.Module,
     path: str | os.PathLike,
     provenance: dict,
     dtype: torch.dtype = torch.float32,
     norm_dtype: torch.dtype = torch.float32,
 ) -> None:
-    """Write ``model`` to ``path`` atomically (temp file in the same directory, then rename)."""
+    """Write ``model`` (a predictor or the action classifier: any module with ``config`` and the
+    schema's state-dict names) to ``path`` atomically (temp file in the same directory, then rename)."""
     path = os.fspath(path)
     tensors = weights_tensors(model, dtype, norm_dtype)
     metadata = weights_metadata(model, provenance)

@@ -25,7 +25,7 @@ from safetensors.torch import save
 from torch import nn
 
 from .classifier import ActionClassifier, make_classifier_config
-from .export import FORMAT, FORMAT_VERSION, weights_metadata, weights_tensors
+from .export import weights_metadata, weights_tensors
 from .layers import MLP, BodyGRUCell, GRUCell, LSTMCell
 from .models import H36M_ACTIONS, build_model, make_config
 
@@ -154,6 +154,18 @@ PROVENANCE = {
 }
 
 
+def _random_norm(model: nn.Module, gen: torch.Generator) -> tuple[torch.Tensor, torch.Tensor]:
+    """Random normalization statistics set on ``model.norm``: mean U(+-1), std in [0.2, 1.0] on the
+    used dims and 1 on the dropped ones. Returns ``(mean, std)``."""
+    used = model.config["dims_used"]
+    frame_dims = model.config["frame_dims"]
+    mean = _uniform(gen, (frame_dims,), 1.0)
+    std = torch.ones(frame_dims)
+    std[used] = 0.2 + 0.8 * torch.rand(len(used), generator=gen)
+    model.norm.set_stats(mean, std)
+    return mean, std
+
+
 def _seed_frames(
     gen: torch.Generator, mean: torch.Tensor, std: torch.Tensor, used: list[int], frames: int = SEED_FRAMES
 ) -> torch.Tensor:
@@ -196,11 +208,7 @@ def model_fixture(stem: str, gen: torch.Generator) -> tuple[Fixture, Fixture]:
     _randomize(model, gen, bounds)
 
     used = config["dims_used"]
-    frame_dims = config["frame_dims"]
-    mean = _uniform(gen, (frame_dims,), 1.0)
-    std = torch.ones(frame_dims)
-    std[used] = 0.2 + 0.8 * torch.rand(len(used), generator=gen)
-    model.norm.set_stats(mean, std)
+    mean, std = _random_norm(model, gen)
 
     tensors = weights_tensors(model, dtype)
     weights = (tensors, weights_metadata(model, PROVENANCE))
@@ -234,18 +242,9 @@ def classifier_fixture(gen: torch.Generator) -> tuple[Fixture, Fixture]:
     model = ActionClassifier(config)
     _randomize(model, gen, {"head.weight": 3.0 * CLASSIFIER_HIDDEN**-0.5})
     used = config["dims_used"]
-    frame_dims = config["frame_dims"]
-    mean = _uniform(gen, (frame_dims,), 1.0)
-    std = torch.ones(frame_dims)
-    std[used] = 0.2 + 0.8 * torch.rand(len(used), generator=gen)
-    model.norm.set_stats(mean, std)
-    tensors = {k: _f32(v) for k, v in model.state_dict().items()}
-    metadata = {
-        "format": FORMAT,
-        "format_version": FORMAT_VERSION,
-        "config": json.dumps(config, sort_keys=True),
-        "provenance": json.dumps(PROVENANCE, sort_keys=True),
-    }
+    mean, std = _random_norm(model, gen)
+    tensors = weights_tensors(model)
+    metadata = weights_metadata(model, PROVENANCE)
     windows = torch.stack([_seed_frames(gen, mean, std, used, CLASSIFIER_WINDOW) for _ in range(CLASSIFIER_WINDOWS)])
     ref = ActionClassifier(config).double().eval()
     ref.load_state_dict({k: v.to(torch.float64) for k, v in tensors.items()})

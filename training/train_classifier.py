@@ -24,10 +24,8 @@ import argparse
 import datetime
 import json
 import math
-import os
 import shlex
 import sys
-import tempfile
 import time
 from pathlib import Path
 
@@ -37,8 +35,8 @@ from torch.nn import functional as F
 
 from . import data as h36m
 from .classifier import ActionClassifier, make_classifier_config
-from .export import FORMAT, FORMAT_VERSION
-from .features import derivative_features
+from .export import save_weights
+from .train import atomic_save
 
 CHECKPOINT = "last.pt"
 CHECKPOINT_KEYS = ("config", "args", "model", "optimizer", "iteration", "numpy_rng", "torch_rng")
@@ -78,19 +76,6 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 # ---------------------------------------------------------------- checkpoints
-
-
-def save_checkpoint(path: Path, state: dict) -> None:
-    """Atomic torch.save."""
-    fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".pt", dir=path.parent)
-    os.close(fd)
-    try:
-        torch.save(state, tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.remove(tmp)
-        raise
 
 
 def load_checkpoint(path: Path) -> dict:
@@ -289,8 +274,7 @@ def train(args) -> None:
                     f.write(json.dumps({"iteration": done, "val": rep}) + "\n")
             log(msg)
         if done % args.checkpoint_every == 0 or done == args.iterations:
-            save_checkpoint(
-                ckpt_path,
+            atomic_save(
                 {
                     "config": config,
                     "args": {k: (str(v) if isinstance(v, Path) else v) for k, v in vars(args).items()},
@@ -301,6 +285,7 @@ def train(args) -> None:
                     "torch_rng": torch.get_rng_state(),
                     "command": "python -m training.train_classifier " + shlex.join(sys.argv[1:]),
                 },
+                ckpt_path,
             )
     log(f"done: {args.iterations} iterations in {time.time() - t0:.0f} s; checkpoint {ckpt_path}")
 
@@ -326,13 +311,10 @@ def evaluate(args) -> dict:
 
 
 def export(args) -> None:
-    from safetensors.torch import save_file
-
     if args.from_ is None:
         raise SystemExit("error: --export needs --from CKPT")
     state = load_checkpoint(args.from_)
     model = model_from_checkpoint(state)
-    tensors = {k: v.detach().to(torch.float32).contiguous() for k, v in model.state_dict().items()}
     s5 = args.from_.with_name("s5_accuracy.json")
     provenance = {
         "data": "H3.6M " + ",".join(f"S{s}" for s in h36m.TRAIN_SUBJECTS if s != state["args"].get("val_subject")),
@@ -347,23 +329,8 @@ def export(args) -> None:
     if s5.is_file():
         rep = json.loads(s5.read_text())
         provenance["s5_mean_accuracy"] = round(rep["mean_accuracy"], 4)
-    metadata = {
-        "format": FORMAT,
-        "format_version": FORMAT_VERSION,
-        "config": json.dumps(state["config"], sort_keys=True),
-        "provenance": json.dumps(provenance, sort_keys=True),
-    }
     out = Path(args.export)
-    fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".safetensors", dir=out.resolve().parent)
-    os.close(fd)
-    try:
-        save_file(tensors, tmp, metadata=metadata)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, out)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.remove(tmp)
-        raise
+    save_weights(model, out, provenance)
     print(f"written {out} ({out.stat().st_size} bytes)")
 
 

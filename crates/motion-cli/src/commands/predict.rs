@@ -264,24 +264,16 @@ fn inference_classifier(
         return Ok(None); // each seed's notice says which label is used
     }
     let classifier = crate::model_source::load_classifier(path)?;
-    let (c, m) = (classifier.config(), model.config());
-    let compatible = c.frame_dims == m.frame_dims
-        && (c.fps - m.fps).abs() < 1e-9
-        && c.actions.iter().all(|a| m.action_index(a).is_some());
-    if !compatible {
-        if path.is_some() {
+    match classifier.fits(model.config()) {
+        Ok(()) => {}
+        Err(problem) if path.is_some() => {
             return Err(UsageError(format!(
-                "{}: this classifier ({} dims at {} Hz) cannot label the model's seeds ({} dims at {} Hz, actions {})",
-                classifier.path().display(),
-                c.frame_dims,
-                c.fps,
-                m.frame_dims,
-                m.fps,
-                m.actions.join(", ")
+                "{}: this classifier cannot label the model's seeds: {problem}",
+                classifier.path().display()
             ))
-            .into());
+            .into())
         }
-        return Ok(None); // each seed's notice says which label is used
+        Err(_) => return Ok(None), // each seed's notice says which label is used
     }
     Ok(Some(classifier))
 }

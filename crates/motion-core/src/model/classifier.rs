@@ -26,7 +26,7 @@
 //! ```
 use super::batch::FrameScalar;
 use super::config::{
-    check_format, parse_provenance, validate_dims_used, Provenance, DERIVATIVE_PADDING,
+    check_format, parse_provenance, validate_derivatives, validate_dims_used, Provenance,
 };
 use super::norm::Normalization;
 use super::weights::{WeightStore, WeightsError};
@@ -105,18 +105,7 @@ impl ClassifierConfig {
                 self.layers
             ));
         }
-        if self.derivative_order > 3 {
-            return Err(format!(
-                "derivative_order {} (expected 0..=3)",
-                self.derivative_order
-            ));
-        }
-        if self.derivative_padding != DERIVATIVE_PADDING {
-            return Err(format!(
-                "derivative_padding `{}` (only `{DERIVATIVE_PADDING}` is defined)",
-                self.derivative_padding
-            ));
-        }
+        validate_derivatives(self.derivative_order, &self.derivative_padding)?;
         if !(self.fps.is_finite() && self.fps > 0.0 && self.fps <= 1000.0) {
             return Err(format!("fps {} is not in (0, 1000]", self.fps));
         }
@@ -326,6 +315,26 @@ impl ActionClassifier {
             row.mapv_inplace(|v| v / sum);
         }
         Ok(probs)
+    }
+
+    /// Whether this classifier can label a predictor's seeds: same frame width and rate, and
+    /// every class one of the predictor's actions. Returns what does not fit.
+    pub fn fits(&self, predictor: &super::ModelConfig) -> Result<(), String> {
+        let c = &self.config;
+        if c.frame_dims != predictor.frame_dims || (c.fps - predictor.fps).abs() > 1e-9 {
+            return Err(format!(
+                "the classifier reads {} dims at {} Hz, the model {} dims at {} Hz",
+                c.frame_dims, c.fps, predictor.frame_dims, predictor.fps
+            ));
+        }
+        match c
+            .actions
+            .iter()
+            .find(|a| predictor.action_index(a).is_none())
+        {
+            Some(a) => Err(format!("the model has no action `{a}`")),
+            None => Ok(()),
+        }
     }
 
     /// The most probable action of a motion clip at the classifier's rate (e.g. a predictor's

@@ -89,18 +89,7 @@ impl ModelConfig {
         if self.hidden == 0 {
             return Err("hidden is 0".into());
         }
-        if self.derivative_order > 3 {
-            return Err(format!(
-                "derivative_order {} (expected 0..=3)",
-                self.derivative_order
-            ));
-        }
-        if self.derivative_padding != DERIVATIVE_PADDING {
-            return Err(format!(
-                "derivative_padding `{}` (only `{DERIVATIVE_PADDING}` is defined)",
-                self.derivative_padding
-            ));
-        }
+        validate_derivatives(self.derivative_order, &self.derivative_padding)?;
         if !(self.fps.is_finite() && self.fps > 0.0) {
             return Err(format!("fps {} is not a positive number", self.fps));
         }
@@ -208,6 +197,19 @@ pub fn validate_dims_used(dims_used: &[usize], frame_dims: usize) -> Result<(), 
     sorted.sort_unstable();
     if sorted.windows(2).any(|w| w[0] == w[1]) {
         return Err("dims_used holds a repeated index".into());
+    }
+    Ok(())
+}
+
+/// Checks the derivative features' order (0..=3) and padding (only `repeat-first` is defined).
+pub fn validate_derivatives(order: usize, padding: &str) -> Result<(), String> {
+    if order > 3 {
+        return Err(format!("derivative_order {order} (expected 0..=3)"));
+    }
+    if padding != DERIVATIVE_PADDING {
+        return Err(format!(
+            "derivative_padding `{padding}` (only `{DERIVATIVE_PADDING}` is defined)"
+        ));
     }
     Ok(())
 }
