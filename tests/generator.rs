@@ -144,7 +144,7 @@ fn dropped_dims_are_the_mean() {
 
 #[test]
 fn batch_rows_match_single_generators() {
-    for name in ["vgru_d", "gru_d_residual"] {
+    for name in ["vgru_d", "gru_d_residual", "dae_lstm"] {
         let m = model(name);
         let s = seed();
         let rows = 3;
@@ -308,7 +308,7 @@ fn bad_input_gives_typed_errors() {
 
 #[test]
 fn a_step_does_not_allocate() {
-    for name in ["vgru_d", "gru_d"] {
+    for name in ["vgru_d", "gru_d", "dae_lstm"] {
         let m = model(name);
         let mut g = Generator::new(Arc::clone(&m));
         g.set_plan_horizon(20).unwrap();

@@ -256,6 +256,11 @@ fn gru_d_residual() {
     check_model("gru_d_residual");
 }
 
+#[test]
+fn dae_lstm() {
+    check_model("dae_lstm");
+}
+
 // ---- loading errors -----------------------------------------------------------------------------
 
 /// A fixture's tensors (as f32) and metadata, for editing.

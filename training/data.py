@@ -141,6 +141,22 @@ def normalization_stats(sequences_50hz) -> NormStats:
     return NormStats(mean=mean, std=std, dims_used=used)
 
 
+def minmax_stats(sequences_50hz) -> NormStats:
+    """Min-max scaling to [0, 1] (paper 002, section 4.1) in the NormStats form: ``mean`` holds the
+    per-dim minimum and ``std`` the range (max - min) over all given 50 Hz frames, so ``normalize``
+    maps the training range onto [0, 1]. The used dims are those of ``normalization_stats`` (std
+    >= 1e-4); dropped dims get range 1 and are restored to their minimum (their constant value)."""
+    allf = np.concatenate(list(sequences_50hz), axis=0)
+    low = allf.min(axis=0)
+    span = allf.max(axis=0) - low
+    used = np.nonzero(allf.std(axis=0) >= STD_EPS)[0].astype(np.int64)
+    span = span.copy()
+    dropped = np.ones(span.shape, dtype=bool)
+    dropped[used] = False
+    span[dropped] = 1.0
+    return NormStats(mean=low, std=span, dims_used=used)
+
+
 def published_dims_used() -> list[int] | None:
     """`dims_used_by_published_models` of h36m_skeleton.json, or None if the reference is absent."""
     import json
@@ -194,15 +210,18 @@ class TrainingSet:
 
 
 def load_training_set(
-    dataset_dir: Path | None = None, actions=ACTIONS, subjects=TRAIN_SUBJECTS, log=None
+    dataset_dir: Path | None = None, actions=ACTIONS, subjects=TRAIN_SUBJECTS, log=None, scaling: str = "standard"
 ) -> TrainingSet:
     """Load the training subjects for `actions`. Normalization statistics are computed over ALL training frames
-    of all 15 actions (the protocol's statistics do not depend on the actions a model is trained on)."""
+    of all 15 actions (the protocol's statistics do not depend on the actions a model is trained on):
+    `scaling` "standard" (mean/std) or "min-max" (to [0, 1], `minmax_stats`)."""
     dataset_dir = Path(dataset_dir) if dataset_dir else default_dataset_dir()
     seqs = load_sequences(dataset_dir, subjects, ACTIONS, log=log)
     if not seqs:
         raise FileNotFoundError(f"no H3.6M training files found under {dataset_dir} (set MOTION_DATA_DIR)")
-    stats = normalization_stats(seqs.values())
+    if scaling not in ("standard", "min-max"):
+        raise ValueError(f"unknown scaling {scaling!r}; expected 'standard' or 'min-max'")
+    stats = normalization_stats(seqs.values()) if scaling == "standard" else minmax_stats(seqs.values())
     actions = tuple(actions)
     by_action: list[list] = []
     for a in actions:

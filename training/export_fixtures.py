@@ -145,6 +145,11 @@ MODEL_SPECS = {
     "vgru_d_f16": ("vgru-d", {"gru_convention": "paper", "residual": False}, torch.float16, "smoking"),
 }
 
+# Drawn after the classifier so the files above stay byte-identical.
+LATE_MODEL_SPECS = {
+    "dae_lstm": ("dae-lstm", {"layers": 2, "dae_hidden": 24, "dae_layers": 2}, torch.float32, "walking"),
+}
+
 PROVENANCE = {
     "data": "none: random weights (parity fixture)",
     "iterations": 0,
@@ -184,7 +189,7 @@ def _seed_frames(
 
 def model_fixture(stem: str, gen: torch.Generator) -> tuple[Fixture, Fixture]:
     """``<stem>.safetensors`` (weights schema) and ``<stem>.expected.safetensors``."""
-    architecture, overrides, dtype, action = MODEL_SPECS[stem]
+    architecture, overrides, dtype, action = {**MODEL_SPECS, **LATE_MODEL_SPECS}[stem]
     extra = {"plan_hidden": MODEL_PLAN} if architecture == "vgru-d" else {}
     config = make_config(
         architecture,
@@ -204,7 +209,12 @@ def model_fixture(stem: str, gen: torch.Generator) -> tuple[Fixture, Fixture]:
         bounds.update({"decoder.weight": 0.3 * MODEL_HIDDEN**-0.5, "decoder.bias": 0.02})  # modest drift
     else:
         bounds["decoder.weight"] = 1.5 * MODEL_HIDDEN**-0.5
-        bounds["rnn.0.weight_ih" if architecture == "gru-d" else "body.weight_ih"] = 1.5 * input_width**-0.5
+        first = {"gru-d": "rnn.0.weight_ih", "vgru-d": "body.weight_ih", "dae-lstm": "rnn.0.weight_ih"}[architecture]
+        bounds[first] = 1.5 * (input_width + (len(config["actions"]) if architecture == "dae-lstm" else 0)) ** -0.5
+    if architecture == "dae-lstm":  # livelier: without these the closed loop settles in ~5 steps
+        widths = [len(H36M_DIMS_USED)] + [config["dae_hidden"]] * config["dae_layers"]
+        bounds.update({f"dae.layers.{k}.weight": 2.5 * w**-0.5 for k, w in enumerate(widths)})
+        bounds.update({f"rnn.{k}.weight_hh": 2.5 * MODEL_HIDDEN**-0.5 for k in range(config["layers"])})
     _randomize(model, gen, bounds)
 
     used = config["dims_used"]
@@ -265,6 +275,10 @@ def build_all() -> dict[str, Fixture]:
     weights, expected = classifier_fixture(gen)
     files["action_classifier.safetensors"] = weights
     files["action_classifier.expected.safetensors"] = expected
+    for stem in LATE_MODEL_SPECS:
+        weights, expected = model_fixture(stem, gen)
+        files[f"{stem}.safetensors"] = weights
+        files[f"{stem}.expected.safetensors"] = expected
     return files
 
 

@@ -1,8 +1,11 @@
-"""Motion models: VGRU-d (VTLN-RNN) and GRU-d.
+"""Motion models: VGRU-d (VTLN-RNN), GRU-d and DAE-LSTM.
 
 Gopalakrishnan, Mali, Kifer, Giles, Ororbia. A Neural Temporal Model for Human Motion Prediction
 (CVPR 2019), sections 3.2 (VTLN-RNN: plan GRU running backwards in time + body GRU, eqs. 1-4),
 3.3 (derivative features) and 3.4 (open-loop and closed-loop passes of the training loss).
+Ghosh, Song, Aksan, Hilliges. Learning Human Motion Models for Long-term Predictions (3DV 2017),
+section 3 (DAE-LSTM: three stacked LSTM layers whose every predicted pose is filtered by a dropout
+autoencoder before it is fed back).
 
 State-dict names are the tensor names of the weights schema (weights/README.md), which the Rust
 engine reads. Models work on normalized used dims ``[B, T, O]``; ``predict`` wraps that with
@@ -21,12 +24,12 @@ from torch.nn import functional as F
 
 from .data import ACTIONS
 from .features import DERIVATIVE_PADDING, DerivativeHistory, derivative_features, normalize, unnormalize
-from .layers import BIAS_INIT, BodyGRUCell, GRUCell, orthogonal_blocks_
+from .layers import BIAS_INIT, MLP, BodyGRUCell, GRUCell, LSTMCell, orthogonal_blocks_
 
 # The one-hot order of multi-action models: the action list of the data pipeline.
 H36M_ACTIONS = list(ACTIONS)
 
-ARCHITECTURES = ("vgru-d", "gru-d")
+ARCHITECTURES = ("vgru-d", "gru-d", "dae-lstm")
 
 
 def make_config(architecture: str, dims_used: list[int], **overrides) -> dict:
@@ -38,7 +41,7 @@ def make_config(architecture: str, dims_used: list[int], **overrides) -> dict:
         "frame_dims": 99,
         "dims_used": [int(d) for d in dims_used],
         "hidden": 512,
-        "layers": 1 if architecture == "vgru-d" else 2,
+        "layers": {"vgru-d": 1, "gru-d": 2, "dae-lstm": 3}[architecture],
         "gru_convention": "paper" if architecture == "vgru-d" else "pytorch",
         "residual": False,
         "derivative_order": 3,
@@ -51,6 +54,10 @@ def make_config(architecture: str, dims_used: list[int], **overrides) -> dict:
     }
     if architecture == "vgru-d":
         config["plan_hidden"] = 512
+    if architecture == "dae-lstm":
+        # Paper 002: plain poses (no derivatives), min-max scaling, direct (not residual) output,
+        # a 3 x 3000 ReLU autoencoder; sizes are overridable (weights/README.md says what ships).
+        config.update(derivative_order=0, residual=False, normalization="min-max", dae_hidden=3000, dae_layers=3)
     unknown = set(overrides) - set(config) - {"plan_hidden"}
     if unknown:
         raise ValueError(f"unknown config fields {sorted(unknown)}")
@@ -312,6 +319,96 @@ class GRUD(MotionModel):
         return torch.stack(outputs, dim=1)
 
 
+def joint_groups(dims_used: list[int]) -> list[list[int]]:
+    """Positions in ``dims_used`` grouped by joint (full-frame dim // 3: an exp-map triple, or the
+    root position), in joint order: the units the DAE's dropout removes whole."""
+    groups: dict[int, list[int]] = {}
+    for k, d in enumerate(dims_used):
+        groups.setdefault(int(d) // 3, []).append(k)
+    return [groups[j] for j in sorted(groups)]
+
+
+class DAELSTM(MotionModel):
+    """DAE-LSTM (paper 002, section 3): LSTM-3LR over the pose (⊕ the action one-hot when the config
+    names actions), a linear decoder to the next pose, and the dropout autoencoder ``dae`` (an MLP
+    ``O -> dae_hidden x dae_layers -> O``, ReLU) that filters every prediction. The filtered pose is
+    both the output and what is fed back. ``filter_enabled = False`` gives the bare LSTM-3LR (its
+    pre-training). Tensors: ``rnn.{k}.*`` (LSTM cells, PyTorch gate order), ``decoder.*``,
+    ``dae.layers.{k}.*``, ``norm.mean`` / ``norm.std`` (min and max - min for min-max scaling)."""
+
+    def __init__(self, config: dict, dropout: float = 0.0):
+        super().__init__(config, dropout)
+        if config["architecture"] != "dae-lstm":
+            raise ValueError(f"DAELSTM needs architecture 'dae-lstm', got {config['architecture']!r}")
+        self.num_layers = int(config["layers"])
+        if self.num_layers < 1:
+            raise ValueError("dae-lstm needs at least one LSTM layer")
+        rnn_input = self.input_size + len(self.actions)
+        sizes = [rnn_input] + [self.hidden_size] * self.num_layers
+        self.rnn = nn.ModuleList(LSTMCell(a, self.hidden_size) for a in sizes[:-1])
+        dae_sizes = [self.output_size] + [int(config["dae_hidden"])] * int(config["dae_layers"]) + [self.output_size]
+        self.dae = MLP(dae_sizes)
+        self.filter_enabled = True
+        self.groups = joint_groups(self.dims_used)
+
+    def action_indices(self, action, batch, device):
+        if not self.actions:
+            return None
+        return super().action_indices(action, batch, device)
+
+    def _flat_weights(self) -> list[torch.Tensor]:
+        flat = []
+        for cell in self.rnn:
+            flat += [cell.weight_ih, cell.weight_hh, cell.bias_ih, cell.bias_hh]
+        return flat
+
+    def _begin(self, batch, steps, action, eps, like):
+        zeros = torch.zeros(self.num_layers, batch, self.hidden_size, dtype=like.dtype, device=like.device)
+        onehot = None
+        if self.actions:
+            idx = self.action_indices(action, batch, like.device)
+            onehot = F.one_hot(idx, len(self.actions)).to(like.dtype)
+        return {"state": (zeros, zeros.clone()), "onehot": onehot}
+
+    def _run(self, ctx, features, t0):
+        if ctx["onehot"] is not None:
+            onehot = ctx["onehot"][:, None, :].expand(-1, features.shape[1], -1)
+            features = torch.cat([features, onehot], dim=-1)
+        # torch's fused multi-layer LSTM over the cells' own parameters: the same equations as
+        # LSTMCell (gate order i, f, g, o), one call for all steps and layers.
+        out, h, c = torch._VF.lstm(
+            features, ctx["state"], self._flat_weights(), True, self.num_layers, 0.0, self.training, False, True
+        )
+        ctx["state"] = (h, c)
+        return out
+
+    def filter(self, pose: torch.Tensor) -> torch.Tensor:
+        """The DAE's reconstruction of a (normalized) pose ``[..., O]``."""
+        return self.dae(pose)
+
+    def _decode(self, hidden, inputs):
+        raw = super()._decode(hidden, inputs)
+        return self.filter(raw) if self.filter_enabled else raw
+
+    def open_loop_raw(self, x: torch.Tensor, action=None) -> torch.Tensor:
+        """Teacher-forced pass of the bare LSTM-3LR over ``x [B, T, O]``: its unfiltered predictions
+        (output t predicts frame t + 1); the training losses filter them themselves."""
+        ctx = self._begin(x.shape[0], x.shape[1], action, None, x)
+        hidden = self._run(ctx, self.input_dropout(derivative_features(x, self.derivative_order)), 0)
+        return MotionModel._decode(self, hidden, x)
+
+    def drop_joints(self, pose: torch.Tensor, rate: float, generator: torch.Generator | None = None) -> torch.Tensor:
+        """The DAE's corruption (section 3.1): each joint's dims set to 0 with probability ``rate``
+        (whole joints removed, no rescaling)."""
+        if rate <= 0:
+            return pose
+        keep_joint = (torch.rand(*pose.shape[:-1], len(self.groups), generator=generator) >= rate).to(pose.dtype)
+        index = torch.empty(self.output_size, dtype=torch.long)
+        for j, group in enumerate(self.groups):
+            index[group] = j
+        return pose * keep_joint.to(pose.device).index_select(-1, index.to(pose.device))
+
+
 def build_model(config: dict, dropout: float = 0.3) -> MotionModel:
     """The model class named by ``config['architecture']``."""
     architecture = config.get("architecture")
@@ -319,6 +416,8 @@ def build_model(config: dict, dropout: float = 0.3) -> MotionModel:
         return VGRUD(config, dropout)
     if architecture == "gru-d":
         return GRUD(config, dropout)
+    if architecture == "dae-lstm":
+        return DAELSTM(config, 0.0)
     raise ValueError(f"unknown architecture {architecture!r}; expected one of {ARCHITECTURES}")
 
 

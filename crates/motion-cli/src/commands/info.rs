@@ -90,6 +90,24 @@ fn text_summary(model: &MotionModel) -> String {
             );
             format!("{} GRU layers x {} units", c.layers, c.hidden)
         }
+        Architecture::DaeLstm => {
+            line(
+                "architecture",
+                "dae-lstm (stacked LSTM + linear decoder, each output filtered by a dropout \
+                 autoencoder before it is fed back, paper 002)"
+                    .into(),
+            );
+            format!(
+                "{} LSTM layers x {} units (first layer input {} = features + {} action one-hot); \
+                 autoencoder {} ReLU layers x {} units",
+                c.layers,
+                c.hidden,
+                c.rnn_input_dims(),
+                c.actions.len(),
+                c.dae_layers.unwrap_or(0),
+                c.dae_hidden.unwrap_or(0)
+            )
+        }
     };
     line(
         "sizes",
@@ -135,13 +153,23 @@ fn text_summary(model: &MotionModel) -> String {
             "no".into()
         },
     );
+    if c.architecture != Architecture::DaeLstm {
+        line(
+            "gru convention",
+            format!(
+                "{} ({})",
+                c.gru_convention.name(),
+                convention_formula(c.gru_convention)
+            ),
+        );
+    }
     line(
-        "gru convention",
-        format!(
-            "{} ({})",
-            c.gru_convention.name(),
-            convention_formula(c.gru_convention)
-        ),
+        "normalization",
+        match c.normalization.as_str() {
+            "min-max" => "min-max (norm.mean = training minimum, norm.std = range; features in [0, 1])",
+            _ => "standard (norm.mean, norm.std = training mean and standard deviation)",
+        }
+        .into(),
     );
     line(
         "derivatives",

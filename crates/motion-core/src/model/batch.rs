@@ -1,7 +1,8 @@
 //! Closed-loop generation for a batch of characters (or of samples of one character) in lockstep.
 //!
 //! Every step is the same sequence for all rows: derivative features of the current normalized
-//! frame, one recurrent step, the decoder, optional residual, un-normalization. The per-step work
+//! frame, one recurrent step, the decoder, optional residual, the DAE-LSTM's autoencoder filter,
+//! un-normalization. The per-step work
 //! is matrix-matrix products over the batch (see [`crate::nn::gemm`]); all buffers are sized in
 //! [`BatchGenerator::new`], so a step allocates nothing of its own. At batch 1 the products are
 //! GEMVs and a step touches no heap at all (tested); at larger batches rayon may allocate its task
@@ -17,6 +18,7 @@
 //! The fed-back frame is the model's normalized output itself (as in `training/models.py`), not
 //! a re-normalized copy of the full frame it returns.
 use super::config::ModelConfig;
+use super::dae_lstm::DaeLstmState;
 use super::generate_error::GenerateError;
 use super::grud::GruDState;
 use super::predictor::{MotionModel, Network};
@@ -71,6 +73,7 @@ pub enum Noise<'a> {
 enum NetState {
     Vgru(Box<VgruState>),
     Grud(GruDState),
+    DaeLstm(Box<DaeLstmState>),
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -124,6 +127,7 @@ impl Shard {
                 NetState::Vgru(Box::new(v.new_state(rows, cfg.seed_frames + cfg.horizon)))
             }
             Network::Grud(g) => NetState::Grud(g.new_state(rows)),
+            Network::DaeLstm(d) => NetState::DaeLstm(Box::new(d.new_state(rows))),
         };
         Self {
             rows,
@@ -154,6 +158,9 @@ impl Shard {
                 net.step(state, &self.features, rows, body_step)
             }
             (NetState::Grud(state), Network::Grud(net)) => net.step(state, &self.features, rows),
+            (NetState::DaeLstm(state), Network::DaeLstm(net)) => {
+                net.step(state, &self.features, rows)
+            }
             _ => unreachable!("state built for this model"),
         };
         model.decoder().forward(hidden, rows, &mut self.out_norm);
@@ -161,6 +168,11 @@ impl Shard {
             for (y, x) in self.out_norm.iter_mut().zip(&self.x_norm) {
                 *y += x;
             }
+        }
+        if let (NetState::DaeLstm(state), Network::DaeLstm(net)) =
+            (&mut self.state, model.network())
+        {
+            net.filter(state, &mut self.out_norm, rows);
         }
         let norm = model.normalization();
         for b in 0..rows {
@@ -294,7 +306,7 @@ impl BatchGenerator {
         let action_indices = self.action_indices(cfg, actions)?;
         let mut sources = match model.network() {
             Network::Vgru(net) => self.noise_sources(net.plan_hidden(), noise)?,
-            Network::Grud(_) => Vec::new(),
+            Network::Grud(_) | Network::DaeLstm(_) => Vec::new(),
         }
         .into_iter();
         for (k, shard) in self.shards.iter_mut().enumerate() {
@@ -311,6 +323,9 @@ impl BatchGenerator {
                     );
                 }
                 (NetState::Grud(state), Network::Grud(net)) => net.reset(state, shard.rows),
+                (NetState::DaeLstm(state), Network::DaeLstm(net)) => {
+                    net.begin(state, &action_indices[rows])
+                }
                 _ => unreachable!("state built for this model"),
             }
             for d in &mut shard.derivatives {
@@ -437,7 +452,10 @@ impl BatchGenerator {
                     valid: cfg.actions.clone(),
                 })
         };
-        let needed = matches!(self.model.network(), Network::Vgru(_));
+        let needed = matches!(
+            self.model.network(),
+            Network::Vgru(_) | Network::DaeLstm(_)
+        );
         match actions.len() {
             0 if needed => Err(GenerateError::MissingAction {
                 valid: cfg.actions.clone(),

@@ -21,14 +21,19 @@ pub enum Architecture {
     /// Stacked GRU layers with derivative inputs + decoder (paper 000, GRU-d).
     #[serde(rename = "gru-d")]
     GruD,
+    /// Stacked LSTM layers + decoder whose every output is filtered by a dropout autoencoder
+    /// before it is fed back (paper 002, section 3).
+    #[serde(rename = "dae-lstm")]
+    DaeLstm,
 }
 
 impl Architecture {
-    /// The schema name (`vgru-d` or `gru-d`).
+    /// The schema name (`vgru-d`, `gru-d` or `dae-lstm`).
     pub fn name(self) -> &'static str {
         match self {
             Architecture::VgruD => "vgru-d",
             Architecture::GruD => "gru-d",
+            Architecture::DaeLstm => "dae-lstm",
         }
     }
 }
@@ -36,21 +41,32 @@ impl Architecture {
 /// The `config` JSON object: everything an engine needs to build and drive the model.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ModelConfig {
-    /// `vgru-d` or `gru-d`.
+    /// `vgru-d`, `gru-d` or `dae-lstm`.
     pub architecture: Architecture,
     /// Width of a full frame as callers see it (99 for H3.6M).
     pub frame_dims: usize,
     /// Indices of the full-frame dims the model predicts; the others are restored to the mean.
     pub dims_used: Vec<usize>,
-    /// Body GRU units (`vgru-d`) or units per layer (`gru-d`).
+    /// Body GRU units (`vgru-d`) or units per recurrent layer (`gru-d`, `dae-lstm`).
     pub hidden: usize,
-    /// Stacked GRU layers (`gru-d`; 1 for `vgru-d`).
+    /// Stacked GRU (`gru-d`) or LSTM (`dae-lstm`) layers; 1 for `vgru-d`.
     pub layers: usize,
     /// Plan GRU units (`vgru-d` only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub plan_hidden: Option<usize>,
-    /// Candidate convention of every GRU cell in the file.
+    /// Units of each hidden layer of the dropout autoencoder (`dae-lstm` only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dae_hidden: Option<usize>,
+    /// Hidden layers of the dropout autoencoder (`dae-lstm` only; paper 002: 3).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dae_layers: Option<usize>,
+    /// Candidate convention of every GRU cell in the file (no GRU in `dae-lstm`: ignored there).
     pub gru_convention: GruConvention,
+    /// How `norm.mean` / `norm.std` were computed: `standard` (mean and standard deviation) or
+    /// `min-max` (minimum and max - min, features in [0, 1] on the training set). The arithmetic
+    /// is the same `(x - mean) / std` either way; the field says what the numbers are.
+    #[serde(default = "standard_normalization")]
+    pub normalization: String,
     /// Output = input frame (normalized used dims) + decoder.
     pub residual: bool,
     /// 0 (plain frames) or up to 3 (frame + backward differences of order 1..=n).
@@ -61,7 +77,8 @@ pub struct ModelConfig {
     pub fps: f64,
     /// Skeleton name (`h36m-32`).
     pub skeleton: String,
-    /// Action labels in one-hot order (empty for unconditioned models).
+    /// Action labels in one-hot order (empty for unconditioned models). VGRU-d feeds the one-hot
+    /// to its plan GRU, DAE-LSTM appends it to the first LSTM layer's input.
     #[serde(default)]
     pub actions: Vec<String>,
     /// Seed length used in training.
@@ -107,6 +124,23 @@ impl ModelConfig {
                 }
             }
             Architecture::GruD => {}
+            Architecture::DaeLstm => {
+                if self.layers == 0 {
+                    return Err("dae-lstm with 0 LSTM layers".into());
+                }
+                if self.dae_hidden.unwrap_or(0) == 0 {
+                    return Err("dae-lstm needs dae_hidden > 0".into());
+                }
+                if self.dae_layers.is_none() {
+                    return Err("dae-lstm needs dae_layers".into());
+                }
+            }
+        }
+        if !matches!(self.normalization.as_str(), "standard" | "min-max") {
+            return Err(format!(
+                "normalization {:?} is neither \"standard\" nor \"min-max\"",
+                self.normalization
+            ));
         }
         Ok(())
     }
@@ -116,15 +150,41 @@ impl ModelConfig {
         self.dims_used.len()
     }
 
-    /// Model input width `I = O * (1 + derivative_order)`.
+    /// Model input width `I = O * (1 + derivative_order)` (features of one frame; a DAE-LSTM's
+    /// first layer also reads the action one-hot, see [`rnn_input_dims`](Self::rnn_input_dims)).
     pub fn input_dims(&self) -> usize {
         self.output_dims() * (1 + self.derivative_order)
+    }
+
+    /// Width of the first recurrent layer's input: the features, plus the action one-hot for a
+    /// DAE-LSTM with actions.
+    pub fn rnn_input_dims(&self) -> usize {
+        match self.architecture {
+            Architecture::DaeLstm => self.input_dims() + self.actions.len(),
+            _ => self.input_dims(),
+        }
+    }
+
+    /// The dropout autoencoder's layer widths `[O, dae_hidden x dae_layers, O]` (`dae-lstm`).
+    pub fn dae_widths(&self) -> Vec<usize> {
+        let o = self.output_dims();
+        let mut widths = vec![o];
+        widths.extend(std::iter::repeat_n(
+            self.dae_hidden.unwrap_or(0),
+            self.dae_layers.unwrap_or(0),
+        ));
+        widths.push(o);
+        widths
     }
 
     /// The index of an action label in one-hot order.
     pub fn action_index(&self, label: &str) -> Option<usize> {
         self.actions.iter().position(|a| a == label)
     }
+}
+
+fn standard_normalization() -> String {
+    "standard".into()
 }
 
 /// The `provenance` JSON object (data, iterations, date, command, best_validation, seed), kept as

@@ -2,8 +2,11 @@
 //! decoder, read from one self-describing safetensors file (schema: weights/README.md).
 //!
 //! Citation: Gopalakrishnan, Mali, Kifer, Giles, Ororbia, "A Neural Temporal Model for Human
-//! Motion Prediction", CVPR 2019 — paper 000, sections 3.2-3.3.
+//! Motion Prediction", CVPR 2019 — paper 000, sections 3.2-3.3 (VGRU-d, GRU-d); Ghosh, Song,
+//! Aksan, Hilliges, "Learning Human Motion Models for Long-term Predictions", 3DV 2017 — paper
+//! 002, section 3 (DAE-LSTM).
 use super::config::{check_format, parse_provenance, Architecture, ModelConfig, Provenance};
+use super::dae_lstm::DaeLstm;
 use super::grud::GruD;
 use super::norm::Normalization;
 use super::vgru::VgruD;
@@ -18,6 +21,8 @@ pub enum Network {
     Vgru(Box<VgruD>),
     /// GRU-d: stacked GRU layers.
     Grud(GruD),
+    /// DAE-LSTM: stacked LSTM layers and the dropout autoencoder that filters each output.
+    DaeLstm(Box<DaeLstm>),
 }
 
 /// Immutable predictor weights; share one across characters and threads with `Arc`.
@@ -52,6 +57,7 @@ impl MotionModel {
         let network = match config.architecture {
             Architecture::VgruD => Network::Vgru(Box::new(VgruD::load(store, &config)?)),
             Architecture::GruD => Network::Grud(GruD::load(store, &config)?),
+            Architecture::DaeLstm => Network::DaeLstm(Box::new(DaeLstm::load(store, &config)?)),
         };
         let decoder = Linear::load(
             store,
@@ -115,6 +121,7 @@ impl MotionModel {
         let net = match &self.network {
             Network::Vgru(v) => v.parameter_count(),
             Network::Grud(g) => g.parameter_count(),
+            Network::DaeLstm(d) => d.parameter_count(),
         };
         net + self.decoder.parameter_count()
     }

@@ -14,26 +14,36 @@ impl ModelConfig {
     /// The paper's configuration (paper 000, section 4): H3.6M frames (99 dims, 54 used),
     /// derivative order 3, 512 units (GRU-d: 2 layers, PyTorch convention, unconditioned;
     /// VGRU-d: plan 512, paper convention, the 15 H3.6M actions), 50 seed + 100 predicted frames.
+    /// DAE-LSTM (paper 002, 4.1): 3 LSTM layers of 1000 units over plain min-max scaled poses and
+    /// the action one-hot, a 3 x 3000 autoencoder.
     pub fn paper(architecture: Architecture) -> Self {
         let vgru = architecture == Architecture::VgruD;
+        let dae = architecture == Architecture::DaeLstm;
         ModelConfig {
             architecture,
             frame_dims: H36M_FRAME_DIMS,
             dims_used: H36M_DIMS_USED.to_vec(),
-            hidden: 512,
-            layers: if vgru { 1 } else { 2 },
+            hidden: if dae { 1000 } else { 512 },
+            layers: match architecture {
+                Architecture::VgruD => 1,
+                Architecture::GruD => 2,
+                Architecture::DaeLstm => 3,
+            },
             plan_hidden: vgru.then_some(512),
+            dae_hidden: dae.then_some(3000),
+            dae_layers: dae.then_some(3),
+            normalization: if dae { "min-max" } else { "standard" }.into(),
             gru_convention: if vgru {
                 GruConvention::Paper
             } else {
                 GruConvention::PyTorch
             },
             residual: false,
-            derivative_order: 3,
+            derivative_order: if dae { 0 } else { 3 },
             derivative_padding: DERIVATIVE_PADDING.into(),
             fps: 25.0,
             skeleton: "h36m-32".into(),
-            actions: if vgru {
+            actions: if vgru || dae {
                 H36M_ACTIONS.iter().map(|a| a.to_string()).collect()
             } else {
                 Vec::new()
@@ -74,6 +84,19 @@ impl ModelConfig {
                 shapes.push(("plan.mu".into(), vec![p]));
                 shapes.push(("plan.sigma".into(), vec![p]));
                 shapes.push(("body.weight_ph".into(), vec![3 * h, p]));
+            }
+            Architecture::DaeLstm => {
+                for k in 0..self.layers {
+                    let inputs = if k == 0 { self.rnn_input_dims() } else { h };
+                    shapes.push((format!("rnn.{k}.weight_ih"), vec![4 * h, inputs]));
+                    shapes.push((format!("rnn.{k}.weight_hh"), vec![4 * h, h]));
+                    shapes.push((format!("rnn.{k}.bias_ih"), vec![4 * h]));
+                    shapes.push((format!("rnn.{k}.bias_hh"), vec![4 * h]));
+                }
+                for (k, w) in self.dae_widths().windows(2).enumerate() {
+                    shapes.push((format!("dae.layers.{k}.weight"), vec![w[1], w[0]]));
+                    shapes.push((format!("dae.layers.{k}.bias"), vec![w[1]]));
+                }
             }
         }
         shapes.push(("decoder.weight".into(), vec![o, h]));

@@ -1,0 +1,171 @@
+//! DAE-LSTM: stacked LSTM layers (LSTM-3LR) predicting the next pose, and a dropout autoencoder
+//! that filters every prediction before it is fed back.
+//!
+//! Citation: Ghosh, Song, Aksan, Hilliges, "Learning Human Motion Models for Long-term
+//! Predictions", 3DV 2017 — paper 002, section 3 (3.1 the dropout autoencoder, 3.2 the LSTM-3LR,
+//! 3.3 stacking them at inference). Tensors as in `training/models.py` (`DAELSTM`):
+//! `rnn.{k}.weight_ih/weight_hh/bias_ih/bias_hh` (PyTorch LSTM cells, gate order i, f, g, o),
+//! `dae.layers.{k}.weight/bias` (ReLU between layers, none after the last); the decoder and the
+//! normalization are the predictor's own (`decoder.*`, `norm.*`).
+//!
+//! The first LSTM layer reads the frame's features followed by the action one-hot when the
+//! config names actions. The autoencoder maps the decoded (normalized) pose to its filtered
+//! version in the same space; that filtered pose is both the output and the next input.
+use super::config::ModelConfig;
+use super::weights::{WeightStore, WeightsError};
+use crate::nn::{LstmCell, LstmConfig, LstmScratch, Mlp, MlpConfig, MlpScratch};
+
+/// DAE-LSTM weights (immutable, shareable).
+#[derive(Debug, Clone)]
+pub struct DaeLstm {
+    layers: Vec<LstmCell>,
+    dae: Mlp,
+    features: usize,
+    actions: usize,
+    outputs: usize,
+}
+
+/// Per-batch state of a [`DaeLstm`]: hidden and cell vectors per layer, the action of each row,
+/// and work buffers, all sized once.
+#[derive(Debug, Clone)]
+pub struct DaeLstmState {
+    hidden: Vec<Vec<f32>>,
+    cell: Vec<Vec<f32>>,
+    scratch: Vec<LstmScratch>,
+    input: Vec<f32>,
+    action: Vec<usize>,
+    dae_scratch: MlpScratch,
+    filtered: Vec<f32>,
+}
+
+impl DaeLstm {
+    /// Reads `rnn.{k}.*` for `k in 0..layers` and `dae.layers.{k}.*` for the config's widths.
+    pub fn load(store: &WeightStore, config: &ModelConfig) -> Result<Self, WeightsError> {
+        let layers = (0..config.layers)
+            .map(|k| {
+                let cfg = LstmConfig {
+                    inputs: if k == 0 {
+                        config.rnn_input_dims()
+                    } else {
+                        config.hidden
+                    },
+                    hidden: config.hidden,
+                };
+                LstmCell::load(store, &format!("rnn.{k}"), cfg)
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let dae = Mlp::load(
+            store,
+            "dae",
+            &MlpConfig {
+                widths: config.dae_widths(),
+            },
+        )?;
+        Ok(Self {
+            layers,
+            dae,
+            features: config.input_dims(),
+            actions: config.actions.len(),
+            outputs: config.output_dims(),
+        })
+    }
+
+    /// Number of trainable parameters (LSTM layers and autoencoder).
+    pub fn parameter_count(&self) -> usize {
+        self.layers
+            .iter()
+            .map(LstmCell::parameter_count)
+            .sum::<usize>()
+            + self.dae.parameter_count()
+    }
+
+    /// Units per LSTM layer.
+    pub fn hidden(&self) -> usize {
+        self.layers[0].config().hidden
+    }
+
+    /// The dropout autoencoder.
+    pub fn autoencoder(&self) -> &Mlp {
+        &self.dae
+    }
+
+    /// Zeroed state for up to `capacity` rows.
+    pub fn new_state(&self, capacity: usize) -> DaeLstmState {
+        let h = self.hidden();
+        let zeros = || {
+            self.layers
+                .iter()
+                .map(|_| vec![0.0; capacity * h])
+                .collect()
+        };
+        DaeLstmState {
+            hidden: zeros(),
+            cell: zeros(),
+            scratch: self
+                .layers
+                .iter()
+                .map(|_| LstmScratch::new(h, capacity))
+                .collect(),
+            input: vec![0.0; capacity * (self.features + self.actions)],
+            action: vec![0; capacity],
+            dae_scratch: MlpScratch::new(&self.dae, capacity),
+            filtered: vec![0.0; capacity * self.outputs],
+        }
+    }
+
+    /// Zeroes the state of `actions.len()` rows and sets each row's action index (ignored by a
+    /// model without actions).
+    pub fn begin(&self, state: &mut DaeLstmState, actions: &[usize]) {
+        let n = actions.len() * self.hidden();
+        for layer in state.hidden.iter_mut().chain(state.cell.iter_mut()) {
+            layer[..n].fill(0.0);
+        }
+        state.action[..actions.len()].copy_from_slice(actions);
+    }
+
+    /// One step for `batch` rows of features `x [batch, I]`; returns the top hidden `[batch, H]`.
+    pub fn step<'s>(&self, state: &'s mut DaeLstmState, x: &[f32], batch: usize) -> &'s [f32] {
+        let h = self.hidden();
+        let width = self.features + self.actions;
+        for (b, row) in state.input[..batch * width]
+            .chunks_exact_mut(width)
+            .enumerate()
+        {
+            let (features, onehot) = row.split_at_mut(self.features);
+            features.copy_from_slice(&x[b * self.features..(b + 1) * self.features]);
+            onehot.fill(0.0);
+            if self.actions > 0 {
+                onehot[state.action[b]] = 1.0;
+            }
+        }
+        for (k, cell) in self.layers.iter().enumerate() {
+            let (below, rest) = state.hidden.split_at_mut(k);
+            let input: &[f32] = if k == 0 {
+                &state.input[..batch * width]
+            } else {
+                &below[k - 1][..batch * h]
+            };
+            cell.step(
+                input,
+                &mut rest[0],
+                &mut state.cell[k],
+                batch,
+                &mut state.scratch[k],
+            );
+        }
+        let top = state.hidden.last().expect("at least one layer");
+        &top[..batch * h]
+    }
+
+    /// Replaces `batch` decoded poses `pose [batch, O]` by the autoencoder's filtering of them.
+    pub fn filter(&self, state: &mut DaeLstmState, pose: &mut [f32], batch: usize) {
+        let n = batch * self.outputs;
+        self.dae.forward(
+            &pose[..n],
+            batch,
+            &mut state.filtered[..n],
+            &mut state.dae_scratch,
+        );
+        pose[..n].copy_from_slice(&state.filtered[..n]);
+    }
+}
