@@ -166,7 +166,9 @@ fn text_summary(model: &MotionModel) -> String {
     line(
         "normalization",
         match c.normalization.as_str() {
-            "min-max" => "min-max (norm.mean = training minimum, norm.std = range; features in [0, 1])",
+            "min-max" => {
+                "min-max (norm.mean = training minimum, norm.std = range; features in [0, 1])"
+            }
             _ => "standard (norm.mean, norm.std = training mean and standard deviation)",
         }
         .into(),

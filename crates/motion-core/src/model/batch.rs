@@ -452,10 +452,7 @@ impl BatchGenerator {
                     valid: cfg.actions.clone(),
                 })
         };
-        let needed = matches!(
-            self.model.network(),
-            Network::Vgru(_) | Network::DaeLstm(_)
-        );
+        let needed = matches!(self.model.network(), Network::Vgru(_) | Network::DaeLstm(_));
         match actions.len() {
             0 if needed => Err(GenerateError::MissingAction {
                 valid: cfg.actions.clone(),
