@@ -88,6 +88,9 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--closed-loop-weight", type=float, default=0.0, help="finetune: weight of the closed-loop term")
     g.add_argument("--closed-loop-horizon", type=int, default=50, help="finetune: self-fed frames of that term")
     g.add_argument("--closed-loop-seed", type=int, default=25, help="finetune: seed frames of that term")
+    g.add_argument("--speed-weight", type=float, default=0.0,
+                   help="finetune: weight of the speed term on the closed loop (squared log ratio of the mean joint "
+                        "speed of prediction and truth, per sequence); needs --closed-loop-weight > 0")
     g.add_argument("--init-dae", type=Path, metavar="CKPT", help="finetune: the dae stage's checkpoint")
     g.add_argument("--init-lstm", type=Path, metavar="CKPT", help="finetune: the lstm stage's checkpoint")
     g.add_argument("--seed", type=int, default=1)
@@ -167,9 +170,29 @@ def sequence_losses(model: DAELSTM, frames: torch.Tensor, actions: torch.Tensor,
 
 
 def closed_loop_loss(model: DAELSTM, frames: torch.Tensor, actions: torch.Tensor, seed: int, horizon: int):
-    """The stacked model fed its own filtered output after ``seed`` true frames; squared error over ``horizon``."""
+    """The stacked model fed its own filtered output after ``seed`` true frames over ``horizon`` frames:
+    (squared error to the truth, squared log ratio of predicted to true joint speed)."""
     pred = model.closed_loop(frames[:, :seed], horizon, actions)
-    return ((pred - frames[:, seed : seed + horizon]) ** 2).mean()
+    truth = frames[:, seed - 1 : seed + horizon]
+    error = ((pred - truth[:, 1:]) ** 2).mean()
+    return error, speed_loss(model, torch.cat([truth[:, :1], pred], dim=1), truth)
+
+
+SPEED_FLOOR = 1e-3  # radians per frame added to both speeds: sequences that stand still do not dominate
+
+
+def speed_loss(model: DAELSTM, pred: torch.Tensor, truth: torch.Tensor) -> torch.Tensor:
+    """Squared log ratio of the mean absolute frame-to-frame change of the joint angles (not the root's 6 dims)
+    of ``pred`` and ``truth`` ``[B, T, O]`` (normalized), per sequence, in radians: the training counterpart of
+    the speed ratio that the checkpoint choice and the 12 s evaluation measure. It penalises a prediction
+    that slows to a stop (the MSE optimum far from the seed) as much as one that moves too fast."""
+    joints = torch.tensor([d >= 6 for d in model.dims_used], device=pred.device)
+    scale = model.norm.std[model.norm.dims_used][joints]
+
+    def speed(x):
+        return (x[:, 1:, joints] - x[:, :-1, joints]).abs().mul(scale).mean(dim=(1, 2)) + SPEED_FLOOR
+
+    return ((speed(pred).log() - speed(truth).log()) ** 2).mean()
 
 
 # ---------------------------------------------------------------- validation
@@ -240,6 +263,11 @@ def train(args, argv: list[str]) -> None:
     elif ckpt_path.exists():
         raise SystemExit(f"error: {ckpt_path} exists: --resume it or choose another --run-dir")
     stage = args.stage
+    if stage == "finetune" and args.closed_loop_weight > 0 and args.closed_loop_seed + args.closed_loop_horizon > args.window + 1:
+        raise SystemExit(f"error: --closed-loop-seed + --closed-loop-horizon ({args.closed_loop_seed} + "
+                         f"{args.closed_loop_horizon}) exceed the {args.window + 1} frames of a --window {args.window} sequence")
+    if args.speed_weight > 0 and args.closed_loop_weight <= 0:
+        raise SystemExit("error: --speed-weight acts on the closed-loop term: give --closed-loop-weight > 0 too")
     torch.set_num_threads(args.threads)
     device = torch.device(args.device)
     log = Logger(run_dir)
@@ -323,9 +351,10 @@ def train(args, argv: list[str]) -> None:
             loss = lstm if dae is None else lstm + dae
             terms = {"lstm": lstm.item()} | ({} if dae is None else {"dae": dae.item()})
             if stage == "finetune" and args.closed_loop_weight > 0:
-                cl = closed_loop_loss(model, frames, acts, args.closed_loop_seed, args.closed_loop_horizon)
-                loss = loss + args.closed_loop_weight * cl
+                cl, sp = closed_loop_loss(model, frames, acts, args.closed_loop_seed, args.closed_loop_horizon)
+                loss = loss + args.closed_loop_weight * cl + args.speed_weight * sp
                 terms["closed"] = cl.item()
+                terms["speed"] = sp.item()
         if not math.isfinite(loss.item()):
             raise SystemExit(f"error: loss became {loss.item()} at iteration {iteration + 1}; see {run_dir}")
         opt.zero_grad(set_to_none=True)
