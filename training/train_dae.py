@@ -30,7 +30,7 @@ is >= 0.5; ``best.pt`` is the eligible one with the lowest validation NPSS (refe
 is eligible, the one with the highest smallest ratio. The dae and lstm stages keep their last iteration.
 
 Checkpoints (``last.pt``: model, optimizer and RNG states, iteration, stage) are written atomically every
-``--checkpoint-every`` iterations; ``--resume`` continues a run exactly; ``--device cuda`` runs unchanged on a GPU.
+``--checkpoint-every`` iterations; ``--resume`` continues a run exactly (``--iterations`` may extend it); ``--device cuda`` runs unchanged on a GPU.
 """
 
 from __future__ import annotations
@@ -50,7 +50,7 @@ import torch
 from . import data as h36m
 from .export import save_weights
 from .models import DAELSTM, H36M_ACTIONS, make_config, parameter_count
-from .train import Logger, Validator, atomic_save
+from .train import RESUME_OVERRIDABLE, Logger, Validator, atomic_save, explicit_args
 
 CHECKPOINT = "last.pt"
 BEST = "best.pt"
@@ -258,7 +258,10 @@ def train(args, argv: list[str]) -> None:
             raise SystemExit(f"error: --resume but {ckpt_path} does not exist")
         resume = load_checkpoint(ckpt_path)
         saved = dict(resume["args"])
-        saved["device"], saved["threads"] = args.device, args.threads
+        given = explicit_args(argv)
+        for k in RESUME_OVERRIDABLE + ("device",):  # --iterations extends (or shortens) the run
+            if k in given or k == "device":
+                saved[k] = getattr(args, k)
         args = argparse.Namespace(**{**vars(args), **saved, "resume": True, "run_dir": run_dir})
     elif ckpt_path.exists():
         raise SystemExit(f"error: {ckpt_path} exists: --resume it or choose another --run-dir")
@@ -276,6 +279,7 @@ def train(args, argv: list[str]) -> None:
 
     dataset = h36m.load_training_set(args.data_dir, h36m.ACTIONS, log=log, scaling="min-max")
     stats = dataset.stats
+    torch.manual_seed(args.seed)  # every stage: initialization (dae, lstm) and the noise and joint drops
     if resume is not None:
         config = resume["config"]
         model = model_from_checkpoint(resume)
@@ -290,7 +294,6 @@ def train(args, argv: list[str]) -> None:
         own.update({k: v for k, v in dae_state["model"].items() if k.startswith("dae.")})
         model.load_state_dict(own)
     else:
-        torch.manual_seed(args.seed)
         config = build_config(args, stats.dims_used)
         model = DAELSTM(config)
     model.norm.set_stats(torch.from_numpy(stats.mean).float(), torch.from_numpy(stats.std).float())

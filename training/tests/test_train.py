@@ -12,24 +12,7 @@ import torch
 from training import data, train
 from training.export import load_weights
 
-
-def synthetic_dataset(seed=0, frames=400):
-    rng = np.random.default_rng(seed)
-    seqs = []
-    for _ in range(2 * len(data.ACTIONS)):
-        x = np.cumsum(rng.normal(scale=0.02, size=(frames, data.FRAME_DIMS)), axis=0)
-        x[:, 10:20] = 0.5  # constant dims are dropped
-        seqs.append(x)
-    stats = data.normalization_stats(seqs)
-    by_action = []
-    for i, a in enumerate(data.ACTIONS):
-        by_action.append([((1, a, k + 1), stats.normalize(seqs[2 * i + k][::2]).astype(np.float32)) for k in range(2)])
-    ts = data.TrainingSet(actions=tuple(data.ACTIONS), stats=stats, by_action=by_action)
-    wins = [
-        data.ValidationWindow(action=a, subaction=1, start=0, frames=seqs[2 * i][:150].copy())
-        for i, a in enumerate(data.ACTIONS[:3])
-    ]
-    return ts, wins
+from .helpers import synthetic_dataset
 
 
 SMALL = ["--hidden", "8", "--plan-hidden", "4", "--batch", "2", "--log-every", "1", "--val-every", "2"]

@@ -1,7 +1,8 @@
 //! The published H3.6M numbers that `eval` prints beside its own, as code.
 //!
 //! Citations: Gopalakrishnan, Mali, Kifer, Giles, Ororbia, "A Neural Temporal Model for Human
-//! Motion Prediction", CVPR 2019 (paper 000), Tables 4-7; Tanke, Zaveri, Gall, "Intention-based
+//! Motion Prediction", CVPR 2019 (paper 000), Tables 4-7; Ghosh, Song, Aksan, Hilliges,
+//! "Learning Human Motion Models for Long-term Predictions", 3DV 2017 (paper 002), Table 2; Tanke, Zaveri, Gall, "Intention-based
 //! Long-Term Human Motion Anticipation", 3DV 2021 (paper 003), Tables 1-2. Model names are
 //! normalized ("GRU-d (ours)" -> "GRU-d"); paper 003 methods keep their reference numbers.
 //! Every published NPSS was computed with the authors' code, i.e. the reference variant
@@ -18,6 +19,8 @@ pub const PAPER003_TABLE1_COLUMNS: [&str; 5] =
     ["walking", "eating", "smoking", "discussion", "average"];
 /// The horizons of paper 000 Table 6, in milliseconds.
 pub const TABLE6_HORIZONS_MS: [u32; 4] = [80, 160, 320, 400];
+/// The horizons of paper 002 Table 2, in milliseconds.
+pub const P002_TABLE2_HORIZONS_MS: [u32; 5] = [80, 160, 320, 560, 1000];
 /// The horizons of paper 000 Table 7, in milliseconds.
 pub const TABLE7_HORIZONS_MS: [u32; 6] = [80, 160, 320, 400, 560, 1000];
 
@@ -37,6 +40,15 @@ pub struct EulerRow {
     pub model: &'static str,
     /// `values[action][horizon]`.
     pub values: [[f64; 6]; 4],
+}
+
+/// One model's paper 002 Table 2 errors: per action of [`PAPER000_ACTIONS`], at [`P002_TABLE2_HORIZONS_MS`].
+#[derive(Debug, Clone, Copy)]
+pub struct EulerRow5 {
+    /// The model as the paper names it.
+    pub model: &'static str,
+    /// `values[action][horizon]`.
+    pub values: [[f64; 5]; 4],
 }
 
 /// One method's NDMS over the 0.4 s bins of one action (paper 003 Table 2).
@@ -112,6 +124,37 @@ pub const P000_TABLE7_EULER: [EulerRow; 2] = [
         [1.09, 1.16, 1.24, 1.33, 1.37, 1.56],
         [1.67, 1.8, 1.94, 1.98, 2.06, 2.32],
         [1.749, 2.037, 2.011, 1.868, 2.088, 2.318],
+    ] },
+];
+/// Paper 002 Table 2: "the Euclidean norm (L2) of un-normalized ground truth and predicted MOCAP
+/// vectors" (exp-map, H3.6M) at [`P002_TABLE2_HORIZONS_MS`], per action of [`PAPER000_ACTIONS`]; the
+/// baselines' rows are the paper's copies of SRNN [19]'s. Printed beside the Euler error of the
+/// standard protocol, its closest measured counterpart (the paper does not say how it averaged).
+#[rustfmt::skip]
+pub const P002_TABLE2_L2: [EulerRow5; 4] = [
+    EulerRow5 { model: "LSTM3LR", values: [
+        [1.18, 1.50, 1.67, 1.81, 2.20],
+        [1.36, 1.79, 2.29, 2.49, 2.82],
+        [2.05, 2.34, 3.10, 3.24, 3.42],
+        [2.25, 2.33, 2.45, 2.48, 2.93],
+    ] },
+    EulerRow5 { model: "ERD", values: [
+        [1.30, 1.56, 1.84, 2.00, 2.38],
+        [1.66, 1.93, 2.28, 2.36, 2.41],
+        [2.34, 2.74, 3.73, 3.68, 3.82],
+        [2.67, 2.97, 3.23, 3.47, 2.92],
+    ] },
+    EulerRow5 { model: "S-RNN", values: [
+        [1.08, 1.34, 1.60, 1.90, 2.13],
+        [1.35, 1.71, 2.12, 2.28, 2.58],
+        [1.90, 2.30, 2.90, 3.21, 3.23],
+        [1.67, 2.03, 2.20, 2.39, 2.43],
+    ] },
+    EulerRow5 { model: "DAE-LSTM", values: [
+        [1.00, 1.11, 1.39, 1.55, 1.39],
+        [1.31, 1.49, 1.86, 1.76, 2.01],
+        [0.92, 1.03, 1.15, 1.38, 1.77],
+        [1.11, 1.20, 1.38, 1.53, 1.73],
     ] },
 ];
 /// Paper 003 Table 1: NPSS (public implementation = reference variant) on the 2-4 s window, columns [`PAPER003_TABLE1_COLUMNS`].
@@ -234,6 +277,16 @@ pub fn table7_euler(model: &str, action: &str) -> Option<[f64; 6]> {
         .map(|r| r.values[col])
 }
 
+/// Paper 002 Table 2's error of `model` for `action` at `ms` (one of [`P002_TABLE2_HORIZONS_MS`]).
+pub fn table2_p002(model: &str, action: &str, ms: u32) -> Option<f64> {
+    let col = column(&PAPER000_ACTIONS, action)?;
+    let h = P002_TABLE2_HORIZONS_MS.iter().position(|h| *h == ms)?;
+    P002_TABLE2_L2
+        .iter()
+        .find(|r| r.model == model)
+        .map(|r| r.values[col][h])
+}
+
 /// Every published number for `action`, keyed by table (empty object if no table has it).
 pub fn for_action(action: &str) -> Value {
     let mut out = Map::new();
@@ -261,6 +314,18 @@ pub fn for_action(action: &str) -> Value {
                     .iter()
                     .map(|r| {
                         let v = horizons_object(&TABLE7_HORIZONS_MS, &r.values[col]);
+                        (r.model.to_string(), v)
+                    })
+                    .collect(),
+            ),
+        );
+        out.insert(
+            "paper002_table2_l2".into(),
+            Value::Object(
+                P002_TABLE2_L2
+                    .iter()
+                    .map(|r| {
+                        let v = horizons_object(&P002_TABLE2_HORIZONS_MS, &r.values[col]);
                         (r.model.to_string(), v)
                     })
                     .collect(),
@@ -309,6 +374,13 @@ mod tests {
         );
         assert_eq!(table7_euler("VGRU-d", "walking").unwrap()[5], 1.28);
         assert_eq!(table4_npss("VGRU-d", "greeting"), None);
+        assert_eq!(table2_p002("DAE-LSTM", "smoking", 1000), Some(1.77));
+        assert_eq!(table2_p002("LSTM3LR", "discussion", 80), Some(2.25));
+        assert_eq!(table2_p002("DAE-LSTM", "walking", 400), None);
+        assert_eq!(
+            for_action("eating")["paper002_table2_l2"]["DAE-LSTM"]["560"],
+            json!(1.76)
+        );
         // paper 003 Table 1's VGRU-d row is paper 000's Table 5 long-term row.
         for (col, action) in PAPER000_ACTIONS.iter().enumerate() {
             assert_eq!(

@@ -145,6 +145,11 @@ fn action_block(out: &mut String, a: &Value) {
                 "GRU-d",
                 published::table7_euler("GRU-d", action).map(|t| t[i]),
             ),
+            (
+                "DAE-LSTM (p002 T2)",
+                published::table2_p002("DAE-LSTM", action, *ms),
+            ),
+            ("LSTM3LR", published::table2_p002("LSTM3LR", action, *ms)),
         ]);
         let label = if i == 0 {
             format!("Euler error {ms} ms")
