@@ -37,6 +37,12 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    // MOTION_SIMD=avx512|avx2|neon|portable picks the kernels; a bad value is bad input.
+    if let Err(err) = motion_core::nn::simd::init_from_env() {
+        let err = anyhow::Error::new(err);
+        eprintln!("error: {}", commands::error_chain(&err));
+        return ExitCode::from(commands::exit_code(&err));
+    }
     let result = match cli.command {
         Command::Convert(args) => commands::convert::run(args),
         Command::Info(args) => commands::info::run(args),

@@ -9,7 +9,9 @@
 //! run that re-plans as generation does.
 //!
 //! The reported time is the median over steps timed one by one (robust to a busy machine); the
-//! mean is reported too.
+//! mean, the 99th percentile and the slowest step are reported too (a re-plan or any other stall
+//! shows in `max`). `--simd avx2,portable` times each SIMD path in turn (the model loaded again
+//! under each, see `motion_core::nn::simd`), so every path the machine has can be measured.
 //!
 //! `--npss GT.npy PRED.npy` times NPSS instead (both spectra, files loaded outside the clock):
 //! the median of `--reps` evaluations, for the comparison scripts in `benches/compare/`.
@@ -28,6 +30,7 @@ use std::time::Instant;
 
 use motion_core::formats::npy::read_npy_as;
 use motion_core::model::{Architecture, BatchGenerator, ModelConfig, MotionModel, Noise};
+use motion_core::nn::simd::{self, SimdError, SimdPath};
 use motion_metrics::ndms::index::NearestIndex;
 use motion_metrics::ndms::{similarity, word, NdmsConfig, NdmsDatabase, NnMethod};
 use motion_metrics::npss::{Npss, SpectrumPower};
@@ -87,6 +90,11 @@ pub struct Args {
     /// a rayon pool thread, whose queue allocates now and then).
     #[arg(long)]
     pub row_split: bool,
+    /// SIMD paths to time, comma-separated (avx512, avx2, neon, portable; default: the one
+    /// selected, i.e. $MOTION_SIMD or the best the CPU has). The model is loaded once per path,
+    /// so each path also gets its own weight layout. A path the CPU lacks is refused.
+    #[arg(long, value_delimiter = ',')]
+    pub simd: Vec<SimdPath>,
     /// Seed of the random weights.
     #[arg(long, default_value_t = 42)]
     pub seed: u64,
@@ -107,12 +115,15 @@ pub struct Args {
 /// The timing of one model at one batch size.
 #[derive(Debug, Clone)]
 struct Measurement {
+    simd: SimdPath,
     arch: &'static str,
     hidden: usize,
     batch: usize,
     steps: usize,
     median_us: f64,
     mean_us: f64,
+    p99_us: f64,
+    max_us: f64,
 }
 
 impl Measurement {
@@ -138,17 +149,27 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(manifest) = &args.ndms {
         return run_ndms(manifest, args.reps, args.json);
     }
-    let models = models(&args)?;
+    let paths = if args.simd.is_empty() {
+        vec![simd::active()]
+    } else {
+        args.simd.clone()
+    };
+    if let Some(p) = paths.iter().find(|p| !p.supported()) {
+        return Err(SimdError::Unsupported(*p).into());
+    }
     let mut results = Vec::new();
-    for model in &models {
-        for &batch in &args.batch {
-            results.push(measure(
-                model,
-                batch,
-                args.steps,
-                args.with_plan,
-                args.row_split,
-            )?);
+    for &path in &paths {
+        simd::set_simd_path(path)?;
+        for model in &models(&args)? {
+            for &batch in &args.batch {
+                results.push(measure(
+                    model,
+                    batch,
+                    args.steps,
+                    args.with_plan,
+                    args.row_split,
+                )?);
+            }
         }
     }
     let peak = peak_rss_mb();
@@ -246,13 +267,18 @@ fn measure(
     } else {
         0.5 * (times[mid - 1] + times[mid])
     };
+    let p99_us = times[(times.len() * 99).div_ceil(100).saturating_sub(1)];
+    let max_us = times[times.len() - 1];
     Ok(Measurement {
+        simd: simd::active(),
         arch: cfg.architecture.name(),
         hidden: cfg.hidden,
         batch,
         steps,
         median_us,
         mean_us,
+        p99_us,
+        max_us,
     })
 }
 
@@ -517,12 +543,15 @@ fn json_report(results: &[Measurement], peak: Option<f64>) -> String {
         .iter()
         .map(|m| {
             serde_json::json!({
+                "simd": m.simd.name(),
                 "arch": m.arch,
                 "hidden": m.hidden,
                 "batch": m.batch,
                 "steps": m.steps,
                 "us_per_step": m.median_us,
                 "mean_us_per_step": m.mean_us,
+                "p99_us": m.p99_us,
+                "max_us": m.max_us,
                 "char_steps_per_s": m.char_steps_per_s(),
             })
         })
@@ -532,18 +561,30 @@ fn json_report(results: &[Measurement], peak: Option<f64>) -> String {
 
 fn text_report(results: &[Measurement], peak: Option<f64>) -> String {
     let mut s = format!(
-        "{:<8} {:>6} {:>6} {:>6} {:>12} {:>12} {:>16}\n",
-        "arch", "hidden", "batch", "steps", "µs/step", "mean µs", "char-steps/s"
+        "{:<8} {:<8} {:>6} {:>6} {:>6} {:>12} {:>12} {:>10} {:>10} {:>16}\n",
+        "simd",
+        "arch",
+        "hidden",
+        "batch",
+        "steps",
+        "µs/step",
+        "mean µs",
+        "p99 µs",
+        "max µs",
+        "char-steps/s"
     );
     for m in results {
         s.push_str(&format!(
-            "{:<8} {:>6} {:>6} {:>6} {:>12.1} {:>12.1} {:>16.0}\n",
+            "{:<8} {:<8} {:>6} {:>6} {:>6} {:>12.1} {:>12.1} {:>10.1} {:>10.1} {:>16.0}\n",
+            m.simd.name(),
             m.arch,
             m.hidden,
             m.batch,
             m.steps,
             m.median_us,
             m.mean_us,
+            m.p99_us,
+            m.max_us,
             m.char_steps_per_s()
         ));
     }

@@ -170,23 +170,22 @@ fn run(ops: Operands<'_>, out: &mut [f32], batch: usize) {
     }
 }
 
-/// The update over consecutive rows, in the widest vector code the CPU runs.
+/// The update over consecutive rows, in the vector code of the selected SIMD path.
 fn rows_dispatch(ops: Operands<'_>, out: &mut [f32]) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::arch::is_x86_feature_detected!("avx512f") {
-            // SAFETY: the CPU has AVX-512F.
-            unsafe { rows_avx512(ops, out) };
-            return;
+    match super::simd::active() {
+        #[cfg(target_arch = "x86_64")]
+        super::simd::SimdPath::Avx512 => {
+            // SAFETY: the path is selected only on a CPU with AVX-512F.
+            unsafe { rows_avx512(ops, out) }
         }
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
-        {
-            // SAFETY: the CPU has AVX2 and FMA.
-            unsafe { rows_avx2(ops, out) };
-            return;
+        #[cfg(target_arch = "x86_64")]
+        super::simd::SimdPath::Avx2 => {
+            // SAFETY: the path is selected only on a CPU with AVX2 and FMA.
+            unsafe { rows_avx2(ops, out) }
         }
+        // NEON is part of the aarch64 baseline: the plain loop is already vectorized for it.
+        _ => rows(ops, out),
     }
-    rows(ops, out);
 }
 
 #[cfg(target_arch = "x86_64")]

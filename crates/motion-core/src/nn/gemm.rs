@@ -5,9 +5,9 @@
 //! - **Row kernels** (batch 1 up to [`row_kernel_max_batch`]): weight rows are the outer loop and each
 //!   is read once for all batch rows, in its stored dtype (f32, f16 or bf16, widened in
 //!   registers). A batch-1 step is bound by how fast weights stream from cache, so reading each
-//!   once, and half-size when the file is half-size, is what matters. AVX-512 kernels
-//!   ([`super::rows_avx512`]) when the CPU has them (detected at run time), else the same
-//!   portable loop compiled for AVX2 + FMA or for the baseline target. No heap memory. With
+//!   once, and half-size when the file is half-size, is what matters. The kernels of the
+//!   selected [`super::simd::SimdPath`]: `rows_avx512` (AVX-512), `rows_avx2` (AVX2 + FMA +
+//!   F16C), `rows_neon` (aarch64), or the portable loop. No heap memory. With
 //!   AVX-512 and a matrix of at least 256 KiB, a product called from a rayon pool thread splits
 //!   its output rows over the pool (`rayon::join`, no allocation): one core streams weights from
 //!   L3 at about 25 GB/s on the 2-core Intel Xeon we measure on, two cores together at about
@@ -21,6 +21,7 @@
 //! For a given machine and path every result is deterministic.
 use super::packed::{PackedMatrix, RowDtype, Rows, Wide};
 use super::sgemm_avx512;
+use super::simd::SimdPath;
 
 /// Operand layout of one product `Y[b, o] = beta * Y[b, o] + Σ_i X[b, i] * W[o, i]`.
 #[derive(Debug, Clone, Copy)]
@@ -110,28 +111,70 @@ impl MatMul {
             }
             return;
         }
-        #[cfg(target_arch = "x86_64")]
-        {
-            if super::rows_avx512::available() {
+        self.rows_on(super::simd::active(), x, w, y, accumulate);
+    }
+
+    /// The row kernels of `path` (the caller checked the operands and that the CPU runs `path`).
+    fn rows_on(
+        &self,
+        path: SimdPath,
+        x: &[f32],
+        w: &PackedMatrix,
+        y: &mut [f32],
+        accumulate: bool,
+    ) {
+        match path {
+            #[cfg(target_arch = "x86_64")]
+            SimdPath::Avx512 => {
                 let parts = self.row_split_parts(w);
                 if parts > 1 {
                     self.rows_avx512_split(x, w, y, accumulate, parts);
                 } else {
-                    // SAFETY: the CPU has the kernels' features, `inputs > 0` and `check`
-                    // asserted the slice lengths.
+                    // SAFETY: the path is selected only on a CPU that has its features,
+                    // `inputs > 0` and `check` asserted the slice lengths.
                     unsafe { super::rows_avx512::product(self, x, w.rows(), y, accumulate) };
                 }
-                return;
             }
-            if std::arch::is_x86_feature_detected!("avx2")
-                && std::arch::is_x86_feature_detected!("fma")
-            {
-                // SAFETY: the CPU supports the features `rows_avx2_fma` is compiled for.
-                unsafe { rows_avx2_fma(self, x, w.rows(), y, accumulate) };
-                return;
+            #[cfg(target_arch = "x86_64")]
+            SimdPath::Avx2 => {
+                // SAFETY: as above (AVX2, FMA and F16C).
+                unsafe { super::rows_avx2::product(self, x, w.rows(), y, accumulate) };
             }
+            #[cfg(target_arch = "aarch64")]
+            SimdPath::Neon => {
+                // SAFETY: as above (NEON).
+                unsafe { super::rows_neon::product(self, x, w.rows(), y, accumulate) };
+            }
+            _ => rows_portable::<false>(self, x, w, y, accumulate),
         }
-        rows_portable::<false>(self, x, w.rows(), y, accumulate);
+    }
+
+    /// [`MatMul::run_rows`] on the kernels of `path` whatever the selected one (tests and
+    /// benchmarks compare paths); refuses a path the CPU lacks.
+    pub fn run_rows_on(
+        &self,
+        path: SimdPath,
+        x: &[f32],
+        w: &PackedMatrix,
+        y: &mut [f32],
+        accumulate: bool,
+    ) -> Result<(), super::simd::SimdError> {
+        if !path.supported() {
+            return Err(super::simd::SimdError::Unsupported(path));
+        }
+        if !self.check(x, w, y) {
+            return Ok(());
+        }
+        if self.inputs == 0 {
+            if !accumulate {
+                for b in 0..self.batch {
+                    y[b * self.y_stride..b * self.y_stride + self.outputs].fill(0.0);
+                }
+            }
+            return Ok(());
+        }
+        self.rows_on(path, x, w, y, accumulate);
+        Ok(())
     }
 
     /// Into how many output ranges the row kernels split this product over threads (see the
@@ -313,40 +356,119 @@ impl MatMul {
     }
 }
 
-/// The row-kernel product without AVX-512: the portable loop compiled for AVX2 + FMA.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn rows_avx2_fma(mm: &MatMul, x: &[f32], rows: &Rows, y: &mut [f32], accumulate: bool) {
-    rows_portable::<true>(mm, x, rows, y, accumulate);
-}
-
-/// The row-kernel product in portable code: one GEMV per batch row (`FMA` picks fused
-/// multiply-adds, only worth it where the target has them).
+/// The row-kernel product in portable code (`FMA` picks fused multiply-adds, only worth it
+/// where the target has them): [`ROW_GROUP`] weight rows at a time against every batch row, so
+/// each weight comes from memory once per product whatever the batch. 16-bit rows are widened
+/// once per group into a stack buffer (a branch-free conversion the compiler vectorizes).
+///
+/// Without AVX-512 a 16-bit matrix also holds an f32 copy of its rows for the large-batch GEMM
+/// (see [`super::packed`]); the portable kernel then reads that copy, with no conversion at all.
 #[inline(always)]
 fn rows_portable<const FMA: bool>(
     mm: &MatMul,
     x: &[f32],
-    rows: &Rows,
+    w: &PackedMatrix,
     y: &mut [f32],
     accumulate: bool,
 ) {
-    for b in 0..mm.batch {
-        let xb = &x[b * mm.x_stride..b * mm.x_stride + mm.inputs];
-        let yb = &mut y[b * mm.y_stride..b * mm.y_stride + mm.outputs];
-        match rows {
-            Rows::F32(w) => gemv_kernel::<f32, FMA>(xb, w, |v| v, yb, accumulate),
-            Rows::F16(w) => {
-                gemv_kernel::<u16, FMA>(xb, w, |v| half::f16::from_bits(v).to_f32(), yb, accumulate)
-            }
-            Rows::Bf16(w) => gemv_kernel::<u16, FMA>(
-                xb,
-                w,
-                // bf16 is the upper half of an f32.
-                |v| f32::from_bits(u32::from(v) << 16),
-                yb,
-                accumulate,
-            ),
+    if let Some(f32_rows) = w.f32_rows() {
+        rows_grouped::<FMA>(mm, x, f32_rows, y, accumulate);
+        return;
+    }
+    match w.rows() {
+        Rows::F32(w) => rows_grouped::<FMA>(mm, x, w, y, accumulate),
+        Rows::F16(w) => rows_widened::<FMA>(mm, x, w, f16_to_f32, y, accumulate),
+        // bf16 is the upper half of an f32.
+        Rows::Bf16(w) => rows_widened::<FMA>(
+            mm,
+            x,
+            w,
+            |v| f32::from_bits(u32::from(v) << 16),
+            y,
+            accumulate,
+        ),
+    }
+}
+
+/// f32 rows [`ROW_GROUP`] at a time against every batch row (the group stays in L1 while the
+/// batch rows pass over it).
+#[inline(always)]
+fn rows_grouped<const FMA: bool>(
+    mm: &MatMul,
+    x: &[f32],
+    w: &[f32],
+    y: &mut [f32],
+    accumulate: bool,
+) {
+    let k = mm.inputs;
+    let mut o = 0;
+    while o < mm.outputs {
+        let n = ROW_GROUP.min(mm.outputs - o);
+        let group = &w[o * k..(o + n) * k];
+        for b in 0..mm.batch {
+            let xb = &x[b * mm.x_stride..b * mm.x_stride + k];
+            let yb = &mut y[b * mm.y_stride + o..b * mm.y_stride + o + n];
+            gemv_kernel::<f32, FMA>(xb, group, |v| v, yb, accumulate);
         }
+        o += n;
+    }
+}
+
+/// Weight rows taken together by the portable kernels.
+const ROW_GROUP: usize = 4;
+/// Widest row the portable 16-bit kernel widens into its stack buffer (`ROW_GROUP` x this f32 =
+/// 32 KiB); wider rows are widened per batch row instead.
+const WIDEN_MAX_INPUTS: usize = 2048;
+
+/// f16 bits to f32, exact, branch-free: the exponent and mantissa shifted into f32 position and
+/// scaled by 2^112 (right for normal and subnormal values alike), infinities and NaNs patched.
+#[inline(always)]
+fn f16_to_f32(h: u16) -> f32 {
+    let h = u32::from(h);
+    let sign = (h & 0x8000) << 16;
+    let magnitude = h & 0x7fff;
+    let scaled = (f32::from_bits(magnitude << 13) * f32::from_bits(0x7780_0000)).to_bits();
+    let bits = if magnitude >= 0x7c00 {
+        (magnitude << 13) | 0x7f80_0000
+    } else {
+        scaled
+    };
+    f32::from_bits(bits | sign)
+}
+
+/// The portable product over 16-bit rows widened by `widen` (see [`rows_portable`]).
+#[inline(always)]
+fn rows_widened<const FMA: bool>(
+    mm: &MatMul,
+    x: &[f32],
+    w: &[u16],
+    widen: impl Fn(u16) -> f32 + Copy,
+    y: &mut [f32],
+    accumulate: bool,
+) {
+    let k = mm.inputs;
+    if k > WIDEN_MAX_INPUTS {
+        for b in 0..mm.batch {
+            let xb = &x[b * mm.x_stride..b * mm.x_stride + k];
+            let yb = &mut y[b * mm.y_stride..b * mm.y_stride + mm.outputs];
+            gemv_kernel::<u16, FMA>(xb, w, widen, yb, accumulate);
+        }
+        return;
+    }
+    let mut buf = [0.0f32; ROW_GROUP * WIDEN_MAX_INPUTS];
+    let mut o = 0;
+    while o < mm.outputs {
+        let n = ROW_GROUP.min(mm.outputs - o);
+        let group = &mut buf[..n * k];
+        for (dst, src) in group.iter_mut().zip(&w[o * k..(o + n) * k]) {
+            *dst = widen(*src);
+        }
+        for b in 0..mm.batch {
+            let xb = &x[b * mm.x_stride..b * mm.x_stride + k];
+            let yb = &mut y[b * mm.y_stride + o..b * mm.y_stride + o + n];
+            gemv_kernel::<f32, FMA>(xb, group, |v| v, yb, accumulate);
+        }
+        o += n;
     }
 }
 
@@ -459,11 +581,18 @@ mod tests {
             .iter()
             .map(|&v| half::bf16::from_f32(v).to_bits())
             .collect();
-        vec![
+        let loaded = vec![
             PackedMatrix::from_f32(values.to_vec(), outputs, inputs),
             PackedMatrix::f16_from_f32(values, outputs, inputs),
             PackedMatrix::from_half_bits(HalfDtype::Bf16, bf16, outputs, inputs),
-        ]
+        ];
+        // Both layouts whatever the path the tests run under (panels or f32 copies).
+        let other: Vec<PackedMatrix> = loaded
+            .iter()
+            .cloned()
+            .map(PackedMatrix::without_panels)
+            .collect();
+        loaded.into_iter().chain(other).collect()
     }
 
     /// Checks `y` (row stride `ys`) against `init + X Wᵀ` in f64 with the widened weights; the
@@ -525,44 +654,75 @@ mod tests {
         (100, 300),
     ];
 
-    /// Every path the machine has, under a name: (name, product).
+    /// A product under a name.
     type Path = (
-        &'static str,
-        fn(&MatMul, &[f32], &PackedMatrix, &mut [f32], bool),
+        String,
+        Box<dyn Fn(&MatMul, &[f32], &PackedMatrix, &mut [f32], bool)>,
     );
 
+    /// Every product the machine has: the dispatch, the GEMMs, and the row kernels of every
+    /// SIMD path this CPU runs (each selected explicitly, whatever `MOTION_SIMD` says).
     fn paths() -> Vec<Path> {
         let mut p: Vec<Path> = vec![
-            ("dispatch", |m, x, w, y, a| m.run(x, w, y, a)),
-            ("rows", |m, x, w, y, a| m.run_rows(x, w, y, a)),
-            ("gemm", |m, x, w, y, a| m.run_gemm(x, w, y, a)),
-            ("matrixmultiply", |m, x, w, y, a| {
-                m.sgemm_threads(x, &w.to_f32(), y, a)
-            }),
-            ("portable", |m, x, w, y, a| {
-                rows_portable::<false>(m, x, w.rows(), y, a)
-            }),
+            (
+                "dispatch".into(),
+                Box::new(|m, x, w, y, a| m.run(x, w, y, a)),
+            ),
+            (
+                "rows".into(),
+                Box::new(|m, x, w, y, a| m.run_rows(x, w, y, a)),
+            ),
+            (
+                "gemm".into(),
+                Box::new(|m, x, w, y, a| m.run_gemm(x, w, y, a)),
+            ),
+            (
+                "matrixmultiply".into(),
+                Box::new(|m, x, w, y, a| m.sgemm_threads(x, &w.to_f32(), y, a)),
+            ),
         ];
-        #[cfg(target_arch = "x86_64")]
-        {
-            if std::arch::is_x86_feature_detected!("avx2")
-                && std::arch::is_x86_feature_detected!("fma")
-            {
-                p.push(("avx2-fma", |m, x, w, y, a| {
-                    // SAFETY: features detected above.
-                    unsafe { rows_avx2_fma(m, x, w.rows(), y, a) }
-                }));
-            }
-            if super::super::rows_avx512::available() {
-                p.push(("avx512", |m, x, w, y, a| {
-                    // SAFETY: features detected above; shapes have inputs > 0.
-                    unsafe { super::super::rows_avx512::product(m, x, w.rows(), y, a) }
-                }));
-            } else {
-                eprintln!("SKIPPED: AVX-512 row kernels (this CPU lacks AVX-512 F/BW/VL)");
-            }
+        for path in SimdPath::available() {
+            p.push((
+                format!("rows {path}"),
+                Box::new(move |m, x, w, y, a| m.run_rows_on(path, x, w, y, a).unwrap()),
+            ));
         }
         p
+    }
+
+    #[test]
+    fn portable_f16_widening_is_exact_for_every_bit_pattern() {
+        for h in 0..=u16::MAX {
+            let want = half::f16::from_bits(h).to_f32();
+            let got = f16_to_f32(h);
+            if want.is_nan() {
+                assert!(got.is_nan(), "{h:#06x}");
+                assert_eq!(got.to_bits() & 0x8000_0000, want.to_bits() & 0x8000_0000);
+            } else {
+                assert_eq!(got.to_bits(), want.to_bits(), "{h:#06x}");
+            }
+        }
+    }
+
+    #[test]
+    fn every_available_simd_path_is_tested() {
+        let names: Vec<String> = paths().into_iter().map(|(n, _)| n).collect();
+        assert!(names.contains(&"rows portable".to_string()));
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2")
+            && std::arch::is_x86_feature_detected!("fma")
+            && std::arch::is_x86_feature_detected!("f16c")
+        {
+            assert!(names.contains(&"rows avx2".to_string()));
+        }
+        #[cfg(target_arch = "aarch64")]
+        assert!(names.contains(&"rows neon".to_string()));
+        let lacking = SimdPath::ALL.into_iter().find(|p| !p.supported()).unwrap();
+        let w = PackedMatrix::from_f32(vec![1.0; 4], 2, 2);
+        let mut y = [0.0; 2];
+        assert!(MatMul::dense(1, 2, 2)
+            .run_rows_on(lacking, &[1.0, 2.0], &w, &mut y, false)
+            .is_err());
     }
 
     #[test]
@@ -576,6 +736,7 @@ mod tests {
                     let mm = MatMul::dense(batch, inputs, outputs);
                     let init = data(batch * outputs, 7);
                     for (name, product) in &paths {
+                        let name = name.as_str();
                         for accumulate in [false, true] {
                             let mut y = init.clone();
                             product(&mm, &x, &w, &mut y, accumulate);
@@ -597,6 +758,7 @@ mod tests {
                 let x = data(batch * (inputs + 5), 4);
                 let init = data(batch * (outputs + 3), 5);
                 for (name, product) in paths() {
+                    let name = name.as_str();
                     let mut y = init.clone();
                     product(&mm, &x, &w, &mut y, true);
                     assert_product(name, &mm, &x, &w, &init, &y, true);

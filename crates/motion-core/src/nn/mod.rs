@@ -16,8 +16,13 @@ pub mod mlp;
 pub mod packed;
 pub mod parallel;
 #[cfg(target_arch = "x86_64")]
+mod rows_avx2;
+#[cfg(target_arch = "x86_64")]
 mod rows_avx512;
+#[cfg(target_arch = "aarch64")]
+mod rows_neon;
 pub mod sgemm_avx512;
+pub mod simd;
 
 pub use body_gru::{BodyGruCell, BodyGruConfig};
 pub use gru::{GruCell, GruConfig, GruConvention, GruScratch};
@@ -25,3 +30,4 @@ pub use linear::{Linear, LinearConfig};
 pub use lstm::{LstmCell, LstmConfig, LstmScratch};
 pub use mlp::{Mlp, MlpConfig, MlpScratch};
 pub use packed::{PackedMatrix, RowDtype};
+pub use simd::{set_simd_path, SimdError, SimdPath};

@@ -112,6 +112,16 @@ impl PackedMatrix {
         matrix
     }
 
+    /// The same matrix in the layout of the paths without AVX-512 (no panels; 16-bit rows keep
+    /// an f32 copy): what loading under `MOTION_SIMD=avx2` or `portable` gives (tests).
+    pub fn without_panels(mut self) -> Self {
+        self.wide = match self.rows {
+            Rows::F32(_) => Wide::Rows,
+            _ => Wide::F32(self.to_f32()),
+        };
+        self
+    }
+
     /// f16 rows holding each of `values` rounded to the nearest f16 (lossy: for benchmarks and
     /// tests that compare the f32 and f16 kernels on one matrix).
     pub fn f16_from_f32(values: &[f32], outputs: usize, inputs: usize) -> Self {

@@ -12,13 +12,6 @@ use super::gemm::MatMul;
 use super::packed::Rows;
 use std::arch::x86_64::*;
 
-/// Whether the CPU runs these kernels (AVX-512 F, BW and VL, detected at run time).
-pub(crate) fn available() -> bool {
-    std::arch::is_x86_feature_detected!("avx512f")
-        && std::arch::is_x86_feature_detected!("avx512bw")
-        && std::arch::is_x86_feature_detected!("avx512vl")
-}
-
 /// A stored weight type and how 16 of them become one f32 vector.
 trait Elem {
     type T;
@@ -77,9 +70,9 @@ impl Elem for Bf16 {
 /// `Y = X Wᵀ` (or `Y += X Wᵀ`) for the layout `mm` over `rows` `[mm.outputs, mm.inputs]`.
 ///
 /// # Safety
-/// The CPU must pass [`available`], `mm.inputs > 0`, and the slices must be long enough for the
+/// The CPU must run [`super::simd::SimdPath::Avx512`], `mm.inputs > 0`, and the slices must be long enough for the
 /// layout (as `MatMul::run` asserts).
-#[target_feature(enable = "avx512f,avx512bw,avx512vl")]
+#[target_feature(enable = "avx512f,avx512bw,avx512vl,f16c")]
 pub(crate) unsafe fn product(mm: &MatMul, x: &[f32], rows: &Rows, y: &mut [f32], accumulate: bool) {
     // SAFETY: forwarded from the caller.
     unsafe {
@@ -100,7 +93,7 @@ pub(crate) unsafe fn product(mm: &MatMul, x: &[f32], rows: &Rows, y: &mut [f32],
 /// # Safety
 /// As [`product`], with `x` and `y` pointing at slices long enough for the whole layout `mm`,
 /// `outputs` inside `0..mm.outputs`, and no other thread writing those columns of `Y`.
-#[target_feature(enable = "avx512f,avx512bw,avx512vl")]
+#[target_feature(enable = "avx512f,avx512bw,avx512vl,f16c")]
 pub(crate) unsafe fn product_outputs(
     mm: &MatMul,
     x: *const f32,

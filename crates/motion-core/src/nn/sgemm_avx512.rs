@@ -114,16 +114,10 @@ fn lines_as_floats_mut(lines: &mut [Line]) -> &mut [f32] {
     unsafe { std::slice::from_raw_parts_mut(lines.as_mut_ptr().cast::<f32>(), lines.len() * 16) }
 }
 
-/// True when this CPU runs the AVX-512F kernel (detected at run time).
+/// True when the AVX-512 path is selected ([`super::simd::active`]; only ever on a CPU that has
+/// it): matrices loaded now are packed into panels, and the panel GEMM runs the AVX-512 kernel.
 pub fn available() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    {
-        std::arch::is_x86_feature_detected!("avx512f")
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        false
-    }
+    super::simd::active() == super::simd::SimdPath::Avx512
 }
 
 /// `Y = X Wᵀ` (`accumulate = false`) or `Y += X Wᵀ` (`accumulate = true`) for `batch` rows of

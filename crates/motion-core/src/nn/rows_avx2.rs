@@ -1,0 +1,219 @@
+//! AVX2 + FMA + F16C row kernels for `Y = X Wᵀ` at small batches: the 256-bit counterpart of
+//! [`super::rows_avx512`], for the CPUs without AVX-512 (most gaming PCs).
+//!
+//! Weight rows stay in their stored dtype and are widened in registers: `vcvtph2ps` for f16, a
+//! 16-bit shift for bf16 (both exact). A tile holds `RW` weight rows against `RB` batch rows in
+//! `RW x RB` independent 8-lane accumulators (8 + 4 weight vectors + 1 input vector inside the 16
+//! vector registers): each weight vector loaded serves `RB` batch rows. Weight rows are the outer
+//! loop, so every weight is read from cache once per product whatever the batch. A row's last
+//! `inputs % 8` elements are copied into a zeroed 8-element buffer and loaded from there, so no
+//! element outside a row is read.
+use super::gemm::MatMul;
+use super::packed::Rows;
+use std::arch::x86_64::*;
+
+/// A stored weight type and how 8 of them become one f32 vector.
+trait Elem {
+    type T: Copy + Default;
+    /// Widens `p[0..8]`.
+    unsafe fn load(p: *const Self::T) -> __m256;
+}
+
+struct F32;
+struct F16;
+struct Bf16;
+
+impl Elem for F32 {
+    type T = f32;
+    #[inline(always)]
+    unsafe fn load(p: *const f32) -> __m256 {
+        unsafe { _mm256_loadu_ps(p) }
+    }
+}
+
+impl Elem for F16 {
+    type T = u16;
+    #[inline(always)]
+    unsafe fn load(p: *const u16) -> __m256 {
+        unsafe { _mm256_cvtph_ps(_mm_loadu_si128(p.cast())) }
+    }
+}
+
+impl Elem for Bf16 {
+    type T = u16;
+    #[inline(always)]
+    unsafe fn load(p: *const u16) -> __m256 {
+        unsafe {
+            let wide = _mm256_cvtepu16_epi32(_mm_loadu_si128(p.cast()));
+            _mm256_castsi256_ps(_mm256_slli_epi32::<16>(wide))
+        }
+    }
+}
+
+/// `Y = X Wᵀ` (or `Y += X Wᵀ`) for the layout `mm` over `rows` `[mm.outputs, mm.inputs]`.
+///
+/// # Safety
+/// The CPU must run [`super::simd::SimdPath::Avx2`] (AVX2, FMA, F16C), `mm.inputs > 0`, and the
+/// slices must be long enough for the layout (as `MatMul::run` asserts).
+#[target_feature(enable = "avx2,fma,f16c")]
+pub(crate) unsafe fn product(mm: &MatMul, x: &[f32], rows: &Rows, y: &mut [f32], accumulate: bool) {
+    let (x, y) = (x.as_ptr(), y.as_mut_ptr());
+    // SAFETY: forwarded from the caller.
+    unsafe {
+        match rows {
+            Rows::F32(w) => drive::<F32>(mm, x, w.as_ptr(), y, accumulate),
+            Rows::F16(w) => drive::<F16>(mm, x, w.as_ptr(), y, accumulate),
+            Rows::Bf16(w) => drive::<Bf16>(mm, x, w.as_ptr(), y, accumulate),
+        }
+    }
+}
+
+/// Weight rows per tile.
+const RW: usize = 4;
+/// Batch rows per tile.
+const RB: usize = 2;
+/// f32 lanes per vector.
+const L: usize = 8;
+
+#[inline(always)]
+unsafe fn drive<E: Elem>(mm: &MatMul, x: *const f32, w: *const E::T, y: *mut f32, acc: bool) {
+    let (n, k, batch) = (mm.outputs, mm.inputs, mm.batch);
+    let (xs, ys) = (mm.x_stride, mm.y_stride);
+    // SAFETY: every tile reads rows `o..o + rw` of `w`, rows `b..b + rb` of `x` (first `k`
+    // elements) and writes columns `o..o + rw` of rows `b..b + rb` of `y`, all inside the layout.
+    unsafe {
+        let mut o = 0;
+        while o + RW <= n {
+            batch_tiles::<E, RW>(x, xs, w.add(o * k), k, y.add(o), ys, batch, acc);
+            o += RW;
+        }
+        while o < n {
+            batch_tiles::<E, 1>(x, xs, w.add(o * k), k, y.add(o), ys, batch, acc);
+            o += 1;
+        }
+    }
+}
+
+/// All batch rows against weight rows `w[0..R]`.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+unsafe fn batch_tiles<E: Elem, const R: usize>(
+    x: *const f32,
+    xs: usize,
+    w: *const E::T,
+    k: usize,
+    y: *mut f32,
+    ys: usize,
+    batch: usize,
+    acc: bool,
+) {
+    // SAFETY: see `drive`.
+    unsafe {
+        let mut b = 0;
+        while b + RB <= batch {
+            tile::<E, R, RB>(x.add(b * xs), xs, w, k, y.add(b * ys), ys, acc);
+            b += RB;
+        }
+        if batch - b == 1 {
+            tile::<E, R, 1>(x.add(b * xs), xs, w, k, y.add(b * ys), ys, acc);
+        }
+    }
+}
+
+/// `src[0..n]` (n < 8) followed by zeros, so a full-vector load reads nothing past the row.
+#[inline(always)]
+unsafe fn padded<T: Copy + Default>(src: *const T, n: usize) -> [T; L] {
+    let mut buf = [T::default(); L];
+    // SAFETY: the caller guarantees `src[0..n]` is readable; `n < L`.
+    unsafe { std::ptr::copy_nonoverlapping(src, buf.as_mut_ptr(), n) };
+    buf
+}
+
+/// `Y[b, r] (+)= Σ_i X[b, i] W[r, i]` for `r < R`, `b < B`.
+#[inline(always)]
+unsafe fn tile<E: Elem, const R: usize, const B: usize>(
+    x: *const f32,
+    xs: usize,
+    w: *const E::T,
+    k: usize,
+    y: *mut f32,
+    ys: usize,
+    accumulate: bool,
+) {
+    // SAFETY: see `drive`; the tail reads only the row's last `k - full` elements.
+    unsafe {
+        let mut acc = [[_mm256_setzero_ps(); R]; B];
+        let full = k / L * L;
+        let mut i = 0;
+        while i < full {
+            let mut wv = [_mm256_setzero_ps(); R];
+            for (r, v) in wv.iter_mut().enumerate() {
+                *v = E::load(w.add(r * k + i));
+            }
+            if R > 1 {
+                // Fetch the next tile's rows one tile ahead (see rows_avx512).
+                for r in 0..R {
+                    _mm_prefetch::<_MM_HINT_T0>(w.wrapping_add((R + r) * k + i).cast());
+                }
+            }
+            for (b, row) in acc.iter_mut().enumerate() {
+                let xv = _mm256_loadu_ps(x.add(b * xs + i));
+                for (a, v) in row.iter_mut().zip(&wv) {
+                    *a = _mm256_fmadd_ps(*v, xv, *a);
+                }
+            }
+            i += L;
+        }
+        if i < k {
+            let rest = k - i;
+            let mut wv = [_mm256_setzero_ps(); R];
+            for (r, v) in wv.iter_mut().enumerate() {
+                let buf = padded(w.add(r * k + i), rest);
+                *v = E::load(buf.as_ptr());
+            }
+            for (b, row) in acc.iter_mut().enumerate() {
+                let buf = padded(x.add(b * xs + i), rest);
+                let xv = _mm256_loadu_ps(buf.as_ptr());
+                for (a, v) in row.iter_mut().zip(&wv) {
+                    *a = _mm256_fmadd_ps(*v, xv, *a);
+                }
+            }
+        }
+        for (b, row) in acc.iter().enumerate() {
+            let yb = y.add(b * ys);
+            let mut r = 0;
+            while r + 4 <= R {
+                let mut s = reduce4(row[r], row[r + 1], row[r + 2], row[r + 3]);
+                if accumulate {
+                    s = _mm_add_ps(_mm_loadu_ps(yb.add(r)), s);
+                }
+                _mm_storeu_ps(yb.add(r), s);
+                r += 4;
+            }
+            while r < R {
+                let zero = _mm256_setzero_ps();
+                // Same addition tree as a lane of `reduce4`, so a row's sum does not depend on
+                // whether it falls in a 4-row tile or the tail.
+                let s = _mm_cvtss_f32(reduce4(row[r], zero, zero, zero));
+                let out = yb.add(r);
+                *out = if accumulate { *out + s } else { s };
+                r += 1;
+            }
+        }
+    }
+}
+
+/// The lane sums of four vectors, `[Σa, Σb, Σc, Σd]`, in a fixed addition tree.
+#[inline(always)]
+unsafe fn reduce4(a: __m256, b: __m256, c: __m256, d: __m256) -> __m128 {
+    // SAFETY: register-only operations of the enabled features.
+    unsafe {
+        let ab = _mm256_hadd_ps(a, b);
+        let cd = _mm256_hadd_ps(c, d);
+        let abcd = _mm256_hadd_ps(ab, cd);
+        _mm_add_ps(
+            _mm256_castps256_ps128(abcd),
+            _mm256_extractf128_ps::<1>(abcd),
+        )
+    }
+}

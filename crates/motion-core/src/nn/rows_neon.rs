@@ -1,0 +1,187 @@
+//! aarch64 NEON row kernels for `Y = X Wᵀ` at small batches: the 128-bit counterpart of
+//! [`super::rows_avx2`] (same tiling: `RW` weight rows x `RB` batch rows of 4-lane accumulators,
+//! every weight read once per product whatever the batch).
+//!
+//! Weight rows stay in their stored dtype and are widened in registers: `fcvtl` for f16 (through
+//! `asm!`, as Rust's f16 NEON intrinsics are not stable), a 16-bit shift (`ushll`) for bf16; both
+//! are exact. A row's last `inputs % 4` elements are copied into a zeroed buffer first, so no
+//! element outside a row is read.
+use super::gemm::MatMul;
+use super::packed::Rows;
+use std::arch::aarch64::*;
+use std::arch::asm;
+
+/// A stored weight type and how 4 of them become one f32 vector.
+trait Elem {
+    type T: Copy + Default;
+    /// Widens `p[0..4]`.
+    unsafe fn load(p: *const Self::T) -> float32x4_t;
+}
+
+struct F32;
+struct F16;
+struct Bf16;
+
+impl Elem for F32 {
+    type T = f32;
+    #[inline(always)]
+    unsafe fn load(p: *const f32) -> float32x4_t {
+        unsafe { vld1q_f32(p) }
+    }
+}
+
+impl Elem for F16 {
+    type T = u16;
+    #[inline(always)]
+    unsafe fn load(p: *const u16) -> float32x4_t {
+        unsafe {
+            let h = vld1_u16(p);
+            let out: float32x4_t;
+            asm!("fcvtl {o:v}.4s, {i:v}.4h", o = lateout(vreg) out, i = in(vreg) h,
+                 options(pure, nomem, nostack, preserves_flags));
+            out
+        }
+    }
+}
+
+impl Elem for Bf16 {
+    type T = u16;
+    #[inline(always)]
+    unsafe fn load(p: *const u16) -> float32x4_t {
+        unsafe { vreinterpretq_f32_u32(vshll_n_u16::<16>(vld1_u16(p))) }
+    }
+}
+
+/// `Y = X Wᵀ` (or `Y += X Wᵀ`) for the layout `mm` over `rows` `[mm.outputs, mm.inputs]`.
+///
+/// # Safety
+/// The CPU must have NEON, `mm.inputs > 0`, and the slices must be long enough for the layout
+/// (as `MatMul::run` asserts).
+#[target_feature(enable = "neon")]
+pub(crate) unsafe fn product(mm: &MatMul, x: &[f32], rows: &Rows, y: &mut [f32], accumulate: bool) {
+    let (x, y) = (x.as_ptr(), y.as_mut_ptr());
+    // SAFETY: forwarded from the caller.
+    unsafe {
+        match rows {
+            Rows::F32(w) => drive::<F32>(mm, x, w.as_ptr(), y, accumulate),
+            Rows::F16(w) => drive::<F16>(mm, x, w.as_ptr(), y, accumulate),
+            Rows::Bf16(w) => drive::<Bf16>(mm, x, w.as_ptr(), y, accumulate),
+        }
+    }
+}
+
+/// Weight rows per tile (16 accumulators + 4 weights + 1 input of the 32 vector registers).
+const RW: usize = 4;
+/// Batch rows per tile.
+const RB: usize = 4;
+/// f32 lanes per vector.
+const L: usize = 4;
+
+#[inline(always)]
+unsafe fn drive<E: Elem>(mm: &MatMul, x: *const f32, w: *const E::T, y: *mut f32, acc: bool) {
+    let (n, k, batch) = (mm.outputs, mm.inputs, mm.batch);
+    let (xs, ys) = (mm.x_stride, mm.y_stride);
+    // SAFETY: every tile stays inside the layout (see rows_avx2::drive).
+    unsafe {
+        let mut o = 0;
+        while o + RW <= n {
+            batch_tiles::<E, RW>(x, xs, w.add(o * k), k, y.add(o), ys, batch, acc);
+            o += RW;
+        }
+        while o < n {
+            batch_tiles::<E, 1>(x, xs, w.add(o * k), k, y.add(o), ys, batch, acc);
+            o += 1;
+        }
+    }
+}
+
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+unsafe fn batch_tiles<E: Elem, const R: usize>(
+    x: *const f32,
+    xs: usize,
+    w: *const E::T,
+    k: usize,
+    y: *mut f32,
+    ys: usize,
+    batch: usize,
+    acc: bool,
+) {
+    // SAFETY: see `drive`.
+    unsafe {
+        let mut b = 0;
+        while b + RB <= batch {
+            tile::<E, R, RB>(x.add(b * xs), xs, w, k, y.add(b * ys), ys, acc);
+            b += RB;
+        }
+        match batch - b {
+            1 => tile::<E, R, 1>(x.add(b * xs), xs, w, k, y.add(b * ys), ys, acc),
+            2 => tile::<E, R, 2>(x.add(b * xs), xs, w, k, y.add(b * ys), ys, acc),
+            3 => tile::<E, R, 3>(x.add(b * xs), xs, w, k, y.add(b * ys), ys, acc),
+            _ => {}
+        }
+    }
+}
+
+#[inline(always)]
+unsafe fn padded<T: Copy + Default>(src: *const T, n: usize) -> [T; L] {
+    let mut buf = [T::default(); L];
+    // SAFETY: the caller guarantees `src[0..n]` is readable; `n < L`.
+    unsafe { std::ptr::copy_nonoverlapping(src, buf.as_mut_ptr(), n) };
+    buf
+}
+
+#[inline(always)]
+unsafe fn tile<E: Elem, const R: usize, const B: usize>(
+    x: *const f32,
+    xs: usize,
+    w: *const E::T,
+    k: usize,
+    y: *mut f32,
+    ys: usize,
+    accumulate: bool,
+) {
+    // SAFETY: see `drive`; the tail reads only the row's last `k - full` elements.
+    unsafe {
+        let mut acc = [[vdupq_n_f32(0.0); R]; B];
+        let full = k / L * L;
+        let mut i = 0;
+        while i < full {
+            let mut wv = [vdupq_n_f32(0.0); R];
+            for (r, v) in wv.iter_mut().enumerate() {
+                *v = E::load(w.add(r * k + i));
+            }
+            for (b, row) in acc.iter_mut().enumerate() {
+                let xv = vld1q_f32(x.add(b * xs + i));
+                for (a, v) in row.iter_mut().zip(&wv) {
+                    *a = vfmaq_f32(*a, *v, xv);
+                }
+            }
+            i += L;
+        }
+        if i < k {
+            let rest = k - i;
+            let mut wv = [vdupq_n_f32(0.0); R];
+            for (r, v) in wv.iter_mut().enumerate() {
+                let buf = padded(w.add(r * k + i), rest);
+                *v = E::load(buf.as_ptr());
+            }
+            for (b, row) in acc.iter_mut().enumerate() {
+                let buf = padded(x.add(b * xs + i), rest);
+                let xv = vld1q_f32(buf.as_ptr());
+                for (a, v) in row.iter_mut().zip(&wv) {
+                    *a = vfmaq_f32(*a, *v, xv);
+                }
+            }
+        }
+        for (b, row) in acc.iter().enumerate() {
+            let yb = y.add(b * ys);
+            for (r, v) in row.iter().enumerate() {
+                // Fixed tree: (l0 + l1) + (l2 + l3).
+                let s = vaddvq_f32(*v);
+                let out = yb.add(r);
+                *out = if accumulate { *out + s } else { s };
+            }
+        }
+    }
+}
