@@ -17,7 +17,11 @@ The stages (paper 002, 3.1-3.3 and 4.1):
 - **finetune**: both stacked; the loss is eq. 2 on the LSTM's output plus eq. 1 on the DAE's filtering of it,
   with the schedules reversed and annealed to 0 (section 4.1: "a reverse schedule", "annealing the dropout rate
   ... to zero"); learning rate 1e-4. Optionally (``--closed-loop-weight``) a closed-loop term: the stacked model
-  fed its own filtered output for ``--closed-loop-horizon`` frames after a seed, squared error to the truth.
+  fed its own filtered output for ``--closed-loop-horizon`` frames after a seed, squared error to the truth
+  (``--speed-weight``: plus the squared log ratio of predicted to true joint speed there); and (``--long-weight``)
+  a long-horizon term: the closed loop run on for a random 0..``--long-burn-in`` frames without gradient, then
+  ``--long-frames`` frames with it, whose joint speed and acceleration must match the truth's (truncated
+  back-propagation through time: what keeps the model moving at 8-12 s, far past any affordable full horizon).
 
 Features are min-max scaled to [0, 1] on the training subjects (``data.minmax_stats``). Multi-action: one model
 for all 15 actions, with the action one-hot concatenated to the LSTM input unless ``--no-action-input``.
@@ -91,6 +95,12 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--speed-weight", type=float, default=0.0,
                    help="finetune: weight of the speed term on the closed loop (squared log ratio of the mean joint "
                         "speed of prediction and truth, per sequence); needs --closed-loop-weight > 0")
+    g.add_argument("--long-weight", type=float, default=0.0,
+                   help="finetune: weight of the long-horizon motion term: the closed loop run on without gradient "
+                        "for a random 0..--long-burn-in frames, then --long-frames frames with gradient, whose joint "
+                        "speed and acceleration are matched (log ratio) to the truth's over the same frames")
+    g.add_argument("--long-burn-in", type=int, default=200, help="finetune: most frames run without gradient")
+    g.add_argument("--long-frames", type=int, default=50, help="finetune: frames with gradient after the burn-in")
     g.add_argument("--init-dae", type=Path, metavar="CKPT", help="finetune: the dae stage's checkpoint")
     g.add_argument("--init-lstm", type=Path, metavar="CKPT", help="finetune: the lstm stage's checkpoint")
     g.add_argument("--seed", type=int, default=1)
@@ -179,6 +189,7 @@ def closed_loop_loss(model: DAELSTM, frames: torch.Tensor, actions: torch.Tensor
 
 
 SPEED_FLOOR = 1e-3  # radians per frame added to both speeds: sequences that stand still do not dominate
+ACCEL_FLOOR = 1e-4  # radians per frame² added to both accelerations, likewise
 
 
 def speed_loss(model: DAELSTM, pred: torch.Tensor, truth: torch.Tensor) -> torch.Tensor:
@@ -193,6 +204,43 @@ def speed_loss(model: DAELSTM, pred: torch.Tensor, truth: torch.Tensor) -> torch
         return (x[:, 1:, joints] - x[:, :-1, joints]).abs().mul(scale).mean(dim=(1, 2)) + SPEED_FLOOR
 
     return ((speed(pred).log() - speed(truth).log()) ** 2).mean()
+
+
+def accel_loss(model: DAELSTM, pred: torch.Tensor, truth: torch.Tensor) -> torch.Tensor:
+    """As ``speed_loss`` for the mean absolute second difference of the joint angles: matching it too keeps the
+    speed term from being met by jitter (fast, rough motion has a far larger acceleration than real motion)."""
+    joints = torch.tensor([d >= 6 for d in model.dims_used], device=pred.device)
+    scale = model.norm.std[model.norm.dims_used][joints]
+
+    def accel(x):
+        x = x[..., joints]
+        return (x[:, 2:] - 2 * x[:, 1:-1] + x[:, :-2]).abs().mul(scale).mean(dim=(1, 2)) + ACCEL_FLOOR
+
+    return ((accel(pred).log() - accel(truth).log()) ** 2).mean()
+
+
+def long_motion_loss(model: DAELSTM, frames: torch.Tensor, actions, seed: int, burn_in: int, length: int):
+    """The long-horizon term (truncated back-propagation through the closed loop): after ``seed`` true frames the
+    stacked model runs ``burn_in`` frames on its own output without gradient, then ``length`` frames with it;
+    speed and acceleration of those frames (with the last burn-in frame before them) against the truth's over the
+    same frames. Positions are not compared: ``burn_in`` frames in, the truth is one of many right answers."""
+    if model.derivative_order != 0:
+        raise ValueError("the long-horizon term feeds poses back directly: derivative_order must be 0")
+    batch = frames.shape[0]
+    ctx = model._begin(batch, seed + burn_in + length, actions, None, frames)
+    with torch.no_grad():
+        out = model._decode(model._run(ctx, frames[:, :seed], 0), frames[:, :seed])
+        frame = out[:, -1:]
+        for t in range(burn_in):
+            frame = model._decode(model._run(ctx, frame, seed + t), frame)
+    ctx["state"] = tuple(s.detach() for s in ctx["state"])
+    outputs = [frame.detach()]
+    for t in range(length):
+        frame = model._decode(model._run(ctx, outputs[-1], seed + burn_in + t), outputs[-1])
+        outputs.append(frame)
+    pred = torch.cat(outputs, dim=1)
+    truth = frames[:, seed + burn_in : seed + burn_in + length + 1]
+    return speed_loss(model, pred, truth) + accel_loss(model, pred, truth)
 
 
 # ---------------------------------------------------------------- validation
@@ -269,6 +317,10 @@ def train(args, argv: list[str]) -> None:
     if stage == "finetune" and args.closed_loop_weight > 0 and args.closed_loop_seed + args.closed_loop_horizon > args.window + 1:
         raise SystemExit(f"error: --closed-loop-seed + --closed-loop-horizon ({args.closed_loop_seed} + "
                          f"{args.closed_loop_horizon}) exceed the {args.window + 1} frames of a --window {args.window} sequence")
+    if stage == "finetune" and args.long_weight > 0 and args.closed_loop_seed + args.long_burn_in + args.long_frames > args.window:
+        raise SystemExit(f"error: --closed-loop-seed + --long-burn-in + --long-frames ({args.closed_loop_seed} + "
+                         f"{args.long_burn_in} + {args.long_frames}) exceed the {args.window + 1} frames of a "
+                         f"--window {args.window} sequence (minus one)")
     if args.speed_weight > 0 and args.closed_loop_weight <= 0:
         raise SystemExit("error: --speed-weight acts on the closed-loop term: give --closed-loop-weight > 0 too")
     torch.set_num_threads(args.threads)
@@ -358,6 +410,11 @@ def train(args, argv: list[str]) -> None:
                 loss = loss + args.closed_loop_weight * cl + args.speed_weight * sp
                 terms["closed"] = cl.item()
                 terms["speed"] = sp.item()
+            if stage == "finetune" and args.long_weight > 0:
+                burn = int(rng.integers(0, args.long_burn_in + 1))
+                lm = long_motion_loss(model, frames, acts, args.closed_loop_seed, burn, args.long_frames)
+                loss = loss + args.long_weight * lm
+                terms["long"] = lm.item()
         if not math.isfinite(loss.item()):
             raise SystemExit(f"error: loss became {loss.item()} at iteration {iteration + 1}; see {run_dir}")
         opt.zero_grad(set_to_none=True)

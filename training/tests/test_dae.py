@@ -109,10 +109,40 @@ def test_speed_term_is_zero_for_the_truth_and_grows_when_the_motion_stops():
     assert train_dae.speed_loss(model, root, truth).item() == pytest.approx(0.0, abs=1e-15)
 
 
+def test_accel_term_tells_jitter_from_smooth_motion():
+    model = small_model()
+    model.norm.set_stats(torch.zeros(model.frame_dims, dtype=torch.float64),
+                         torch.ones(model.frame_dims, dtype=torch.float64))
+    t = torch.linspace(0, 6, 60, dtype=torch.float64)
+    truth = 0.5 + 0.3 * torch.sin(t[None, :, None] + torch.arange(model.output_size)[None, None, :])
+    step = (truth[:, 1:] - truth[:, :-1]).abs().mean()
+    sign = torch.tensor([(-1.0) ** i for i in range(60)], dtype=torch.float64)[None, :, None]
+    jitter = 0.5 + 0.5 * step * sign.expand_as(truth)  # about the same speed, all of it back and forth
+    assert train_dae.accel_loss(model, truth, truth).item() == pytest.approx(0.0, abs=1e-15)
+    assert train_dae.accel_loss(model, jitter, truth).item() > 1.0
+
+
+def test_long_term_follows_the_closed_loop_and_cuts_the_gradient_at_the_burn_in():
+    model = small_model().train()
+    gen = torch.Generator().manual_seed(4)
+    frames = torch.rand(2, 20, model.output_size, generator=gen, dtype=torch.float64)
+    act = torch.tensor([1, 2])
+    loss = train_dae.long_motion_loss(model, frames, act, seed=5, burn_in=6, length=4)
+    loss.backward()
+    assert torch.isfinite(loss) and model.decoder.weight.grad.abs().sum() > 0
+    # the frames it scores are the closed loop's frames 6..10 after the seed
+    with torch.no_grad():
+        pred = model.closed_loop(frames[:, :5], 11, act)
+        want = train_dae.speed_loss(model, pred[:, 6:11], frames[:, 11:16]) + train_dae.accel_loss(
+            model, pred[:, 6:11], frames[:, 11:16])
+        got = train_dae.long_motion_loss(model, frames, act, seed=5, burn_in=6, length=4)
+    torch.testing.assert_close(got, want, rtol=1e-12, atol=1e-12)
+
+
 TINY = ["--hidden", "8", "--layers", "2", "--dae-hidden", "6", "--dae-layers", "2", "--batch", "2", "--window", "12",
         "--log-every", "1", "--val-every", "2", "--checkpoint-every", "1", "--val-per-action", "1"]
 FINETUNE = ["--closed-loop-weight", "1", "--closed-loop-seed", "4", "--closed-loop-horizon", "8",
-            "--speed-weight", "0.5"]
+            "--speed-weight", "0.5", "--long-weight", "0.2", "--long-burn-in", "3", "--long-frames", "4"]
 
 
 @pytest.fixture

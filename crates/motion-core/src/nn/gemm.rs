@@ -55,8 +55,10 @@ pub fn row_kernel_max_batch(w: &PackedMatrix) -> usize {
 
 /// Row-kernel products over fewer weight bytes than this stay on one thread (a fork-join costs
 /// a few µs; a 256 KiB matrix streams in about 10 µs at one core's L3 bandwidth).
+#[cfg(target_arch = "x86_64")]
 const ROW_SPLIT_MIN_BYTES: usize = 256 << 10;
 /// Fewest output rows per thread of a split row-kernel product.
+#[cfg(target_arch = "x86_64")]
 const ROW_SPLIT_MIN_OUTPUTS: usize = 64;
 
 /// Below this many multiply-adds a product is not split across threads.
@@ -180,6 +182,7 @@ impl MatMul {
     /// Into how many output ranges the row kernels split this product over threads (see the
     /// module doc): 1 below [`ROW_SPLIT_MIN_BYTES`] of weights, inside [`super::parallel::serial`],
     /// on one thread, or when not called from a rayon pool thread.
+    #[cfg(target_arch = "x86_64")]
     fn row_split_parts(&self, w: &PackedMatrix) -> usize {
         let threads = super::parallel::threads();
         // Off a pool thread a join is a trip through rayon's injection queue (slow, and it

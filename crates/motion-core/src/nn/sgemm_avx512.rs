@@ -26,8 +26,10 @@ pub const TILE_ROWS: usize = 12;
 /// Inputs per pass. Measured on Zen 5 (48 KiB L1, 1 MiB L2) at batch 256: depths 128..1024 are
 /// within noise of each other for K <= 512, and one pass beats four passes of 256 at K = 1024
 /// (the panel slice streams well from L2; fewer passes mean fewer round trips of `Y`).
+#[cfg(target_arch = "x86_64")]
 const KC_MAX: usize = 1024;
 /// Rows of `X` per block (96 x 1024 x 4 B = 384 KiB, inside L2); 48..264 measured alike.
+#[cfg(target_arch = "x86_64")]
 const MC_MAX: usize = 96;
 /// Below this many multiply-adds a product is not split across threads.
 const PARALLEL_MIN_WORK: usize = 1 << 21;
@@ -180,6 +182,7 @@ pub fn gemm_panels(
 }
 
 /// Splits `total` into the fewest near-equal parts of at most `max`, each rounded up to `align`.
+#[cfg(target_arch = "x86_64")]
 fn block_len(total: usize, max: usize, align: usize) -> usize {
     let parts = total.div_ceil(max);
     total.div_ceil(parts).next_multiple_of(align).min(total)
