@@ -18,6 +18,11 @@
 //! (t - k T)` in `0..T`. Each block thus replays the training-time situation "the seed is over,
 //! `T` frames are ahead", so guides stay in the distribution the body saw in training. The
 //! switch between blocks is not smoothed; the body's own state carries the motion across it.
+//!
+//! The next block's plan is computed ahead, one plan step per body step over the `T` steps after
+//! the seed of the current block, into a second guide buffer that becomes the current one when
+//! the block starts: no step pays for a whole block (a stall of `T` plan steps), and the guides
+//! are bit-identical to planning the block at once.
 use super::config::ModelConfig;
 use super::weights::{WeightStore, WeightsError};
 use crate::nn::activation::softplus;
@@ -74,6 +79,10 @@ pub struct VgruState {
     plan_capacity: usize,
     /// Plan outputs in forward order: row `b`, output `j` at `(b * plan_capacity + j) * P`.
     guides: Vec<f32>,
+    /// The next block's plan outputs, same layout, filled ahead (see the module doc).
+    next_guides: Vec<f32>,
+    /// Plan steps of the next block done so far (`0..=horizon`).
+    next_done: usize,
     plan_gi: Vec<f32>,
     plan_h: Vec<f32>,
     plan_scratch: GruScratch,
@@ -145,6 +154,8 @@ impl VgruD {
             horizon: 0,
             plan_capacity: plan_steps,
             guides: vec![0.0; capacity * plan_steps * p],
+            next_guides: vec![0.0; capacity * plan_steps * p],
+            next_done: 0,
             plan_gi: vec![0.0; capacity * 3 * p],
             plan_h: vec![0.0; capacity * p],
             plan_scratch: GruScratch::new(p, capacity),
@@ -173,7 +184,9 @@ impl VgruD {
         if steps > state.plan_capacity {
             state.plan_capacity = steps;
             state.guides = vec![0.0; state.capacity * steps * p];
+            state.next_guides = vec![0.0; state.capacity * steps * p];
         }
+        state.next_done = 0;
         state.seed_len = seed_len;
         state.horizon = horizon;
         state.noise = noise;
@@ -189,6 +202,14 @@ impl VgruD {
 
     /// Runs `steps` plan steps for `batch` rows from fresh initial states, storing outputs `0..steps`.
     fn plan_block(&self, state: &mut VgruState, batch: usize, steps: usize) {
+        self.plan_start(state, batch);
+        for j in 0..steps {
+            self.plan_step(state, batch, j, false);
+        }
+    }
+
+    /// A fresh plan initial state `mu + scale ⊙ eps` per row (the next `eps` of its source).
+    fn plan_start(&self, state: &mut VgruState, batch: usize) {
         let p = self.plan_hidden();
         for b in 0..batch {
             let eps = &mut state.eps[b * p..(b + 1) * p];
@@ -198,31 +219,57 @@ impl VgruD {
                 *h = m + s * e;
             }
         }
-        for j in 0..steps {
-            self.plan.step_with_projection(
-                &state.plan_gi,
-                &mut state.plan_h,
-                batch,
-                &mut state.plan_scratch,
-            );
-            for b in 0..batch {
-                let at = (b * state.plan_capacity + j) * p;
-                state.guides[at..at + p].copy_from_slice(&state.plan_h[b * p..(b + 1) * p]);
-            }
+    }
+
+    /// Plan step `j`: output `j` into the current guides or (`next`) the next block's.
+    fn plan_step(&self, state: &mut VgruState, batch: usize, j: usize, next: bool) {
+        let p = self.plan_hidden();
+        self.plan.step_with_projection(
+            &state.plan_gi,
+            &mut state.plan_h,
+            batch,
+            &mut state.plan_scratch,
+        );
+        let guides = if next {
+            &mut state.next_guides
+        } else {
+            &mut state.guides
+        };
+        for b in 0..batch {
+            let at = (b * state.plan_capacity + j) * p;
+            guides[at..at + p].copy_from_slice(&state.plan_h[b * p..(b + 1) * p]);
         }
     }
 
-    /// The plan output read by body step `t` (see the module doc), re-planning when a new block starts.
+    /// One more plan step of the next block (started on its first step), if it is not complete.
+    fn plan_ahead(&self, state: &mut VgruState, batch: usize) {
+        if state.next_done >= state.horizon {
+            return;
+        }
+        if state.next_done == 0 {
+            self.plan_start(state, batch);
+        }
+        self.plan_step(state, batch, state.next_done, true);
+        state.next_done += 1;
+    }
+
+    /// The plan output read by body step `t` (see the module doc): switches to the block planned
+    /// ahead when a new block starts, and advances the next block's plan by one step.
     fn guide_index(&self, state: &mut VgruState, batch: usize, t: usize) -> usize {
         let (s, h) = (state.seed_len, state.horizon);
-        if t < s + h {
+        if t < s {
             return s + h - 1 - t;
         }
         let block = (t - s) / h;
         let local = t - block * h;
-        if local == s {
-            self.plan_block(state, batch, h);
+        if block >= 1 && local == s {
+            while state.next_done < h {
+                self.plan_ahead(state, batch); // only if steps were skipped: never in lockstep use
+            }
+            std::mem::swap(&mut state.guides, &mut state.next_guides);
+            state.next_done = 0;
         }
+        self.plan_ahead(state, batch);
         s + h - 1 - local
     }
 
