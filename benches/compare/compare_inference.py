@@ -172,8 +172,15 @@ def main() -> int:
         "--baseline-cli",
         help="also time this motion-cli build (e.g. an older commit) in the same run, as `baseline`",
     )
+    parser.add_argument(
+        "--simd",
+        default="",
+        help="also time ours on each of these SIMD paths (comma-separated: avx512, avx2, neon, portable; "
+        "`motion-cli bench --simd`), each against ORT in the same run",
+    )
     parser.add_argument("--json", help="also write the results to this JSON file")
     args = parser.parse_args()
+    simd_paths = [p for p in args.simd.split(",") if p]
 
     if not os.path.exists(args.cli):
         print(f"error: {args.cli} not found; run `cargo build --release -p motion-cli` first", file=sys.stderr)
@@ -226,6 +233,8 @@ def main() -> int:
                 if args.threads != 1 and batch <= 4:
                     # Opt-in: products split over threads by output rows (`bench --row-split`).
                     engines["split"] = ours_runner(args.cli, weights, batch, args.threads, ("--row-split",))
+                for path in simd_paths:
+                    engines[f"simd-{path}"] = ours_runner(args.cli, weights, batch, args.threads, ("--simd", path))
                 if args.threads != 1:
                     engines["ours-1t"] = ours_runner(args.cli, weights, batch, 1)
                     if args.baseline_cli:
@@ -256,6 +265,7 @@ def main() -> int:
                     "split_over_ort": med.get("split", float("nan")) / best_ort,
                     "pytorch_over_split": best_torch / med.get("split", float("nan")),
                     "baseline_over_ort": best_base / best_ort,
+                    "ours_over_ort_by_simd": {p: med[f"simd-{p}"] / best_ort for p in simd_paths},
                     "ort_vs_pytorch_max_abs": err,
                     "flops_per_char_step": flops,
                     "weight_bytes_per_step": weight_bytes,
@@ -267,6 +277,12 @@ def main() -> int:
                 }
                 rows.append(row)
                 print_row(row, header=len(rows) == 1)
+                if simd_paths:
+                    print(
+                        "    per SIMD path, ours µs (ours/ORT): "
+                        + "  ".join(f"{p} {med[f'simd-{p}']:.1f} ({row['ours_over_ort_by_simd'][p]:.2f}x)" for p in simd_paths),
+                        flush=True,
+                    )
     if args.json:
         with open(args.json, "w") as f:
             json.dump({"threads": args.threads, "reps": args.reps, "dtype": args.dtype, "results": rows}, f, indent=1)

@@ -9,7 +9,7 @@
 //!
 //! Run: `cargo bench --bench motion -- gemm/`
 use criterion::{BenchmarkId, Criterion, Throughput};
-use motion::core::nn::sgemm_avx512::{self, PanelMatrix};
+use motion::core::nn::sgemm_panels::{self, PanelMatrix};
 use std::hint::black_box;
 use std::time::Duration;
 
@@ -112,7 +112,7 @@ fn fma_registers(n: usize) -> f32 {
 /// Registers this module's benchmarks.
 pub fn benches(c: &mut Criterion) {
     #[cfg(target_arch = "x86_64")]
-    if sgemm_avx512::available() {
+    if motion::core::nn::SimdPath::Avx512.supported() {
         const ROUNDS: usize = 100_000;
         let mut group = c.benchmark_group("gemm/peak");
         group
@@ -155,13 +155,13 @@ pub fn benches(c: &mut Criterion) {
         group.throughput(Throughput::Elements((2 * BATCH * inputs * outputs) as u64));
         let shape = format!("{inputs}x{outputs}");
         for (threads, pool) in &pools {
-            if sgemm_avx512::available() {
+            if sgemm_panels::panels_in_use() {
                 group.bench_function(
                     BenchmarkId::new(format!("panels_avx512/t{threads}"), &shape),
                     |b| {
                         b.iter(|| {
                             pool.install(|| {
-                                sgemm_avx512::gemm_panels(
+                                sgemm_panels::gemm_panels(
                                     BATCH, &x, inputs, &panels, &mut y, outputs, false,
                                 )
                             });

@@ -13,14 +13,14 @@
 //!   L3 at about 25 GB/s on the 2-core Intel Xeon we measure on, two cores together at about
 //!   32-43 GB/s. Called from elsewhere it stays on the calling thread (see
 //!   [`crate::model::BatchGenerator::set_row_split`]).
-//! - **GEMM** (larger batches): with AVX-512, [`sgemm_avx512::gemm_panels`] over the weights
+//! - **GEMM** (larger batches): with AVX-512, [`sgemm_panels::gemm_panels`] over the weights
 //!   packed into column panels at load; otherwise `matrixmultiply::sgemm` over the f32 rows (its
 //!   packing buffers are its own business), split over rayon threads by rows of `X` when the
 //!   product is big enough to pay for the fork.
 //!
 //! For a given machine and path every result is deterministic.
 use super::packed::{PackedMatrix, RowDtype, Rows, Wide};
-use super::sgemm_avx512;
+use super::sgemm_panels;
 use super::simd::SimdPath;
 
 /// Operand layout of one product `Y[b, o] = beta * Y[b, o] + Σ_i X[b, i] * W[o, i]`.
@@ -44,11 +44,13 @@ pub struct MatMul {
 /// products timed interleaved): against the AVX-512 panel GEMM, f32 rows tie at batch 1 (both
 /// read 4 bytes a weight) and lose above; f16/bf16 rows read half the bytes and win up to batch 4
 /// on the step's `[1536, 512]` products. `matrixmultiply` re-packs the weight on every call, so
-/// without panels the row kernels win up to batch 16 at least.
+/// without panels the row kernels win up to batch 16 at least; so do the AVX2 row kernels against
+/// the AVX2 panel GEMM (the shipped VGRU-d at batch 8: 291 µs with the GEMM from batch 5, on a Zen
+/// 4/5 EPYC).
 pub fn row_kernel_max_batch(w: &PackedMatrix) -> usize {
-    match (w.wide(), w.dtype()) {
-        (Wide::Panels(_), RowDtype::F32) => 1,
-        (Wide::Panels(_), _) => 4,
+    match (super::simd::active(), w.wide(), w.dtype()) {
+        (SimdPath::Avx512, Wide::Panels(_), RowDtype::F32) => 1,
+        (SimdPath::Avx512, Wide::Panels(_), _) => 4,
         _ => 16,
     }
 }
@@ -264,7 +266,7 @@ impl MatMul {
             return;
         }
         match (w.wide(), w.f32_rows()) {
-            (Wide::Panels(panels), _) => sgemm_avx512::gemm_panels(
+            (Wide::Panels(panels), _) => sgemm_panels::gemm_panels(
                 self.batch,
                 x,
                 self.x_stride,

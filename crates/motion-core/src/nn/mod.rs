@@ -21,7 +21,7 @@ mod rows_avx2;
 mod rows_avx512;
 #[cfg(target_arch = "aarch64")]
 mod rows_neon;
-pub mod sgemm_avx512;
+pub mod sgemm_panels;
 pub mod simd;
 
 pub use body_gru::{BodyGruCell, BodyGruConfig};

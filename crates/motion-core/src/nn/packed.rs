@@ -9,11 +9,11 @@
 //! kernel's.
 //!
 //! Large batches are compute-bound and go to a GEMM over f32 weights: with AVX-512 the matrix
-//! also holds its weights packed into column panels for [`super::sgemm_avx512`] (packed here,
+//! also holds its weights packed into column panels for [`super::sgemm_panels`] (packed here,
 //! at load, so no step re-packs or allocates); without it, `matrixmultiply` reads the f32 rows
 //! (16-bit rows then keep an f32 copy for it). The second form doubles the weight memory (11 MB
 //! more for a paper-size f32 model), the price of fast batches of every size.
-use super::sgemm_avx512::{self, PanelMatrix};
+use super::sgemm_panels::{self, PanelMatrix};
 use crate::model::weights::{HalfDtype, WeightStore, WeightsError};
 
 /// The element type of a [`PackedMatrix`]'s rows.
@@ -75,7 +75,7 @@ impl PackedMatrix {
     /// Panics if `values.len() != outputs * inputs` (a programming error).
     pub fn from_f32(values: Vec<f32>, outputs: usize, inputs: usize) -> Self {
         assert_eq!(values.len(), outputs * inputs, "matrix size");
-        let wide = if sgemm_avx512::available() {
+        let wide = if sgemm_panels::panels_in_use() {
             Wide::Panels(PanelMatrix::pack(&values, outputs, inputs))
         } else {
             Wide::Rows
@@ -104,7 +104,7 @@ impl PackedMatrix {
             wide: Wide::Rows,
         };
         let values = matrix.to_f32();
-        matrix.wide = if sgemm_avx512::available() {
+        matrix.wide = if sgemm_panels::panels_in_use() {
             Wide::Panels(PanelMatrix::pack(&values, outputs, inputs))
         } else {
             Wide::F32(values)

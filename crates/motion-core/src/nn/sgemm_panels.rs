@@ -15,9 +15,12 @@
 //! reused by all the block's row tiles while it is hot in L1/L2. A call allocates nothing.
 //! Large products are split by rows over the rayon pool.
 //!
-//! Without AVX-512F (or off x86-64) [`available`] is false and [`gemm_panels`] still computes the
-//! right numbers with portable loops over the same layout, only slowly; callers should use
-//! their own fallback then.
+//! With the AVX2 path selected the same panels feed an AVX2 + FMA kernel (`6 x 16` tiles, each
+//! panel in two halves). On other paths [`panels_in_use`] is false and [`gemm_panels`] still
+//! computes the right numbers with portable loops over the same layout, only slowly; callers
+//! should use their own fallback then.
+
+use super::simd::SimdPath;
 
 /// Output columns per panel: two 16-lane AVX-512 registers.
 pub const PANEL_WIDTH: usize = 32;
@@ -116,10 +119,10 @@ fn lines_as_floats_mut(lines: &mut [Line]) -> &mut [f32] {
     unsafe { std::slice::from_raw_parts_mut(lines.as_mut_ptr().cast::<f32>(), lines.len() * 16) }
 }
 
-/// True when the AVX-512 path is selected ([`super::simd::active`]; only ever on a CPU that has
-/// it): matrices loaded now are packed into panels, and the panel GEMM runs the AVX-512 kernel.
-pub fn available() -> bool {
-    super::simd::active() == super::simd::SimdPath::Avx512
+/// True when the selected SIMD path ([`super::simd::active`]) has a panel kernel (AVX-512 or
+/// AVX2): matrices loaded now are packed into panels for [`gemm_panels`].
+pub fn panels_in_use() -> bool {
+    matches!(super::simd::active(), SimdPath::Avx512 | SimdPath::Avx2)
 }
 
 /// `Y = X Wᵀ` (`accumulate = false`) or `Y += X Wᵀ` (`accumulate = true`) for `batch` rows of
@@ -130,6 +133,41 @@ pub fn available() -> bool {
 /// too short for the layout or if rows of `Y` would overlap (`y_stride < outputs`), both
 /// programming errors.
 pub fn gemm_panels(
+    batch: usize,
+    x: &[f32],
+    x_stride: usize,
+    w: &PanelMatrix,
+    y: &mut [f32],
+    y_stride: usize,
+    accumulate: bool,
+) {
+    let path = super::simd::active();
+    gemm_panels_with(path, batch, x, x_stride, w, y, y_stride, accumulate);
+}
+
+/// [`gemm_panels`] on the kernel of `path` whatever the selected one (tests and benchmarks);
+/// refuses a path the CPU lacks.
+#[allow(clippy::too_many_arguments)]
+pub fn gemm_panels_on(
+    path: SimdPath,
+    batch: usize,
+    x: &[f32],
+    x_stride: usize,
+    w: &PanelMatrix,
+    y: &mut [f32],
+    y_stride: usize,
+    accumulate: bool,
+) -> Result<(), super::simd::SimdError> {
+    if !path.supported() {
+        return Err(super::simd::SimdError::Unsupported(path));
+    }
+    gemm_panels_with(path, batch, x, x_stride, w, y, y_stride, accumulate);
+    Ok(())
+}
+
+#[allow(clippy::too_many_arguments)]
+fn gemm_panels_with(
+    path: SimdPath,
     batch: usize,
     x: &[f32],
     x_stride: usize,
@@ -172,12 +210,14 @@ pub fn gemm_panels(
                 let (y_chunk, rest) = y_rest.split_at_mut(y_len);
                 y_rest = rest;
                 let x_chunk = &x[start * x_stride..];
-                s.spawn(move |_| serial(n, x_chunk, x_stride, w, y_chunk, y_stride, accumulate));
+                s.spawn(move |_| {
+                    serial(path, n, x_chunk, x_stride, w, y_chunk, y_stride, accumulate)
+                });
                 start += n;
             }
         });
     } else {
-        serial(batch, x, x_stride, w, y, y_stride, accumulate);
+        serial(path, batch, x, x_stride, w, y, y_stride, accumulate);
     }
 }
 
@@ -189,7 +229,9 @@ fn block_len(total: usize, max: usize, align: usize) -> usize {
 }
 
 /// The product on one thread (slices already checked by the caller).
+#[allow(clippy::too_many_arguments)]
 fn serial(
+    path: SimdPath,
     batch: usize,
     x: &[f32],
     x_stride: usize,
@@ -209,13 +251,23 @@ fn serial(
     }
     #[cfg(target_arch = "x86_64")]
     {
-        if available() {
-            let kc = block_len(inputs, KC_MAX, 1);
-            let mc = block_len(batch, MC_MAX, TILE_ROWS);
-            // SAFETY: the CPU has AVX-512F, and the caller checked that every row of `x` and `y`
-            // the layout addresses lies inside the slices (`y` exclusively borrowed).
-            unsafe { avx512::blocked(batch, x, x_stride, w, y, y_stride, accumulate, kc, mc) };
-            return;
+        let kc = block_len(inputs, KC_MAX, 1);
+        match path {
+            SimdPath::Avx512 => {
+                let mc = block_len(batch, MC_MAX, TILE_ROWS);
+                // SAFETY: the path is selected only on a CPU with AVX-512F, and the caller
+                // checked that every row of `x` and `y` the layout addresses lies inside the
+                // slices (`y` exclusively borrowed).
+                unsafe { avx512::blocked(batch, x, x_stride, w, y, y_stride, accumulate, kc, mc) };
+                return;
+            }
+            SimdPath::Avx2 => {
+                let mc = block_len(batch, MC_MAX, avx2::TILE_ROWS);
+                // SAFETY: as above, with AVX2 and FMA.
+                unsafe { avx2::blocked(batch, x, x_stride, w, y, y_stride, accumulate, kc, mc) };
+                return;
+            }
+            _ => {}
         }
     }
     portable(batch, x, x_stride, w, y, y_stride, accumulate);
@@ -411,6 +463,165 @@ mod avx512 {
     }
 }
 
+/// The AVX2 + FMA kernel over the same panels: each 32-column panel in two halves of 16 columns
+/// (two ymm registers), a `TILE_ROWS x 16` tile of accumulators (12 of the 16 ymm registers, +2
+/// weight vectors + 1 broadcast).
+#[cfg(target_arch = "x86_64")]
+mod avx2 {
+    use super::{PanelMatrix, PANEL_WIDTH};
+    use std::arch::x86_64::*;
+
+    /// Rows of `X` per register tile.
+    pub(super) const TILE_ROWS: usize = 6;
+    /// Columns per half panel.
+    const HALF: usize = 16;
+
+    /// The blocked product on one thread: `kc` inputs per pass, `mc` rows per block.
+    ///
+    /// # Safety
+    /// AVX2 and FMA must be available; `x`, `y` must hold every addressed row (checked by
+    /// `gemm_panels`) and `y_stride >= outputs` unless `batch == 1`.
+    #[allow(clippy::too_many_arguments)]
+    #[target_feature(enable = "avx2,fma")]
+    pub(super) unsafe fn blocked(
+        batch: usize,
+        x: &[f32],
+        x_stride: usize,
+        w: &PanelMatrix,
+        y: &mut [f32],
+        y_stride: usize,
+        accumulate: bool,
+        kc_max: usize,
+        mc_max: usize,
+    ) {
+        let (inputs, outputs) = (w.inputs, w.outputs);
+        let panels = w.panels();
+        let data = w.data().as_ptr();
+        let y_ptr = y.as_mut_ptr();
+        let mut pc = 0;
+        while pc < inputs {
+            let kc = kc_max.min(inputs - pc);
+            let load_c = accumulate || pc > 0;
+            let mut ic = 0;
+            while ic < batch {
+                let mc = mc_max.min(batch - ic);
+                let x_block = &x[ic * x_stride..];
+                for p in 0..panels {
+                    for half in 0..PANEL_WIDTH / HALF {
+                        let first = p * PANEL_WIDTH + half * HALF;
+                        if first >= outputs {
+                            break;
+                        }
+                        let width = HALF.min(outputs - first);
+                        // SAFETY: panel `p` holds `inputs * PANEL_WIDTH` floats; we start `pc`
+                        // rows in, at the half's first column (32-byte aligned: panel rows are
+                        // 64-byte aligned and a half is 64 bytes).
+                        let b = unsafe { data.add((p * inputs + pc) * PANEL_WIDTH + half * HALF) };
+                        let tiles = mc.div_ceil(TILE_ROWS);
+                        let mut ir = 0;
+                        for t in 0..tiles {
+                            let m = mc / tiles + usize::from(t < mc % tiles);
+                            // SAFETY: tile rows `ic + ir ..+ m` and columns `first ..+ width`
+                            // lie inside `y`; rows `ic + ir ..+ m` of `x` hold inputs `pc ..+ kc`.
+                            unsafe {
+                                let c = y_ptr.add((ic + ir) * y_stride + first);
+                                let a = x_block.as_ptr().add(ir * x_stride + pc);
+                                tile_rows(m, kc, a, x_stride, b, c, y_stride, load_c, width);
+                            }
+                            ir += m;
+                        }
+                    }
+                }
+                ic += mc;
+            }
+            pc += kc;
+        }
+    }
+
+    /// Runs the tile kernel for `m` (1..=TILE_ROWS) rows.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    unsafe fn tile_rows(
+        m: usize,
+        kc: usize,
+        a: *const f32,
+        lda: usize,
+        b: *const f32,
+        c: *mut f32,
+        ldc: usize,
+        load_c: bool,
+        width: usize,
+    ) {
+        macro_rules! by_rows {
+            ($($n:literal)*) => {
+                match m {
+                    $($n => unsafe { tile::<$n>(kc, a, lda, b, c, ldc, load_c, width) },)*
+                    _ => unreachable!("tile rows out of range"),
+                }
+            };
+        }
+        by_rows!(1 2 3 4 5 6);
+    }
+
+    /// `C[0..M, 0..width] (+)= A B` for `M` rows of `X` (`a[r * lda + k]`) and a half panel
+    /// (`b[k * PANEL_WIDTH + j]`, `j < 16`) over `kc` inputs.
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn tile<const M: usize>(
+        kc: usize,
+        a: *const f32,
+        lda: usize,
+        b: *const f32,
+        c: *mut f32,
+        ldc: usize,
+        load_c: bool,
+        width: usize,
+    ) {
+        let mut acc = [[_mm256_setzero_ps(); 2]; M];
+        let (mut a, mut b) = (a, b);
+        for _ in 0..kc {
+            // SAFETY: rows `a + r * lda` (r < M) hold `kc` inputs; `b` holds `kc` panel rows.
+            unsafe {
+                let b0 = _mm256_load_ps(b);
+                let b1 = _mm256_load_ps(b.add(8));
+                for (r, row) in acc.iter_mut().enumerate() {
+                    let av = _mm256_broadcast_ss(&*a.add(r * lda));
+                    row[0] = _mm256_fmadd_ps(av, b0, row[0]);
+                    row[1] = _mm256_fmadd_ps(av, b1, row[1]);
+                }
+                a = a.add(1);
+                b = b.add(PANEL_WIDTH);
+            }
+        }
+        for (r, row) in acc.iter().enumerate() {
+            // SAFETY: row `r` of the tile, columns `0..width`, lie inside `y`.
+            unsafe {
+                let p = c.add(r * ldc);
+                if width == HALF {
+                    for (v, &s) in row.iter().enumerate() {
+                        let q = p.add(8 * v);
+                        let out = if load_c {
+                            _mm256_add_ps(_mm256_loadu_ps(q), s)
+                        } else {
+                            s
+                        };
+                        _mm256_storeu_ps(q, out);
+                    }
+                } else {
+                    let mut buf = [0.0f32; HALF];
+                    _mm256_storeu_ps(buf.as_mut_ptr(), row[0]);
+                    _mm256_storeu_ps(buf.as_mut_ptr().add(8), row[1]);
+                    for (j, &v) in buf.iter().enumerate().take(width) {
+                        let q = p.add(j);
+                        *q = if load_c { *q + v } else { v };
+                    }
+                }
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -456,7 +667,8 @@ mod tests {
         y
     }
 
-    /// Runs one case through `gemm_panels` (and the portable path) and compares with f64.
+    /// Runs one case through `gemm_panels` and the kernel of every SIMD path the CPU has, and
+    /// compares with f64.
     fn check(batch: usize, inputs: usize, outputs: usize, pad: (usize, usize), accumulate: bool) {
         let (x_stride, y_stride) = (inputs + pad.0, outputs + pad.1);
         let seed = (batch * 1_000_003 + inputs * 1009 + outputs) as u64;
@@ -470,12 +682,20 @@ mod tests {
         );
         // Sums of `inputs` products of values in [-1, 1): f32 rounding grows like sqrt(inputs).
         let tol = 2e-6 * (inputs as f64).sqrt().max(1.0) * 4.0;
-        for (name, fast) in [("dispatch", true), ("portable", false)] {
+        let mut kernels: Vec<(String, Option<SimdPath>)> = vec![("dispatch".into(), None)];
+        kernels.extend(
+            SimdPath::available()
+                .into_iter()
+                .map(|p| (p.to_string(), Some(p))),
+        );
+        for (name, path) in kernels {
             let mut y = y0.clone();
-            if fast {
-                gemm_panels(batch, &x, x_stride, &packed, &mut y, y_stride, accumulate);
-            } else {
-                portable(batch, &x, x_stride, &packed, &mut y, y_stride, accumulate);
+            match path {
+                None => gemm_panels(batch, &x, x_stride, &packed, &mut y, y_stride, accumulate),
+                Some(p) => gemm_panels_on(
+                    p, batch, &x, x_stride, &packed, &mut y, y_stride, accumulate,
+                )
+                .unwrap(),
             }
             for (i, (&got, &want)) in y.iter().zip(&expect).enumerate() {
                 assert!(
