@@ -136,7 +136,7 @@ fn resample_expmap(
     let k = ratio.round();
     if k >= 1.0 && (ratio - k).abs() < SAME_RATE * k {
         notices.push(format!(
-            "note: {}: read as {} Hz (--input-fps); every {}th frame kept for the model's {} Hz",
+            "note: {}: read as {} Hz (--input-fps); one frame in {} kept for the model's {} Hz",
             path.display(),
             round_rate(from),
             k as usize,
