@@ -8,10 +8,11 @@
 //! numbers as the f32 upcast the file reader would give; only the accumulation order is the
 //! kernel's.
 //!
-//! Large batches are compute-bound and go to a GEMM over f32 weights: with AVX-512 the matrix
-//! also holds its weights packed into column panels for [`super::sgemm_panels`] (packed here,
-//! at load, so no step re-packs or allocates); without it, `matrixmultiply` reads the f32 rows
-//! (16-bit rows then keep an f32 copy for it). The second form doubles the weight memory (11 MB
+//! Large batches are compute-bound and go to a GEMM over f32 weights: with the AVX-512 or AVX2
+//! path selected at load ([`super::simd`]) the matrix also holds its weights packed into column
+//! panels for [`super::sgemm_panels`] (packed here, at load, so no step re-packs or allocates);
+//! on the other paths `matrixmultiply` reads the f32 rows (16-bit rows then keep an f32 copy for
+//! it, which the portable row kernel reads too). The second form doubles the weight memory (11 MB
 //! more for a paper-size f32 model), the price of fast batches of every size.
 use super::sgemm_panels::{self, PanelMatrix};
 use crate::model::weights::{HalfDtype, WeightStore, WeightsError};
