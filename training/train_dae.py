@@ -101,6 +101,8 @@ def build_parser() -> argparse.ArgumentParser:
                         "speed and acceleration are matched (log ratio) to the truth's over the same frames")
     g.add_argument("--long-burn-in", type=int, default=200, help="finetune: most frames run without gradient")
     g.add_argument("--long-frames", type=int, default=50, help="finetune: frames with gradient after the burn-in")
+    g.add_argument("--freeze-dae", action="store_true",
+                   help="finetune: keep the pre-trained autoencoder fixed (train the LSTM and decoder only)")
     g.add_argument("--init-dae", type=Path, metavar="CKPT", help="finetune: the dae stage's checkpoint")
     g.add_argument("--init-lstm", type=Path, metavar="CKPT", help="finetune: the lstm stage's checkpoint")
     g.add_argument("--seed", type=int, default=1)
@@ -355,6 +357,10 @@ def train(args, argv: list[str]) -> None:
         params = list(model.dae.parameters())
     elif stage == "lstm":
         params = [p for n, p in model.named_parameters() if not n.startswith("dae.")]
+    elif args.freeze_dae:
+        params = [p for n, p in model.named_parameters() if not n.startswith("dae.")]
+        for p in model.dae.parameters():
+            p.requires_grad_(False)
     else:
         params = list(model.parameters())
     lr = args.lr if args.lr is not None else (1e-4 if stage == "finetune" else 1e-3)

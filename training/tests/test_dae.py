@@ -200,6 +200,21 @@ def test_three_stages_resume_exactly_and_export(tmp_path, synthetic, monkeypatch
         train_dae.main(["--export", str(tmp_path / "x.safetensors"), "--from", str(tmp_path / "dae" / "last.pt")])
 
 
+def test_freeze_dae_keeps_the_autoencoder_and_trains_the_rest(tmp_path, synthetic):
+    run(["--stage", "dae", "--run-dir", str(tmp_path / "dae"), "--iterations", "2"] + TINY)
+    run(["--stage", "lstm", "--run-dir", str(tmp_path / "lstm"), "--iterations", "2"] + TINY)
+    init = ["--init-dae", str(tmp_path / "dae" / "last.pt"), "--init-lstm", str(tmp_path / "lstm" / "last.pt")]
+    run(["--stage", "finetune", "--run-dir", str(tmp_path / "ft"), "--iterations", "2", "--freeze-dae"]
+        + TINY + FINETUNE + init)
+    dae = torch.load(tmp_path / "dae" / "last.pt", weights_only=False)["model"]
+    lstm = torch.load(tmp_path / "lstm" / "last.pt", weights_only=False)["model"]
+    ft = torch.load(tmp_path / "ft" / "last.pt", weights_only=False)["model"]
+    for k in ft:
+        if k.startswith("dae."):
+            assert torch.equal(ft[k], dae[k]), k
+    assert not torch.equal(ft["rnn.0.weight_ih"], lstm["rnn.0.weight_ih"])
+
+
 def test_bad_arguments_are_refused(tmp_path, synthetic):
     with pytest.raises(SystemExit, match="exceed"):
         train_dae.main(["--stage", "finetune", "--run-dir", str(tmp_path / "a"), "--closed-loop-weight", "1",
