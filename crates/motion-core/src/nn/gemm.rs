@@ -409,13 +409,26 @@ fn rows_grouped<const FMA: bool>(
     let mut o = 0;
     while o < mm.outputs {
         let n = ROW_GROUP.min(mm.outputs - o);
-        let group = &w[o * k..(o + n) * k];
-        for b in 0..mm.batch {
-            let xb = &x[b * mm.x_stride..b * mm.x_stride + k];
-            let yb = &mut y[b * mm.y_stride + o..b * mm.y_stride + o + n];
-            gemv_kernel::<f32, FMA>(xb, group, |v| v, yb, accumulate);
-        }
+        group_product::<FMA>(mm, x, &w[o * k..(o + n) * k], o, y, accumulate);
         o += n;
+    }
+}
+
+/// Every batch row against the f32 weight rows `group` (rows `o..o + group.len() / inputs`).
+#[inline(always)]
+fn group_product<const FMA: bool>(
+    mm: &MatMul,
+    x: &[f32],
+    group: &[f32],
+    o: usize,
+    y: &mut [f32],
+    accumulate: bool,
+) {
+    let (k, n) = (mm.inputs, group.len() / mm.inputs);
+    for b in 0..mm.batch {
+        let xb = &x[b * mm.x_stride..b * mm.x_stride + k];
+        let yb = &mut y[b * mm.y_stride + o..b * mm.y_stride + o + n];
+        gemv_kernel::<f32, FMA>(xb, group, |v| v, yb, accumulate);
     }
 }
 
@@ -468,11 +481,7 @@ fn rows_widened<const FMA: bool>(
         for (dst, src) in group.iter_mut().zip(&w[o * k..(o + n) * k]) {
             *dst = widen(*src);
         }
-        for b in 0..mm.batch {
-            let xb = &x[b * mm.x_stride..b * mm.x_stride + k];
-            let yb = &mut y[b * mm.y_stride + o..b * mm.y_stride + o + n];
-            gemv_kernel::<f32, FMA>(xb, group, |v| v, yb, accumulate);
-        }
+        group_product::<FMA>(mm, x, group, o, y, accumulate);
         o += n;
     }
 }

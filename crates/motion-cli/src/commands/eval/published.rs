@@ -33,22 +33,14 @@ pub struct ModelRow<const N: usize> {
     pub values: [f64; N],
 }
 
-/// One model's Euler errors: per action of [`PAPER000_ACTIONS`], at [`TABLE7_HORIZONS_MS`].
+/// One model's errors at `H` horizons, per action of [`PAPER000_ACTIONS`]: paper 000 Table 7 at
+/// [`TABLE7_HORIZONS_MS`] (`H` = 6), paper 002 Table 2 at [`P002_TABLE2_HORIZONS_MS`] (`H` = 5).
 #[derive(Debug, Clone, Copy)]
-pub struct EulerRow {
+pub struct EulerRow<const H: usize = 6> {
     /// The model as the paper names it.
     pub model: &'static str,
     /// `values[action][horizon]`.
-    pub values: [[f64; 6]; 4],
-}
-
-/// One model's paper 002 Table 2 errors: per action of [`PAPER000_ACTIONS`], at [`P002_TABLE2_HORIZONS_MS`].
-#[derive(Debug, Clone, Copy)]
-pub struct EulerRow5 {
-    /// The model as the paper names it.
-    pub model: &'static str,
-    /// `values[action][horizon]`.
-    pub values: [[f64; 5]; 4],
+    pub values: [[f64; H]; 4],
 }
 
 /// One method's NDMS over the 0.4 s bins of one action (paper 003 Table 2).
@@ -131,26 +123,26 @@ pub const P000_TABLE7_EULER: [EulerRow; 2] = [
 /// baselines' rows are the paper's copies of SRNN [19]'s. Printed beside the Euler error of the
 /// standard protocol, its closest measured counterpart (the paper does not say how it averaged).
 #[rustfmt::skip]
-pub const P002_TABLE2_L2: [EulerRow5; 4] = [
-    EulerRow5 { model: "LSTM3LR", values: [
+pub const P002_TABLE2_L2: [EulerRow<5>; 4] = [
+    EulerRow { model: "LSTM3LR", values: [
         [1.18, 1.50, 1.67, 1.81, 2.20],
         [1.36, 1.79, 2.29, 2.49, 2.82],
         [2.05, 2.34, 3.10, 3.24, 3.42],
         [2.25, 2.33, 2.45, 2.48, 2.93],
     ] },
-    EulerRow5 { model: "ERD", values: [
+    EulerRow { model: "ERD", values: [
         [1.30, 1.56, 1.84, 2.00, 2.38],
         [1.66, 1.93, 2.28, 2.36, 2.41],
         [2.34, 2.74, 3.73, 3.68, 3.82],
         [2.67, 2.97, 3.23, 3.47, 2.92],
     ] },
-    EulerRow5 { model: "S-RNN", values: [
+    EulerRow { model: "S-RNN", values: [
         [1.08, 1.34, 1.60, 1.90, 2.13],
         [1.35, 1.71, 2.12, 2.28, 2.58],
         [1.90, 2.30, 2.90, 3.21, 3.23],
         [1.67, 2.03, 2.20, 2.39, 2.43],
     ] },
-    EulerRow5 { model: "DAE-LSTM", values: [
+    EulerRow { model: "DAE-LSTM", values: [
         [1.00, 1.11, 1.39, 1.55, 1.39],
         [1.31, 1.49, 1.86, 1.76, 2.01],
         [0.92, 1.03, 1.15, 1.38, 1.77],
@@ -233,6 +225,24 @@ fn horizons_object(horizons: &[u32], values: &[f64]) -> Value {
     )
 }
 
+/// `{model: {horizon_ms: value}}` of one action column of an error table.
+fn models_by_horizon<const H: usize>(
+    rows: &[EulerRow<H>],
+    horizons: &[u32; H],
+    col: usize,
+) -> Value {
+    Value::Object(
+        rows.iter()
+            .map(|r| {
+                (
+                    r.model.to_string(),
+                    horizons_object(horizons, &r.values[col]),
+                )
+            })
+            .collect(),
+    )
+}
+
 /// The published NDMS rows of `action` (paper 003 Table 2).
 pub fn ndms_rows(action: &str) -> impl Iterator<Item = &'static NdmsRow> + '_ {
     P003_TABLE2_NDMS.iter().filter(move |r| r.action == action)
@@ -309,27 +319,11 @@ pub fn for_action(action: &str) -> Value {
         );
         out.insert(
             "paper000_table7_euler".into(),
-            Value::Object(
-                P000_TABLE7_EULER
-                    .iter()
-                    .map(|r| {
-                        let v = horizons_object(&TABLE7_HORIZONS_MS, &r.values[col]);
-                        (r.model.to_string(), v)
-                    })
-                    .collect(),
-            ),
+            models_by_horizon(&P000_TABLE7_EULER, &TABLE7_HORIZONS_MS, col),
         );
         out.insert(
             "paper002_table2_l2".into(),
-            Value::Object(
-                P002_TABLE2_L2
-                    .iter()
-                    .map(|r| {
-                        let v = horizons_object(&P002_TABLE2_HORIZONS_MS, &r.values[col]);
-                        (r.model.to_string(), v)
-                    })
-                    .collect(),
-            ),
+            models_by_horizon(&P002_TABLE2_L2, &P002_TABLE2_HORIZONS_MS, col),
         );
     }
     if let Some(col) = column(&PAPER003_TABLE1_COLUMNS, action) {
