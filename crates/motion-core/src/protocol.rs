@@ -1,7 +1,7 @@
 //! The standard H3.6M evaluation protocol (`h36m.md`): the 15 actions, the fixed test windows on
 //! subject 5 (8 per action, 25 Hz frame indices), loading a window's seed and ground truth from the
 //! data directory, the protocol's Euler conversion of exp-map sequences and the zero-velocity
-//! baseline.
+//! baselines (the angle protocols' and the root-held one for world positions).
 //!
 //! The window table is `h36m_test_windows.csv`, embedded as code. It was produced with the
 //! protocol's fixed random generator (seed 1234567890, `randint(16, T - 150)` alternating
@@ -293,7 +293,13 @@ fn load_windows(
     Ok(out)
 }
 
-/// The zero-velocity baseline: the last seed frame repeated `horizon` times.
+/// The zero-velocity baseline of the angle protocols (Euler error, NPSS): the last seed frame
+/// repeated `horizon` times, dims 0..5 included.
+///
+/// Those protocols drop dims 0..5, so this is paper 000 Table 6's baseline exactly. Do not use it
+/// where the root is integrated (world positions, NDMS, speed, drift): in the H3.6M encoding
+/// dims 0..5 are per-frame root **deltas**, so repeating them keeps the seed's last root velocity
+/// and yaw rate — a frozen pose gliding and turning. Use [`zero_velocity_held_root`] there.
 ///
 /// # Panics
 /// If `seed` has no frames.
@@ -303,6 +309,21 @@ pub fn zero_velocity(seed: ArrayView2<'_, f64>, horizon: usize) -> Array2<f64> {
     for mut row in out.rows_mut() {
         row.assign(&last);
     }
+    out
+}
+
+/// The zero-velocity baseline for root-aware measures of H3.6M frames (root deltas in dims 0..5):
+/// the last seed pose repeated `horizon` times with zero root translation and rotation deltas,
+/// so the integrated root stays exactly where the seed left it (no translation, no turning).
+///
+/// Its joint angles (dims 6..) equal [`zero_velocity`]'s, so the angle protocols score the two
+/// identically.
+///
+/// # Panics
+/// If `seed` has no frames or fewer than 6 dims.
+pub fn zero_velocity_held_root(seed: ArrayView2<'_, f64>, horizon: usize) -> Array2<f64> {
+    let mut out = zero_velocity(seed, horizon);
+    out.slice_mut(s![.., ..6]).fill(0.0);
     out
 }
 
@@ -383,10 +404,46 @@ mod tests {
             .rows()
             .into_iter()
             .all(|r| r == data.seed.row(SEED_FRAMES - 1)));
+        // The root-held variant: the same angles, zero root deltas.
+        let held = zero_velocity_held_root(data.seed.view(), 4);
+        assert!(held.slice(s![.., ..6]).iter().all(|&v| v == 0.0));
+        assert_eq!(held.slice(s![.., 6..]), zv.slice(s![.., 6..]));
         // A file of another length is rejected, naming the file.
         let short = frames.slice(s![..100, ..]);
         let err = cut_window(short, &window, 10, Path::new("x.txt")).unwrap_err();
         assert!(err.to_string().starts_with("x.txt:"), "{err}");
+    }
+
+    #[test]
+    fn the_root_held_baseline_does_not_move_the_integrated_root() {
+        use crate::kinematics::expmap_positions;
+        use crate::{RootEncoding, Skeleton};
+        // A seed that walks and turns: constant root deltas, moving joints.
+        let seed = Array2::from_shape_fn((SEED_FRAMES, 99), |(t, d)| match d {
+            0 => 12.0,
+            2 => 3.0,
+            4 => 0.002,
+            _ => 0.3 * ((t as f64) * 0.2 + d as f64).sin(),
+        });
+        let skeleton = Skeleton::h36m();
+        let root_path = |forecast: Array2<f64>| {
+            let joined = ndarray::concatenate(Axis(0), &[seed.view(), forecast.view()]).unwrap();
+            let p = expmap_positions(&skeleton, joined.view(), RootEncoding::Deltas, 2).unwrap();
+            p.slice(s![SEED_FRAMES - 1.., 0, ..]).to_owned()
+        };
+        let held = root_path(zero_velocity_held_root(seed.view(), 300));
+        let first = held.row(0).to_owned();
+        for row in held.rows() {
+            assert_eq!(row, first, "the root moved");
+        }
+        // The angle protocol's baseline keeps the seed's root velocity: it glides (about 24 mm a
+        // frame on a wide curve).
+        let glide = root_path(zero_velocity(seed.view(), 300));
+        let moved = (&glide.row(300) - &glide.row(0))
+            .mapv(|v| v * v)
+            .sum()
+            .sqrt();
+        assert!(moved > 1000.0, "{moved}");
     }
 
     #[test]

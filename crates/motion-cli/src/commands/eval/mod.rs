@@ -26,8 +26,8 @@ use serde_json::{json, Map, Value};
 use motion_core::formats::h36m_text::{downsample_protocol, read_expmap_text};
 use motion_core::model::{ActionClassifier, BatchGenerator, MotionModel, Network, Noise};
 use motion_core::protocol::{
-    load_action_windows_covered, sequence_file, zero_velocity, ACTIONS, LONG_TERM_HORIZON,
-    SEED_FRAMES, TEST_SUBJECT,
+    load_action_windows_covered, sequence_file, zero_velocity_held_root, ACTIONS,
+    LONG_TERM_HORIZON, SEED_FRAMES, TEST_SUBJECT,
 };
 use motion_core::skeleton::{H36M_FRAME_DIMS, H36M_PROTOCOL_FPS};
 use motion_metrics::plausibility::MAX_HORIZON_FRAMES;
@@ -51,8 +51,8 @@ and HORIZON predicted frames after them. Four actions (directions, discussion, s
 waiting) have no windows because their S5 files are missing from the data release; actions whose \
 files are missing are reported and skipped.
 
-Per action it reports, for the model and the zero-velocity baseline (the last seed frame \
-repeated): the Euler error at 80-1000 ms; NPSS with the paper's |DFT|² and with the published \
+Per action it reports, for the model and the zero-velocity baseline (the last seed pose \
+repeated, the root held in place: no translation, no turning): the Euler error at 80-1000 ms; NPSS with the paper's |DFT|² and with the published \
 code's Re(DFT)² (the variant the papers' tables were computed with) over the whole horizon and \
 0-1 s, 1-2 s, 2-4 s; NDMS (database: every motion word of the action's S5 files, exact nearest \
 neighbour; queries include the last 7 seed frames; every word is put in the rigid body frame of \
@@ -483,13 +483,15 @@ fn coverage_json(coverage: &Coverage) -> Value {
     })
 }
 
-/// The zero-velocity baseline of every window: `8 x 1 x horizon x 99`.
+/// The zero-velocity baseline of every window, root held
+/// ([`motion_core::protocol::zero_velocity_held_root`]): `8 x 1 x horizon x 99`. Its angles are
+/// the protocol's repeated last frame, so its Euler error and NPSS are paper 000 Table 6's baseline.
 fn zero_velocity_predictions(truth: &ActionTruth, horizon: usize) -> Array4<f64> {
     let windows = truth.windows();
     let mut out = Array4::zeros((windows.len(), 1, horizon, H36M_FRAME_DIMS));
     for (w, window) in windows.iter().enumerate() {
         out.slice_mut(s![w, 0, .., ..])
-            .assign(&zero_velocity(window.seed.view(), horizon));
+            .assign(&zero_velocity_held_root(window.seed.view(), horizon));
     }
     out
 }
@@ -653,7 +655,7 @@ fn full_report(
             "ndms": "database = every motion word (kappa 8, stride 1) of the action's S5 files at 25 Hz; queries = forecasts with the last 7 seed frames prepended; exact nearest neighbour (brute force); bins of 0.4 s by word end",
             "positions": "FK of seed + forecast with the root integrated (each 25 Hz root delta applied twice)",
             "mean_joint_speed_last_1s": "mean displacement per 25 Hz frame (mm) of the 12 NDMS joints over the last 25 frame steps; world = with the root trajectory, pose = root deltas zeroed (body motion only)",
-            "zero_velocity": "the last seed frame repeated, root deltas included (in world positions the frozen pose keeps the last root velocity, turning included: its drift grows with the horizon)",
+            "zero_velocity": "the last seed pose repeated with the root held (root deltas 0: no translation, no turning); its joint angles are the protocol's repeated last frame, so its Euler error and NPSS are paper 000 Table 6's zero-velocity baseline",
             "ground_truth_coverage": "horizons past 100 frames: a window's ground truth ends with its S5 file; Euler error per frame = mean over the windows covering the frame (dims chosen over each window's covered frames); NPSS whole over the frames all windows cover (npss_whole_frames), each NPSS window over the windows covering it completely (npss_windows); windows_per_second = windows covering each second of the horizon",
             "plausibility": "speed_ratio, drift, foot_contact (motion_metrics::plausibility) per window 0-2, 2-4, 4-8, 8-12 s for model (all 8 x K), zero_velocity and ground_truth (the real continuation; each window counts the test windows whose file covers it); speed reference = mean root-frame joint speed over the action's S5 files; drift p95 over real 12 s windows of the action, every subject, seeded by the 50 frames before each",
         },
