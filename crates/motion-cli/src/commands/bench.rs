@@ -107,9 +107,8 @@ pub struct Args {
     /// Repetitions of the `--npss` or `--ndms` evaluation (the median is reported).
     #[arg(long, default_value_t = 5)]
     pub reps: usize,
-    /// Print one JSON object instead of a table.
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub reporting: super::output::Output,
 }
 
 /// The timing of one model at one batch size.
@@ -147,7 +146,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         return run_npss(&args);
     }
     if let Some(manifest) = &args.ndms {
-        return run_ndms(manifest, args.reps, args.json);
+        return run_ndms(manifest, args.reps, args.reporting.json);
     }
     let paths = if args.simd.is_empty() {
         vec![simd::active()]
@@ -173,7 +172,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
     }
     let peak = peak_rss_mb();
-    if args.json {
+    if args.reporting.json {
         println!("{}", json_report(&results, peak));
     } else {
         print!("{}", text_report(&results, peak));
@@ -308,7 +307,7 @@ fn run_npss(args: &Args) -> anyhow::Result<()> {
         rows.push((name, value, times[times.len() / 2], times[0]));
     }
     let peak = peak_rss_mb();
-    if args.json {
+    if args.reporting.json {
         let results: Vec<serde_json::Value> = rows
             .iter()
             .map(|&(metric, value, median_ms, min_ms)| {

@@ -15,6 +15,7 @@ use motion_core::kinematics::channel_positions;
 use motion_core::motion::{Motion, MotionLayout, RootEncoding};
 use motion_core::skeleton::{Skeleton, CMU_FRAME_DIMS, H36M_FRAME_DIMS, H36M_SOURCE_FPS};
 use ndarray::{s, Array2, Array3};
+use serde_json::json;
 
 use super::UsageError;
 
@@ -70,6 +71,8 @@ pub struct Args {
     /// instead of converting the channels. For BVH input, End Sites are included, in file order.
     #[arg(long)]
     pub positions: bool,
+    #[command(flatten)]
+    pub reporting: super::output::Output,
 }
 
 /// A loaded input.
@@ -104,15 +107,74 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
 
     let mut loaded = load(&args.input, in_format, args.input_fps)?;
+    let input = Described::of(&loaded);
+    let mut notices = Vec::new();
     if let Some(target) = args.fps {
-        loaded = resample(loaded, target)?;
+        let k;
+        (loaded, k) = resample(loaded, target)?;
+        notices.push(format!(
+            "note: resampled {} fps to {} fps by keeping 1 frame in {k} ({} -> {} frames)",
+            input.fps,
+            target,
+            input.frames,
+            Described::of(&loaded).frames
+        ));
     }
+    let written = Described::of(&loaded);
 
-    if args.positions {
+    let (what, shape) = if args.positions {
         let positions = positions(&loaded, &args.input)?;
         write_npy(&args.output, &positions)?;
-        return Ok(());
+        ("positions", positions.shape().to_vec())
+    } else {
+        let shape = write_channels(&args, loaded, out_format, &mut notices)?;
+        ("channels", shape)
+    };
+
+    if args.reporting.json {
+        args.reporting.print_json(&json!({
+            "input": {
+                "path": args.input,
+                "format": format_name(in_format),
+                "frames": input.frames,
+                "fps": input.fps,
+                "skeleton": input.skeleton,
+            },
+            "output": {
+                "path": args.output,
+                "format": format_name(out_format),
+                "content": what,
+                "shape": shape,
+                "frames": written.frames,
+                "fps": written.fps,
+                "skeleton": written.skeleton,
+            },
+            "notices": notices,
+        }))?;
+    } else {
+        notices.iter().for_each(|n| args.reporting.notice(n));
+        args.reporting.notice(format_args!(
+            "wrote {} ({} frames at {} fps{})",
+            args.output.display(),
+            written.frames,
+            written.fps,
+            written
+                .skeleton
+                .map(|s| format!(", {s} skeleton"))
+                .unwrap_or_default()
+        ));
     }
+    Ok(())
+}
+
+/// Writes the channels of `loaded` (BVH, exp-map text or `.npy`); returns the written shape
+/// (BVH: frames x channels).
+fn write_channels(
+    args: &Args,
+    loaded: Loaded,
+    out_format: FileFormat,
+    notices: &mut Vec<String>,
+) -> anyhow::Result<Vec<usize>> {
     match out_format {
         FileFormat::Bvh => {
             let bvh = match loaded {
@@ -124,6 +186,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 }
             };
             write_bvh(&args.output, &bvh)?;
+            Ok(bvh.frames.shape().to_vec())
         }
         FileFormat::ExpMapText | FileFormat::Npy => {
             let frames = match loaded {
@@ -136,11 +199,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                     let target = ExpMapTarget::detect(&bvh).map_err(bad)?;
                     let difference = offset_difference(&bvh, target);
                     if difference > 1e-6 {
-                        eprintln!(
+                        notices.push(format!(
                             "warning: {}: joint offsets differ from the built-in {} skeleton by up to {difference}; exp-map frames keep only rotations and the root motion (in the BVH's units)",
                             args.input.display(),
                             target.name()
-                        );
+                        ));
                     }
                     bvh_to_expmap(&bvh, target).map_err(bad)?.into_frames()
                 }
@@ -150,9 +213,53 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             } else {
                 write_expmap_text(&args.output, frames.view())?;
             }
+            Ok(frames.shape().to_vec())
         }
     }
-    Ok(())
+}
+
+/// Frames, rate and skeleton of a loaded motion, for the report.
+struct Described {
+    frames: usize,
+    fps: f64,
+    /// `None` for exp-map columns no built-in skeleton has.
+    skeleton: Option<String>,
+}
+
+impl Described {
+    fn of(loaded: &Loaded) -> Described {
+        match loaded {
+            Loaded::ExpMap(motion) => Described {
+                frames: motion.len(),
+                fps: motion.fps(),
+                // `load` puts H3.6M (root deltas) and CMU (absolute root) frames on their skeletons.
+                skeleton: Some(match motion.layout() {
+                    MotionLayout::ExpMap {
+                        root: RootEncoding::Deltas,
+                    } => format!("H3.6M {}-joint", motion.skeleton().len()),
+                    _ => format!("CMU {}-joint", motion.skeleton().len()),
+                }),
+            },
+            Loaded::Unknown { frames, fps } => Described {
+                frames: frames.nrows(),
+                fps: *fps,
+                skeleton: None,
+            },
+            Loaded::Bvh(bvh) => Described {
+                frames: bvh.frames.nrows(),
+                fps: bvh.fps(),
+                skeleton: Some(format!("BVH {}-joint", bvh.skeleton.len())),
+            },
+        }
+    }
+}
+
+fn format_name(format: FileFormat) -> &'static str {
+    match format {
+        FileFormat::ExpMapText => "exp-map text",
+        FileFormat::Bvh => "bvh",
+        FileFormat::Npy => "npy",
+    }
 }
 
 fn load(path: &Path, format: FileFormat, input_fps: f64) -> anyhow::Result<Loaded> {
@@ -182,7 +289,7 @@ fn load(path: &Path, format: FileFormat, input_fps: f64) -> anyhow::Result<Loade
 }
 
 /// Keeps every k-th frame (0, k, 2k, ...) where k = input rate / `target`.
-fn resample(loaded: Loaded, target: f64) -> anyhow::Result<Loaded> {
+fn resample(loaded: Loaded, target: f64) -> anyhow::Result<(Loaded, usize)> {
     let source_fps = match &loaded {
         Loaded::ExpMap(motion) => motion.fps(),
         Loaded::Unknown { fps, .. } => *fps,
@@ -199,7 +306,7 @@ fn resample(loaded: Loaded, target: f64) -> anyhow::Result<Loaded> {
     }
     let k = k as usize;
     let keep = |frames: &Array2<f64>| frames.slice(s![..;k, ..]).to_owned();
-    Ok(match loaded {
+    let resampled = match loaded {
         Loaded::ExpMap(motion) => {
             let frames = keep(&motion.frames().to_owned());
             Loaded::ExpMap(Motion::new(
@@ -218,7 +325,8 @@ fn resample(loaded: Loaded, target: f64) -> anyhow::Result<Loaded> {
             frame_time: bvh.frame_time * k as f64,
             skeleton: bvh.skeleton,
         }),
-    })
+    };
+    Ok((resampled, k))
 }
 
 fn positions(loaded: &Loaded, input: &Path) -> anyhow::Result<Array3<f64>> {

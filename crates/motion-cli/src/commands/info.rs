@@ -16,9 +16,8 @@ use motion_core::nn::GruConvention;
 pub struct Args {
     /// A motion-weights safetensors file.
     pub weights: PathBuf,
-    /// Print one JSON object (config, provenance, parameter count) instead of text.
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub reporting: super::output::Output,
 }
 
 /// Runs the command.
@@ -26,7 +25,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let store = WeightStore::open(&args.weights)?;
     if architecture_name(&store).ok().as_deref() == Some(CLASSIFIER_ARCHITECTURE) {
         let classifier = ActionClassifier::from_store(&store)?;
-        let text = if args.json {
+        let text = if args.reporting.json {
             classifier_json(&classifier)?
         } else {
             classifier_text(&classifier)
@@ -35,7 +34,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         return Ok(());
     }
     let model = MotionModel::from_store(&store)?;
-    let text = if args.json {
+    let text = if args.reporting.json {
         json_summary(&model)?
     } else {
         text_summary(&model)

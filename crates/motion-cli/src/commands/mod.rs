@@ -4,6 +4,8 @@ pub mod classifier;
 pub mod convert;
 pub mod eval;
 pub mod info;
+pub mod output;
+
 pub mod plausibility;
 pub mod predict;
 pub mod render;

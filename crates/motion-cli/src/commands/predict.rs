@@ -7,7 +7,6 @@ mod seed;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use motion_core::formats::expmap_bvh::ExpMapTarget;
 use motion_core::formats::FileFormat;
 use motion_core::model::{ActionClassifier, BatchGenerator, ModelConfig, MotionModel, Noise};
@@ -100,12 +99,8 @@ pub struct Args {
     /// Frame rate of exp-map seeds (.txt, .txt.gz, .npy), which files do not store.
     #[arg(long, value_name = "HZ", default_value_t = H36M_SOURCE_FPS)]
     pub input_fps: f64,
-    /// Print the results as JSON on stdout.
-    #[arg(long)]
-    pub json: bool,
-    /// No notices or progress bar on stderr.
-    #[arg(long)]
-    pub quiet: bool,
+    #[command(flatten)]
+    pub reporting: super::output::Output,
 }
 
 /// Everything one prediction needs besides the seed and output paths.
@@ -189,24 +184,18 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         input_fps: args.input_fps,
         seed_end: args.seed_end,
     };
-    if !args.quiet
-        && !args.json
-        && args.samples > 1
-        && job.model.config().architecture.name() == "gru-d"
-    {
-        eprintln!(
+    if args.samples > 1 && job.model.config().architecture.name() == "gru-d" {
+        args.reporting.notice(format_args!(
             "note: the model is deterministic (gru-d): all {} samples are identical",
             args.samples
-        );
+        ));
     }
     if batch {
         run_batch(&args, &job)
     } else {
         let done = predict_one(&job, &args.seed, &args.out, args.truth.as_deref())?;
-        if !args.quiet && !args.json {
-            done.notices.iter().for_each(|n| eprintln!("{n}"));
-        }
-        if args.json {
+        done.notices.iter().for_each(|n| args.reporting.notice(n));
+        if args.reporting.json {
             let report = json!({
                 "model": describe(args.model.as_deref()),
                 "action": done.action,
@@ -220,10 +209,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 "outputs": done.outputs,
                 "notices": done.notices,
             });
-            println!("{}", serde_json::to_string_pretty(&report)?);
-        } else if !args.quiet {
+            args.reporting.print_json(&report)?;
+        } else {
             for path in &done.outputs {
-                eprintln!(
+                args.reporting.notice(format_args!(
                     "wrote {} ({} seed + {} predicted frames at {} Hz)",
                     path.display(),
                     if job.prediction_only {
@@ -233,7 +222,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                     },
                     job.frames,
                     job.model.config().fps
-                );
+                ));
             }
         }
         Ok(())
@@ -557,16 +546,10 @@ fn run_batch(args: &Args, job: &Job) -> anyhow::Result<()> {
         }
     }
     let outputs = output_names(&files, &args.out, &args.format);
-    let bar = ProgressBar::new(files.len() as u64);
-    if args.quiet || args.json {
-        bar.set_draw_target(ProgressDrawTarget::hidden());
-    } else {
-        bar.set_draw_target(ProgressDrawTarget::stderr());
-        bar.set_style(
-            ProgressStyle::with_template("{bar:40} {pos}/{len} seeds {elapsed} {msg}")
-                .expect("valid template"),
-        );
-    }
+    let bar = args.reporting.progress_bar(
+        files.len() as u64,
+        "{bar:40} {pos}/{len} seeds {elapsed} {msg}",
+    );
     let results: Vec<anyhow::Result<Done>> = files
         .par_iter()
         .zip(&outputs)
@@ -583,9 +566,7 @@ fn run_batch(args: &Args, job: &Job) -> anyhow::Result<()> {
     for (seed, result) in files.iter().zip(&results) {
         match result {
             Ok(done) => {
-                if !args.quiet && !args.json {
-                    done.notices.iter().for_each(|n| eprintln!("{n}"));
-                }
+                done.notices.iter().for_each(|n| args.reporting.notice(n));
                 entries.push(json!({
                     "seed": seed,
                     "outputs": done.outputs,
@@ -595,7 +576,7 @@ fn run_batch(args: &Args, job: &Job) -> anyhow::Result<()> {
             }
             Err(err) => {
                 let message = super::error_chain(err);
-                if !args.json {
+                if !args.reporting.json {
                     eprintln!("failed: {message}");
                 }
                 entries.push(json!({"seed": seed, "error": message}));
@@ -603,7 +584,7 @@ fn run_batch(args: &Args, job: &Job) -> anyhow::Result<()> {
         }
     }
     let succeeded = files.len() - failed;
-    if args.json {
+    if args.reporting.json {
         let report = json!({
             "model": describe(args.model.as_deref()),
             "action": if job.infer.is_some() { Value::Null } else { json!(job.action) },
@@ -616,13 +597,13 @@ fn run_batch(args: &Args, job: &Job) -> anyhow::Result<()> {
             "failed": failed,
             "seeds": entries,
         });
-        println!("{}", serde_json::to_string_pretty(&report)?);
-    } else if !args.quiet {
-        eprintln!(
+        args.reporting.print_json(&report)?;
+    } else {
+        args.reporting.notice(format_args!(
             "predicted {succeeded} of {} seeds into {} ({failed} failed)",
             files.len(),
             args.out.display()
-        );
+        ));
     }
     if failed > 0 {
         return Err(UsageError(format!(

@@ -87,12 +87,8 @@ pub struct Args {
     /// No turn at all: draw the coordinates as they are.
     #[arg(long)]
     pub no_upright: bool,
-    /// Print what was written as JSON on stdout.
-    #[arg(long)]
-    pub json: bool,
-    /// No notices on stderr.
-    #[arg(long)]
-    pub quiet: bool,
+    #[command(flatten)]
+    pub reporting: super::output::Output,
 }
 
 /// What the output extension asks for.
@@ -169,37 +165,35 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     } else {
         Upright::FirstFrame
     };
+    let mut notices = Vec::new();
     if let Some((r, degrees)) = mode.rotation(&first) {
         let centre = first.root(0);
         rotate_track(&mut first, &r, centre);
         if let Some(s) = second.as_mut() {
             rotate_track(s, &r, centre);
         }
-        if !args.quiet && !args.json {
-            match mode {
-                Upright::WholeMotion => eprintln!(
-                    "note: {} leans {degrees:.0}° on average; the whole motion is drawn upright (--upright)",
-                    first.name
-                ),
-                _ => eprintln!(
-                    "note: {}'s first frame leans {degrees:.0}°; the drawing is turned by that one rotation, later lean is drawn as it is (--no-upright: no turn)",
-                    first.name
-                ),
-            }
-        }
+        notices.push(match mode {
+            Upright::WholeMotion => format!(
+                "note: {} leans {degrees:.0}° on average; the whole motion is drawn upright (--upright)",
+                first.name
+            ),
+            _ => format!(
+                "note: {}'s first frame leans {degrees:.0}°; the drawing is turned by that one rotation, later lean is drawn as it is (--no-upright: no turn)",
+                first.name
+            ),
+        });
     }
     let mut tracks = vec![&first];
     tracks.extend(second.as_ref());
-    if !args.quiet && !args.json {
-        if let Some(s) = &second {
-            if (s.fps - first.fps).abs() > 1e-3 * first.fps {
-                eprintln!(
-                    "note: {} is {} Hz, {} {} Hz: frames are matched by time",
-                    s.name, s.fps, first.name, first.fps
-                );
-            }
+    if let Some(s) = &second {
+        if (s.fps - first.fps).abs() > 1e-3 * first.fps {
+            notices.push(format!(
+                "note: {} is {} Hz, {} {} Hz: frames are matched by time",
+                s.name, s.fps, first.name, first.fps
+            ));
         }
     }
+    notices.iter().for_each(|n| args.reporting.notice(n));
     let floor = floor_height(&tracks);
     let picture = Picture {
         grid: floor_grid(&tracks, floor, 500.0, 600.0),
@@ -217,7 +211,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     write_atomically(&args.out, &bytes)
         .map_err(|e| UsageError(format!("{}: cannot write: {e}", args.out.display())))?;
-    if args.json {
+    if args.reporting.json {
         let report = json!({
             "input": args.input,
             "compare": args.compare,
@@ -231,15 +225,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 Upright::WholeMotion => "whole motion",
             },
             "bytes": bytes.len(),
+            "notices": notices,
         });
-        println!("{}", serde_json::to_string_pretty(&report)?);
-    } else if !args.quiet {
-        eprintln!(
+        args.reporting.print_json(&report)?;
+    } else {
+        args.reporting.notice(format_args!(
             "wrote {} ({} frames, {:.2} s)",
             args.out.display(),
             times.len(),
             times.len() as f64 / first.fps
-        );
+        ));
     }
     Ok(())
 }

@@ -135,9 +135,8 @@ pub struct Args {
     /// LeftForeArm, ..., LeftUpLeg, RightUpLeg, LeftLeg, RightLeg, LeftFoot, RightFoot).
     #[arg(long, value_name = "FILE.bvh")]
     pub skeleton: Option<PathBuf>,
-    /// Print one JSON object instead of a table.
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub reporting: super::output::Output,
     /// Also draw the per-horizon results (Euler error per frame, NPSS windows, NDMS 0.4 s bins;
     /// 25 Hz time axis) to FILE.svg or FILE.png.
     #[arg(long, value_name = "FILE.svg|FILE.png")]
@@ -385,7 +384,7 @@ pub fn run(args: Args) -> Result<()> {
         }
         crate::plot::write_charts(plot, &charts, 3)?;
     }
-    if args.json {
+    if args.reporting.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
         print!("{}", human_table(&report));

@@ -14,12 +14,11 @@ pub mod report;
 pub mod scoring;
 pub mod selection;
 
-use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::sync::Arc;
 
 use anyhow::{Context, Result};
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+
 use ndarray::{s, Array2, Array3, Array4};
 use serde_json::{json, Map, Value};
 
@@ -126,9 +125,8 @@ pub struct Args {
     /// Evaluate a single-action model on other actions too.
     #[arg(long)]
     pub any_action: bool,
-    /// Print one JSON object instead of tables.
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub reporting: crate::commands::output::Output,
     /// Also draw metric vs horizon per action (Euler error, NPSS windows, NDMS bins; the
     /// zero-velocity baseline dashed) to FILE.svg or FILE.png.
     #[arg(long, value_name = "FILE.svg|FILE.png")]
@@ -179,7 +177,10 @@ pub fn run(args: Args) -> Result<()> {
         None => None,
     };
 
-    let progress = progress_bar(selection.planned.len() * WINDOWS_PER_ACTION, args.json);
+    let progress = args.reporting.progress_bar(
+        (selection.planned.len() * WINDOWS_PER_ACTION) as u64,
+        "{bar:30} {pos}/{len} windows {elapsed} {msg}",
+    );
     let mut generator = BatchGenerator::new(Arc::clone(&model), WINDOWS_PER_ACTION * samples);
     let mut results = Vec::new();
     let mut plausibility_rows = Vec::new();
@@ -285,8 +286,8 @@ pub fn run(args: Args) -> Result<()> {
         crate::plot::write_charts(plot, &plots::charts(&results), 3)?;
     }
     let report = full_report(&args, &model, &dataset, &selection, results, saved);
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+    if args.reporting.json {
+        args.reporting.print_json(&report)?;
     } else {
         print!("{}", report::table(&report, &plausibility_rows));
     }
@@ -494,18 +495,6 @@ fn zero_velocity_predictions(truth: &ActionTruth, horizon: usize) -> Array4<f64>
             .assign(&zero_velocity_held_root(window.seed.view(), horizon));
     }
     out
-}
-
-fn progress_bar(total: usize, json: bool) -> ProgressBar {
-    if json || !std::io::stderr().is_terminal() {
-        return ProgressBar::hidden();
-    }
-    let bar = ProgressBar::with_draw_target(Some(total as u64), ProgressDrawTarget::stderr());
-    bar.set_style(
-        ProgressStyle::with_template("{bar:30} {pos}/{len} windows {elapsed} {msg}")
-            .expect("valid template"),
-    );
-    bar
 }
 
 fn npss_json(scores: &NpssScores) -> Value {
