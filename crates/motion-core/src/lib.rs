@@ -43,6 +43,7 @@ pub mod kinematics;
 pub mod model;
 pub mod motion;
 pub mod nn;
+pub mod pose;
 pub mod protocol;
 pub mod root;
 pub mod rotation;

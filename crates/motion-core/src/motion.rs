@@ -174,6 +174,33 @@ impl Motion {
     }
 }
 
+/// A number frames may be given in (`f32` or `f64`); the models compute in `f32`, kinematics and
+/// file formats in `f64`.
+pub trait FrameScalar: Copy {
+    /// The value as f32 (what the model computes with).
+    fn to_f32(self) -> f32;
+    /// The value as f64.
+    fn to_f64(self) -> f64;
+}
+
+impl FrameScalar for f32 {
+    fn to_f32(self) -> f32 {
+        self
+    }
+    fn to_f64(self) -> f64 {
+        self as f64
+    }
+}
+
+impl FrameScalar for f64 {
+    fn to_f32(self) -> f32 {
+        self as f32
+    }
+    fn to_f64(self) -> f64 {
+        self
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

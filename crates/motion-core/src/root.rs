@@ -270,7 +270,7 @@ fn log_rotation(m: &Mat3) -> [f64; 3] {
     // expmap2rotmat read as a column-vector matrix is the rotation about r: use glam's robust
     // matrix -> quaternion conversion on the element-wise copy (no transpose).
     let q = glam::DQuat::from_mat3(&crate::rotation::mat3_to_dmat3(m)).normalize();
-    crate::rotation::quat_to_expmap(q)
+    crate::rotation::quat_to_axis_angle(q)
 }
 
 /// Inverse of a 3x3 matrix (adjugate / determinant); `None` if singular.

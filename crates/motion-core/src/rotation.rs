@@ -14,9 +14,10 @@
 //! [`quat_to_row_mat3`] do that transpose for you.
 //!
 //! Note that the Rodrigues formula of [`expmap2rotmat`] gives, read as a column-vector matrix, the
-//! rotation about `r` by `|r|` (what [`expmap_to_quat`] returns). Read as a row-vector matrix (as
-//! the H3.6M FK does) it is the *inverse* rotation. Hence the column-vector (BVH) local rotation
-//! of an H3.6M joint with exp-map `r` is `expmap_to_quat(r).inverse()` = `expmap_to_quat(-r)`.
+//! rotation about `r` by `|r|` (what [`axis_angle_to_quat`] returns). Read as a row-vector matrix
+//! (as the H3.6M FK does) it is the *inverse* rotation. Hence the column-vector (BVH, engine)
+//! local rotation of an H3.6M joint with exp-map `r` is [`h36m_joint_quat`]`(r)` =
+//! `axis_angle_to_quat(r).conjugate()`.
 //!
 //! ## Euler angles
 //! [`EulerOrder`] names the axis sequence as BVH lists its rotation channels. Angles `[a, b, c]`
@@ -180,15 +181,32 @@ pub fn quat_to_row_mat3(q: DQuat) -> Mat3 {
     dmat3_to_mat3(&DMat3::from_quat(q).transpose())
 }
 
-/// Exponential map (axis times angle, radians) to the unit quaternion of the rotation about `r` by
-/// `|r|` (column-vector convention; exact, no ε).
-pub fn expmap_to_quat(r: [f64; 3]) -> DQuat {
+/// The unit quaternion (column-vector convention) of the rotation about `r` by `|r|` radians:
+/// the plain axis-angle reading of a scaled axis (exact, no ε).
+///
+/// This is **not** the rotation an H3.6M exp-map frame gives its joint: the data's row-vector FK
+/// makes that the inverse, [`h36m_joint_quat`].
+pub fn axis_angle_to_quat(r: [f64; 3]) -> DQuat {
     DQuat::from_scaled_axis(DVec3::from_array(r))
 }
 
-/// Unit quaternion to exponential map with angle in `[0, π]` (the quaternion is taken with
-/// `w >= 0`). Inverse of [`expmap_to_quat`] for `|r| < π`.
-pub fn quat_to_expmap(q: DQuat) -> [f64; 3] {
+/// The local rotation (column-vector quaternion, as glam, engines and BVH use it) of a joint whose
+/// H3.6M exp-map triple is `r`: the rotation about `r` by `-|r|`, i.e. the conjugate of
+/// [`axis_angle_to_quat`]`(r)`. It is `row_mat3_to_quat(&expmap2rotmat(r))` without the
+/// evaluation code's float32-ε (see the module docs).
+pub fn h36m_joint_quat(r: [f64; 3]) -> DQuat {
+    axis_angle_to_quat(r).conjugate()
+}
+
+/// The H3.6M exp-map triple of a joint whose local (column-vector) rotation is `q`: inverse of
+/// [`h36m_joint_quat`] for angles below π.
+pub fn h36m_joint_expmap(q: DQuat) -> [f64; 3] {
+    quat_to_axis_angle(q.conjugate())
+}
+
+/// Unit quaternion to scaled axis (axis times angle) with the angle in `[0, π]` (the quaternion
+/// is taken with `w >= 0`). Inverse of [`axis_angle_to_quat`] for `|r| < π`.
+pub fn quat_to_axis_angle(q: DQuat) -> [f64; 3] {
     let q = if q.w < 0.0 { -q } else { q };
     let v = DVec3::new(q.x, q.y, q.z);
     let s = v.length();
@@ -558,10 +576,10 @@ mod tests {
         // Element-wise copy round trips.
         assert_eq!(dmat3_to_mat3(&mat3_to_dmat3(&row)), row);
         // Read as a column-vector matrix, Rodrigues is the rotation about r ...
-        let col = DMat3::from_quat(expmap_to_quat(r));
+        let col = DMat3::from_quat(axis_angle_to_quat(r));
         assert!(dmat_close(&mat3_to_dmat3(&row), &col, 1e-6));
         // ... so the row-vector rotation is its inverse.
-        assert!(row_mat3_to_quat(&row).abs_diff_eq(expmap_to_quat([-0.4, 0.9, -0.2]), 1e-6));
+        assert!(row_mat3_to_quat(&row).abs_diff_eq(axis_angle_to_quat([-0.4, 0.9, -0.2]), 1e-6));
         // And a row vector times R equals Rᵀ times the column vector.
         let v = [1.0, 2.0, 3.0];
         let a = vec_mul_mat3(v, &row);
@@ -575,11 +593,11 @@ mod tests {
 
     #[test]
     fn quat_to_expmap_handles_identity_and_sign() {
-        assert_eq!(quat_to_expmap(DQuat::IDENTITY), [0.0, 0.0, 0.0]);
-        let q = expmap_to_quat([0.0, 1.0, 0.0]);
-        assert!(close3(quat_to_expmap(-q), [0.0, 1.0, 0.0], 1e-15));
-        let q = expmap_to_quat([0.0, 0.0, PI]);
-        let r = quat_to_expmap(q);
+        assert_eq!(quat_to_axis_angle(DQuat::IDENTITY), [0.0, 0.0, 0.0]);
+        let q = axis_angle_to_quat([0.0, 1.0, 0.0]);
+        assert!(close3(quat_to_axis_angle(-q), [0.0, 1.0, 0.0], 1e-15));
+        let q = axis_angle_to_quat([0.0, 0.0, PI]);
+        let r = quat_to_axis_angle(q);
         assert!((r[2].abs() - PI).abs() < 1e-12);
     }
 
@@ -612,7 +630,7 @@ mod tests {
 
         #[test]
         fn expmap_quat_round_trip(r in expmap_in_ball(PI - 1e-6)) {
-            let back = quat_to_expmap(expmap_to_quat(r));
+            let back = quat_to_axis_angle(axis_angle_to_quat(r));
             prop_assert!(close3(back, r, 1e-12), "{:?} vs {:?}", back, r);
         }
 
@@ -627,7 +645,7 @@ mod tests {
         #[test]
         fn expmap2rotmat_matches_glam_rotation(r in expmap_in_ball(2.0 * PI)) {
             let m = mat3_to_dmat3(&expmap2rotmat(r));
-            prop_assert!(dmat_close(&m, &DMat3::from_quat(expmap_to_quat(r)), 1e-6));
+            prop_assert!(dmat_close(&m, &DMat3::from_quat(axis_angle_to_quat(r)), 1e-6));
         }
 
         #[test]

@@ -117,18 +117,18 @@ pub enum ConvertError {
 
 /// The channel layout of one joint as the conversion reads and writes it.
 #[derive(Debug, Clone, Copy)]
-struct JointChannels {
+pub(crate) struct JointChannels {
     /// Index of the first channel of the joint in a BVH frame.
-    start: usize,
+    pub(crate) start: usize,
     /// Column (relative to `start`) of x, y, z position channels (root only).
-    position: Option<[usize; 3]>,
+    pub(crate) position: Option<[usize; 3]>,
     /// Rotation order and the column (relative to `start`) of each of its three angles.
-    rotation: (EulerOrder, [usize; 3]),
+    pub(crate) rotation: (EulerOrder, [usize; 3]),
 }
 
 /// Reads the layout of a joint that must have 3 rotation channels (and, for the root, 3
 /// position channels).
-fn joint_channels(skeleton: &Skeleton, j: usize) -> Result<JointChannels, ConvertError> {
+pub(crate) fn joint_channels(skeleton: &Skeleton, j: usize) -> Result<JointChannels, ConvertError> {
     let joint = skeleton.joint(j);
     let is_root = joint.parent.is_none();
     let problem = || ConvertError::Channels {

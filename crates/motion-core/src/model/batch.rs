@@ -34,31 +34,7 @@ pub const SHARD_MIN_ROWS: usize = 48;
 /// Smallest model whose steps run on a pool thread: below, no product is large enough to split.
 const POOL_STEP_MIN_PARAMETERS: usize = 1 << 19;
 
-/// A number seed frames may be given in (`f32` or `f64`); the model computes in `f32`.
-pub trait FrameScalar: Copy {
-    /// The value as f32 (what the model computes with).
-    fn to_f32(self) -> f32;
-    /// The value as f64 (for error messages).
-    fn to_f64(self) -> f64;
-}
-
-impl FrameScalar for f32 {
-    fn to_f32(self) -> f32 {
-        self
-    }
-    fn to_f64(self) -> f64 {
-        self as f64
-    }
-}
-
-impl FrameScalar for f64 {
-    fn to_f32(self) -> f32 {
-        self as f32
-    }
-    fn to_f64(self) -> f64 {
-        self
-    }
-}
+pub use crate::motion::FrameScalar;
 
 /// The plan noise of one character (VGRU-d only; deterministic models ignore it).
 #[derive(Debug, Clone, Copy)]
