@@ -280,8 +280,8 @@ fn bad_input_exits_2_with_one_line_and_no_output() {
     );
     assert_rejected(
         &dir,
-        &[&txt, &out_bvh, &"--fps", &"30"],
-        "cannot resample 50 fps to 30 fps",
+        &[&txt, &out_bvh, &"--fps", &"0.5"],
+        "--fps must be at least 1",
     );
 
     let malformed = dir.join("malformed.bvh");
@@ -344,5 +344,27 @@ fn help_teaches_with_examples() {
         "exits with status 2",
     ] {
         assert!(help.contains(needle), "{needle:?} missing from:\n{help}");
+    }
+}
+
+#[test]
+fn any_rate_interpolates_and_frames_at_shared_times_are_the_source_frames() {
+    let dir = scratch("any-rate");
+    let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/walk_seed.bvh");
+    let out = dir.join("walk60.bvh");
+    convert_ok(&[&source, &out, &"--fps", &"60"]);
+    let (a, b) = (read_bvh(&source).unwrap(), read_bvh(&out).unwrap());
+    assert!((b.fps() - 60.0).abs() < 1e-9);
+    // 75 frames at 25 Hz span 2.96 s: 178 frames at 60 Hz.
+    assert_eq!(b.frames.nrows(), 178);
+    let pa = channel_positions(&a.skeleton, a.frames.view()).unwrap();
+    let pb = channel_positions(&b.skeleton, b.frames.view()).unwrap();
+    // Every 0.2 s both rates have a frame: 25 Hz frame 5k is 60 Hz frame 12k.
+    for k in 0..15 {
+        let d = (&pa.index_axis(ndarray::Axis(0), 5 * k)
+            - &pb.index_axis(ndarray::Axis(0), 12 * k))
+            .mapv(f64::abs)
+            .fold(0.0f64, |m, &v| m.max(v));
+        assert!(d < 1e-6, "0.2 s x {k}: {d} mm");
     }
 }

@@ -66,7 +66,7 @@ fn every_subcommand_prints_one_json_object_and_nothing_on_stderr() {
     ]);
     assert_eq!(report["output"]["format"], "exp-map text");
     assert_eq!(report["output"]["fps"], 12.5);
-    assert_eq!(report["output"]["skeleton"], "BVH 32-joint");
+    assert_eq!(report["output"]["skeleton"], "H3.6M 32-joint");
     assert_eq!(report["output"]["shape"][1], 99);
     assert!(report["notices"][0].as_str().unwrap().contains("resampled"));
     let frames = report["output"]["frames"].as_u64().unwrap();

@@ -45,6 +45,7 @@ pub mod motion;
 pub mod nn;
 pub mod pose;
 pub mod protocol;
+pub mod resample;
 pub mod root;
 pub mod rotation;
 pub mod skeleton;

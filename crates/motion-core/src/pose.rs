@@ -198,7 +198,7 @@ impl PoseDecoder {
         }
         let previous = self.started.then_some(pose.root_motion);
         pose.root_translation = root_translation.as_vec3();
-        pose.root_motion = root_motion(root_translation, root_rotation, previous);
+        pose.root_motion = root_motion_between(root_translation, root_rotation, previous);
         self.started = true;
         &self.pose
     }
@@ -240,7 +240,13 @@ pub fn yaw_of(q: DQuat) -> DQuat {
     }
 }
 
-fn root_motion(translation: DVec3, rotation: DQuat, previous: Option<RootMotion>) -> RootMotion {
+/// The root motion of a root at `translation` (metres) with world `rotation`, deltas against the
+/// `previous` frame's (zero without one).
+pub(crate) fn root_motion_between(
+    translation: DVec3,
+    rotation: DQuat,
+    previous: Option<RootMotion>,
+) -> RootMotion {
     let ground = DVec3::new(translation.x, 0.0, translation.z);
     let yaw = yaw_of(rotation);
     let (delta_translation, delta_yaw) = match previous {

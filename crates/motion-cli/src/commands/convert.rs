@@ -13,6 +13,7 @@ use motion_core::formats::npy::{read_npy_frames, write_npy};
 use motion_core::formats::FileFormat;
 use motion_core::kinematics::channel_positions;
 use motion_core::motion::{Motion, MotionLayout, RootEncoding};
+use motion_core::resample::resample_bvh;
 use motion_core::skeleton::{Skeleton, CMU_FRAME_DIMS, H36M_FRAME_DIMS, H36M_SOURCE_FPS};
 use ndarray::{s, Array2, Array3};
 use serde_json::json;
@@ -32,6 +33,11 @@ every joint a JOINT with Zrotation Xrotation Yrotation channels (the root also X
 Yposition Zposition), and the same world positions as the exp-map forward kinematics. A BVH \
 is converted back to exp-map frames when its joints are the H3.6M (or CMU) ones, in any \
 rotation order.
+
+--fps N takes any rate >= 1: a whole ratio keeps every k-th frame (the evaluation protocol's \
+downsampling, H3.6M root deltas untouched); any other ratio interpolates in BVH space, where the \
+root is absolute (rotations by slerp, positions linearly). Exp-map output then stores H3.6M root \
+deltas per output frame.
 
 Examples:
   # H3.6M exp-map text to BVH (50 Hz), and back
@@ -60,8 +66,8 @@ pub struct Args {
     pub input: PathBuf,
     /// Output file: .txt, .txt.gz, .bvh or .npy (with --positions: .npy).
     pub output: PathBuf,
-    /// Resample to this rate by keeping every k-th frame (0, k, 2k, ...); the input rate must
-    /// be k times it. `--fps 25` on 50 Hz H3.6M is the evaluation protocol's downsampling.
+    /// Resample to this rate (any, >= 1): a whole ratio keeps every k-th frame (`--fps 25` on
+    /// 50 Hz H3.6M is the evaluation protocol's downsampling), others interpolate by slerp.
     #[arg(long, value_name = "HZ")]
     pub fps: Option<f64>,
     /// Frame rate of exp-map input (.txt, .txt.gz, .npy), which files do not store.
@@ -110,10 +116,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let input = Described::of(&loaded);
     let mut notices = Vec::new();
     if let Some(target) = args.fps {
-        let k;
-        (loaded, k) = resample(loaded, target)?;
+        let how;
+        (loaded, how) = resample(loaded, target, &args.input)?;
         notices.push(format!(
-            "note: resampled {} fps to {} fps by keeping 1 frame in {k} ({} -> {} frames)",
+            "note: resampled {} fps to {} fps by {how} ({} -> {} frames)",
             input.fps,
             target,
             input.frames,
@@ -248,7 +254,10 @@ impl Described {
             Loaded::Bvh(bvh) => Described {
                 frames: bvh.frames.nrows(),
                 fps: bvh.fps(),
-                skeleton: Some(format!("BVH {}-joint", bvh.skeleton.len())),
+                skeleton: Some(match ExpMapTarget::detect(bvh) {
+                    Ok(target) => format!("{} {}-joint", target.name(), target.skeleton().len()),
+                    Err(_) => format!("BVH {}-joint", bvh.skeleton.len()),
+                }),
             },
         }
     }
@@ -288,8 +297,10 @@ fn load(path: &Path, format: FileFormat, input_fps: f64) -> anyhow::Result<Loade
     Ok(Loaded::ExpMap(motion))
 }
 
-/// Keeps every k-th frame (0, k, 2k, ...) where k = input rate / `target`.
-fn resample(loaded: Loaded, target: f64) -> anyhow::Result<(Loaded, usize)> {
+/// `loaded` at `target` fps: a whole ratio k keeps every k-th frame (0, k, 2k, ...; for H3.6M the
+/// protocol's downsampling, root deltas untouched); any other ratio resamples by slerp in BVH
+/// space ([`motion_core::resample::resample_bvh`]). Returns the result and how it was done.
+fn resample(loaded: Loaded, target: f64, input: &Path) -> anyhow::Result<(Loaded, String)> {
     let source_fps = match &loaded {
         Loaded::ExpMap(motion) => motion.fps(),
         Loaded::Unknown { fps, .. } => *fps,
@@ -298,35 +309,48 @@ fn resample(loaded: Loaded, target: f64) -> anyhow::Result<(Loaded, usize)> {
     let ratio = source_fps / target;
     let k = ratio.round();
     // BVH frame times are rounded in files (0.00833333 for 120 Hz): allow for that.
-    if !(target.is_finite() && target > 0.0 && k >= 1.0 && (ratio - k).abs() < 1e-3 * k) {
-        return Err(UsageError(format!(
-            "cannot resample {source_fps} fps to {target} fps: only keeping every k-th frame is supported (the input rate must be a whole multiple of --fps)"
-        ))
-        .into());
+    if k >= 1.0 && (ratio - k).abs() < 1e-3 * k {
+        let k = k as usize;
+        let keep = |frames: &Array2<f64>| frames.slice(s![..;k, ..]).to_owned();
+        let resampled = match loaded {
+            Loaded::ExpMap(motion) => {
+                let frames = keep(&motion.frames().to_owned());
+                Loaded::ExpMap(Motion::new(
+                    motion.skeleton().clone(),
+                    motion.layout(),
+                    frames,
+                    target,
+                )?)
+            }
+            Loaded::Unknown { frames, .. } => Loaded::Unknown {
+                frames: keep(&frames),
+                fps: target,
+            },
+            Loaded::Bvh(bvh) => Loaded::Bvh(Bvh {
+                frames: keep(&bvh.frames),
+                frame_time: bvh.frame_time * k as f64,
+                skeleton: bvh.skeleton,
+            }),
+        };
+        return Ok((resampled, format!("keeping 1 frame in {k}")));
     }
-    let k = k as usize;
-    let keep = |frames: &Array2<f64>| frames.slice(s![..;k, ..]).to_owned();
-    let resampled = match loaded {
-        Loaded::ExpMap(motion) => {
-            let frames = keep(&motion.frames().to_owned());
-            Loaded::ExpMap(Motion::new(
-                motion.skeleton().clone(),
-                motion.layout(),
-                frames,
-                target,
-            )?)
+    let bvh = match loaded {
+        Loaded::Bvh(bvh) => bvh,
+        Loaded::ExpMap(motion) => expmap_to_bvh(&motion)
+            .map_err(|e| UsageError(format!("{}: {e}", input.display())))?,
+        Loaded::Unknown { frames, .. } => {
+            return Err(UsageError(format!(
+                "{}: {} columns fit no built-in skeleton, so only whole-ratio resampling (keeping every k-th frame) is possible, not {source_fps} fps to {target} fps",
+                input.display(),
+                frames.ncols()
+            ))
+            .into())
         }
-        Loaded::Unknown { frames, .. } => Loaded::Unknown {
-            frames: keep(&frames),
-            fps: target,
-        },
-        Loaded::Bvh(bvh) => Loaded::Bvh(Bvh {
-            frames: keep(&bvh.frames),
-            frame_time: bvh.frame_time * k as f64,
-            skeleton: bvh.skeleton,
-        }),
     };
-    Ok((resampled, k))
+    Ok((
+        Loaded::Bvh(resample_bvh(&bvh, target)),
+        "interpolating (rotations by slerp, positions linearly)".into(),
+    ))
 }
 
 fn positions(loaded: &Loaded, input: &Path) -> anyhow::Result<Array3<f64>> {

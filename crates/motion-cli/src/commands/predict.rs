@@ -1,7 +1,7 @@
 //! `motion-cli predict --seed SEQ --out OUT`: closed-loop prediction from a seed sequence (BVH,
 //! exp-map text or `.npy`), one file or a whole directory in parallel.
 mod output;
-mod resample;
+
 mod seed;
 
 use std::path::{Path, PathBuf};

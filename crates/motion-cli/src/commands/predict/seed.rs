@@ -13,8 +13,8 @@ use motion_core::skeleton::H36M_SOURCE_FPS;
 use ndarray::{s, Array2};
 use std::sync::Arc;
 
-use super::resample::resample_bvh;
 use crate::commands::UsageError;
+use motion_core::resample::resample_bvh;
 
 /// Two frame rates closer than this (relative) are the same: BVH frame times are rounded in files.
 const SAME_RATE: f64 = 1e-3;
