@@ -491,3 +491,53 @@ fn the_action_is_inferred_from_the_seed_when_not_given() {
     assert_eq!(code, 2, "{stderr}");
     assert!(stderr.contains("vgru_d.safetensors"), "{stderr}");
 }
+
+#[test]
+fn fps_writes_bvh_at_any_rate_through_the_model_frames() {
+    let dir = scratch("fps60");
+    let (at25, at60) = (dir.join("p25.bvh"), dir.join("p60.bvh"));
+    let seed = walk_seed();
+    for (out, fps) in [(&at25, None), (&at60, Some("60"))] {
+        let mut args: Vec<&dyn AsRef<std::ffi::OsStr>> = vec![
+            &"--seed",
+            &seed,
+            &"--action",
+            &"walking",
+            &"--frames",
+            &"20",
+            &"--out",
+            out,
+        ];
+        if let Some(f) = &fps {
+            args.extend([&"--fps" as &dyn AsRef<std::ffi::OsStr>, f]);
+        }
+        predict_ok(&args);
+    }
+    let (a, b) = (read_bvh(&at25).unwrap(), read_bvh(&at60).unwrap());
+    assert!((b.fps() - 60.0).abs() < 1e-9);
+    let span = (a.frames.nrows() - 1) as f64 / 25.0;
+    assert_eq!(b.frames.nrows(), (span * 60.0 + 1e-6).floor() as usize + 1);
+    // Every 0.2 s both have a frame: the 60 Hz file passes through the model's frames.
+    let pa = motion_core::kinematics::channel_positions(&a.skeleton, a.frames.view()).unwrap();
+    let pb = motion_core::kinematics::channel_positions(&b.skeleton, b.frames.view()).unwrap();
+    for k in 0..(a.frames.nrows() - 1) / 5 {
+        let d = (&pa.index_axis(ndarray::Axis(0), 5 * k)
+            - &pb.index_axis(ndarray::Axis(0), 12 * k))
+            .mapv(f64::abs)
+            .fold(0.0f64, |m, &v| m.max(v));
+        assert!(d < 1e-6, "0.2 s x {k}: {d} mm");
+    }
+    // Exp-map output keeps the model's rate: --fps is refused, naming the file.
+    let (code, _, err) = predict(&[
+        &"--seed",
+        &walk_seed(),
+        &"--action",
+        &"walking",
+        &"--out",
+        &dir.join("p.npy"),
+        &"--fps",
+        &"60",
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("p.npy") && err.contains("--fps"), "{err}");
+}

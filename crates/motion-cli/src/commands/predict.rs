@@ -99,6 +99,10 @@ pub struct Args {
     /// Frame rate of exp-map seeds (.txt, .txt.gz, .npy), which files do not store.
     #[arg(long, value_name = "HZ", default_value_t = H36M_SOURCE_FPS)]
     pub input_fps: f64,
+    /// Write BVH output at this rate (any, >= 1; rotations by slerp, the root linearly) instead
+    /// of the model's (25 Hz for H3.6M models).
+    #[arg(long, value_name = "HZ")]
+    pub fps: Option<f64>,
     #[command(flatten)]
     pub reporting: super::output::Output,
 }
@@ -118,6 +122,8 @@ struct Job {
     prediction_only: bool,
     input_fps: f64,
     seed_end: Option<usize>,
+    /// BVH output rate (`--fps`).
+    out_fps: Option<f64>,
 }
 
 /// What one prediction produced.
@@ -137,6 +143,26 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     if args.samples == 0 {
         return Err(UsageError("--samples must be at least 1".into()).into());
+    }
+    if let Some(fps) = args.fps {
+        if !(fps.is_finite() && fps >= 1.0) {
+            return Err(UsageError(format!(
+                "--fps must be at least 1 (frames per second), got {fps}"
+            ))
+            .into());
+        }
+        let bvh = if args.seed.is_dir() {
+            args.format == "bvh"
+        } else {
+            check_output(&args.out)? == FileFormat::Bvh
+        };
+        if !bvh {
+            return Err(UsageError(format!(
+                "--fps resamples BVH output; {} would be exp-map frames, which keep the model's rate (resample them later with `convert --fps`)",
+                args.out.display()
+            ))
+            .into());
+        }
     }
     if !(args.input_fps.is_finite() && args.input_fps > 0.0) {
         return Err(UsageError(format!(
@@ -183,6 +209,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         prediction_only: args.prediction_only,
         input_fps: args.input_fps,
         seed_end: args.seed_end,
+        out_fps: args.fps,
     };
     if args.samples > 1 && job.model.config().architecture.name() == "gru-d" {
         args.reporting.notice(format_args!(
@@ -201,6 +228,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 "action": done.action,
                 "action_inferred": done.inferred,
                 "fps": job.model.config().fps,
+                "output_fps": job.out_fps.unwrap_or(job.model.config().fps),
                 "seed": args.seed,
                 "seed_frames": done.seed_frames,
                 "predicted_frames": job.frames,
@@ -213,7 +241,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         } else {
             for path in &done.outputs {
                 args.reporting.notice(format_args!(
-                    "wrote {} ({} seed + {} predicted frames at {} Hz)",
+                    "wrote {} ({} seed + {} predicted frames at {} Hz{})",
                     path.display(),
                     if job.prediction_only {
                         0
@@ -221,7 +249,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                         done.seed_frames
                     },
                     job.frames,
-                    job.model.config().fps
+                    job.model.config().fps,
+                    job.out_fps
+                        .map(|f| format!(", written at {f} Hz"))
+                        .unwrap_or_default()
                 ));
             }
         }
@@ -378,6 +409,7 @@ fn predict_one(
     let clips = |samples| Clips {
         samples,
         fps: config.fps,
+        out_fps: job.out_fps,
         target: job.target,
     };
     let mut outputs = write_clips(out, format, &clips(&samples))?;

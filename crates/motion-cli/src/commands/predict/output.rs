@@ -1,6 +1,7 @@
 //! Writing predictions: `.bvh` (root integrated, imports into Blender), `.npy` or exp-map `.txt`;
 //! several samples as `OUT_0`, `OUT_1`, ... or one `.npy` with a samples axis. Every file goes
 //! through a temporary file and a rename (the writers of `motion_core::formats` do that).
+use motion_core::resample::resample_bvh;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -20,6 +21,8 @@ pub struct Clips<'a> {
     pub samples: &'a [Array2<f64>],
     /// Their frame rate.
     pub fps: f64,
+    /// The rate BVH output is written at (`None`: `fps`).
+    pub out_fps: Option<f64>,
     /// Their skeleton.
     pub target: ExpMapTarget,
 }
@@ -99,6 +102,10 @@ pub fn write_clips(
                         path.display()
                     )
                 })?;
+                let bvh = match clips.out_fps {
+                    Some(fps) => resample_bvh(&bvh, fps),
+                    None => bvh,
+                };
                 write_bvh(&path, &bvh)?;
             }
         }
