@@ -49,6 +49,13 @@ fn fixture(name: &str) -> PathBuf {
 }
 
 fn model(name: &str) -> Arc<MotionModel> {
+    if name == "dae_lstm_actions" {
+        // The parity fixture is unconditioned: a small random action-conditioned DAE-LSTM.
+        let mut config = ModelConfig::paper(Architecture::DaeLstm);
+        (config.hidden, config.layers, config.dae_hidden) = (16, 2, Some(24));
+        config.seed_frames = 10;
+        return Arc::new(MotionModel::random(&config, 11).unwrap());
+    }
     Arc::new(MotionModel::load(fixture(&format!("{name}.safetensors"))).unwrap())
 }
 
@@ -308,7 +315,7 @@ fn bad_input_gives_typed_errors() {
 
 #[test]
 fn a_step_does_not_allocate() {
-    for name in ["vgru_d", "gru_d", "dae_lstm"] {
+    for name in ["vgru_d", "gru_d", "dae_lstm", "dae_lstm_actions"] {
         let m = model(name);
         let mut g = Generator::new(Arc::clone(&m));
         g.set_plan_horizon(20).unwrap();
@@ -319,8 +326,12 @@ fn a_step_does_not_allocate() {
         std::hint::black_box(vec![0u8; 16]);
         assert!(allocations() > probe, "the counter sees allocations");
         let before = allocations();
-        // 100 steps cross several re-planned blocks of 20.
-        for _ in 0..100 {
+        // 100 steps cross several re-planned blocks of 20, with action switches.
+        for k in 0..100 {
+            if (name == "vgru_d" || name == "dae_lstm_actions") && k % 17 == 5 {
+                g.set_action(if k % 2 == 0 { "eating" } else { "walking" }, 4)
+                    .unwrap();
+            }
             g.step_into(&mut frame).unwrap();
         }
         assert_eq!(
@@ -416,5 +427,125 @@ fn shipped_weights_continue_real_motion() {
     assert!(
         worst.is_finite() && worst < 50.0,
         "largest generated value {worst}"
+    );
+}
+
+// ---- switching the action mid-stream ----------------------------------------------------------------
+
+/// `n` frames of a generator that switches to `switch` (with `crossfade`) after `after` frames.
+fn switched(name: &str, switch: Option<(&str, usize)>, after: usize, n: usize) -> Array2<f32> {
+    let m = model(name);
+    let mut g = Generator::new(Arc::clone(&m));
+    g.set_plan_horizon(20).unwrap();
+    g.start(seed().view(), Some("walking"), Noise::Seed(3))
+        .unwrap();
+    let mut out = g.generate(after).unwrap();
+    if let Some((action, crossfade)) = switch {
+        g.set_action(action, crossfade).unwrap();
+    }
+    let rest = g.generate(n - after).unwrap();
+    out.append(ndarray::Axis(0), rest.view()).unwrap();
+    out
+}
+
+fn first_difference(a: &Array2<f32>, b: &Array2<f32>) -> Option<usize> {
+    (0..a.nrows()).find(|&t| a.row(t) != b.row(t))
+}
+
+#[test]
+fn set_action_switches_without_reseeding() {
+    for name in ["vgru_d", "dae_lstm_actions"] {
+        let plain = switched(name, None, 5, 60);
+        // The same action again changes nothing, bit for bit (VGRU-d re-plans the next block
+        // from the same noise).
+        assert_eq!(switched(name, Some(("walking", 0)), 5, 60), plain, "{name}");
+        let eating = switched(name, Some(("eating", 0)), 5, 60);
+        let first = first_difference(&plain, &eating).expect("the switch shows");
+        match name {
+            // Reads the one-hot every step: the very next frame.
+            "dae_lstm_actions" => assert_eq!(first, 5),
+            // Seed 10 frames, blocks of 20: frame k (0-based) comes from body step 9 + k; the
+            // next block starts at body step 30 (frame 21), re-planned in time.
+            _ => assert_eq!(first, 21, "{name}"),
+        }
+        // Late in a block (less than half left): the block after next.
+        if name == "vgru_d" {
+            let late = switched(name, Some(("eating", 0)), 15, 60);
+            assert_eq!(first_difference(&plain, &late), Some(41));
+        }
+    }
+    // A crossfade starts closer to the old action and ends on the new one's path.
+    let fade = switched("dae_lstm_actions", Some(("eating", 8)), 5, 60);
+    let eating = switched("dae_lstm_actions", Some(("eating", 0)), 5, 60);
+    let plain = switched("dae_lstm_actions", None, 5, 60);
+    let dist = |a: &Array2<f32>, b: &Array2<f32>, t: usize| -> f32 {
+        a.row(t)
+            .iter()
+            .zip(b.row(t))
+            .map(|(x, y)| (x - y).abs())
+            .sum()
+    };
+    assert_eq!(first_difference(&plain, &fade), Some(5));
+    assert!(dist(&fade, &plain, 5) < dist(&eating, &plain, 5));
+}
+
+#[test]
+fn set_action_on_one_row_leaves_the_others_alone() {
+    let m = model("vgru_d");
+    let seeds = Array3::from_shape_fn((2, 10, 99), |(_, t, d)| seed()[[t, d]]);
+    let run = |switch: bool| {
+        let mut g = BatchGenerator::new(Arc::clone(&m), 2);
+        g.set_plan_horizon(20).unwrap();
+        g.start(
+            seeds.view(),
+            &["walking"],
+            &[Noise::Seed(1), Noise::Seed(2)],
+        )
+        .unwrap();
+        let mut rows = vec![Vec::new(), Vec::new()];
+        for k in 0..50 {
+            if switch && k == 3 {
+                g.set_action(1, "eating", 0).unwrap();
+            }
+            let f = g.step().unwrap();
+            for (r, row) in rows.iter_mut().enumerate() {
+                row.extend(f.row(r).iter().copied());
+            }
+        }
+        rows
+    };
+    let (a, b) = (run(false), run(true));
+    assert_eq!(a[0], b[0], "row 0 untouched");
+    assert_ne!(a[1], b[1], "row 1 switched");
+}
+
+#[test]
+fn set_action_errors_are_typed() {
+    let m = model("vgru_d");
+    let mut g = Generator::new(Arc::clone(&m));
+    assert_eq!(g.set_action("walking", 0), Err(GenerateError::NotStarted));
+    g.start(seed().view(), Some("walking"), Noise::Seed(0))
+        .unwrap();
+    assert!(matches!(
+        g.set_action("moonwalk", 0),
+        Err(GenerateError::UnknownAction { .. })
+    ));
+    let mut b = BatchGenerator::new(Arc::clone(&m), 2);
+    let seeds = Array3::from_shape_fn((2, 10, 99), |(_, t, d)| seed()[[t, d]]);
+    b.start(
+        seeds.view(),
+        &["walking"],
+        &[Noise::Seed(1), Noise::Seed(2)],
+    )
+    .unwrap();
+    assert_eq!(
+        b.set_action(2, "eating", 0),
+        Err(GenerateError::NoSuchRow { row: 2, batch: 2 })
+    );
+    let mut grud = Generator::new(model("gru_d"));
+    grud.start(seed().view(), None, Noise::Seed(0)).unwrap();
+    assert_eq!(
+        grud.set_action("walking", 0),
+        Err(GenerateError::NotConditioned)
     );
 }

@@ -333,6 +333,62 @@ impl BatchGenerator {
         Ok(())
     }
 
+    /// Conditions character `row` on `action` from its next step on, without re-seeding (the
+    /// motion continues from where it is). How soon the new action shows depends on the model:
+    /// - DAE-LSTM reads the action one-hot at every step: from the next step, or blended from the
+    ///   previous action over `crossfade` steps;
+    /// - VGRU-d reads it through its plan of the next block ([`set_plan_horizon`](Self::set_plan_horizon),
+    ///   100 frames by default): from the next block, or the one after when the next one starts
+    ///   in less than half a block (the plan is then computed ahead at no more than two plan
+    ///   steps per body step: no step stalls); `crossfade` is not used, the body's own state
+    ///   carries the motion across the block change.
+    ///
+    /// # Errors
+    /// Before [`start`](Self::start), a row outside the batch, an unknown label, or a model
+    /// without actions (GRU-d).
+    pub fn set_action(
+        &mut self,
+        row: usize,
+        action: &str,
+        crossfade: usize,
+    ) -> Result<(), GenerateError> {
+        if self.phase == Phase::Idle {
+            return Err(GenerateError::NotStarted);
+        }
+        if row >= self.batch {
+            return Err(GenerateError::NoSuchRow {
+                row,
+                batch: self.batch,
+            });
+        }
+        let model = Arc::clone(&self.model);
+        let cfg = model.config();
+        if cfg.actions.is_empty() {
+            return Err(GenerateError::NotConditioned);
+        }
+        let index = cfg
+            .action_index(action)
+            .ok_or_else(|| GenerateError::UnknownAction {
+                label: action.to_string(),
+                valid: cfg.actions.clone(),
+            })?;
+        // The next advance runs body step `body_steps` (the first step after start hands out
+        // the prediction already made, and the same holds then).
+        let t = self.body_steps;
+        let (k, local) = (row / self.shard_rows, row % self.shard_rows);
+        let shard = &mut self.shards[k];
+        match (&mut shard.state, model.network()) {
+            (NetState::Vgru(state), Network::Vgru(net)) => {
+                net.set_action(state, shard.rows, local, index, t)
+            }
+            (NetState::DaeLstm(state), Network::DaeLstm(net)) => {
+                net.set_action(state, local, index, crossfade)
+            }
+            _ => return Err(GenerateError::NotConditioned),
+        }
+        Ok(())
+    }
+
     /// The next full frame of every character, `[batch, frame_dims]`: the first call after
     /// [`start`](Self::start) returns the prediction made from the last seed frame, each later
     /// call feeds the previous output back (closed loop).

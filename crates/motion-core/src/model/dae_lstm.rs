@@ -34,6 +34,8 @@ pub struct DaeLstmState {
     scratch: Vec<LstmScratch>,
     input: Vec<f32>,
     action: Vec<usize>,
+    /// Per row, a crossfade in progress: (previous action, steps done, steps in all).
+    fade: Vec<(usize, usize, usize)>,
     dae_scratch: MlpScratch,
     filtered: Vec<f32>,
 }
@@ -108,6 +110,7 @@ impl DaeLstm {
                 .collect(),
             input: vec![0.0; capacity * (self.features + self.actions)],
             action: vec![0; capacity],
+            fade: vec![(0, 0, 0); capacity],
             dae_scratch: MlpScratch::new(&self.dae, capacity),
             filtered: vec![0.0; capacity * self.outputs],
         }
@@ -121,6 +124,27 @@ impl DaeLstm {
             layer[..n].fill(0.0);
         }
         state.action[..actions.len()].copy_from_slice(actions);
+        state.fade[..actions.len()].fill((0, 0, 0));
+    }
+
+    /// Conditions row `row` on `action` (one-hot index) from the next step on, without
+    /// re-seeding; with `crossfade = n > 0` the one-hot input moves from the previous action to
+    /// the new one over `n` steps (weights `k / (n + 1)`, `k = 1..n`), then holds the new one.
+    pub fn set_action(
+        &self,
+        state: &mut DaeLstmState,
+        row: usize,
+        action: usize,
+        crossfade: usize,
+    ) {
+        debug_assert!(action < self.actions);
+        let previous = state.action[row];
+        state.action[row] = action;
+        state.fade[row] = if crossfade > 0 && previous != action {
+            (previous, 0, crossfade)
+        } else {
+            (0, 0, 0)
+        };
     }
 
     /// One step for `batch` rows of features `x [batch, I]`; returns the top hidden `[batch, H]`.
@@ -135,7 +159,15 @@ impl DaeLstm {
             features.copy_from_slice(&x[b * self.features..(b + 1) * self.features]);
             onehot.fill(0.0);
             if self.actions > 0 {
-                onehot[state.action[b]] = 1.0;
+                let (from, done, steps) = &mut state.fade[b];
+                if *done < *steps {
+                    *done += 1;
+                    let w = *done as f32 / (*steps + 1) as f32;
+                    onehot[*from] = 1.0 - w;
+                    onehot[state.action[b]] = w;
+                } else {
+                    onehot[state.action[b]] = 1.0;
+                }
             }
         }
         for (k, cell) in self.layers.iter().enumerate() {

@@ -66,7 +66,18 @@ pub enum GenerateError {
     /// A plan horizon of 0 steps.
     #[error("plan horizon must be at least 1 step")]
     ZeroHorizon,
+    /// A batch row that does not exist.
+    #[error("character {row} does not exist: the batch has {batch}")]
+    NoSuchRow {
+        /// The row given.
+        row: usize,
+        /// The batch size.
+        batch: usize,
+    },
+    /// An action was set on a model that is not action-conditioned.
+    #[error("this model is not action-conditioned: it has no action to change")]
+    NotConditioned,
     /// `step` was called before `start`.
-    #[error("step() called before start(): seed the generator first")]
+    #[error("step() or set_action() called before start(): seed the generator first")]
     NotStarted,
 }

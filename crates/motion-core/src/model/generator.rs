@@ -67,6 +67,12 @@ impl Generator {
         )
     }
 
+    /// Conditions the character on `action` from its next frame on, without re-seeding; see
+    /// [`BatchGenerator::set_action`] for when each architecture shows it and `crossfade`.
+    pub fn set_action(&mut self, action: &str, crossfade: usize) -> Result<(), GenerateError> {
+        self.inner.set_action(0, action, crossfade)
+    }
+
     /// The next full frame (`frame_dims` values); see [`BatchGenerator::step`].
     pub fn step(&mut self) -> Result<&[f32], GenerateError> {
         let frames = self.inner.step()?;

@@ -84,6 +84,12 @@ pub struct VgruState {
     /// Plan steps of the next block done so far (`0..=horizon`).
     next_done: usize,
     plan_gi: Vec<f32>,
+    /// Plan input projections of actions set mid-stream, applied when a next block's plan
+    /// starts (see [`VgruD::set_action`]); `pending[b]` marks the rows that have one.
+    pending_gi: Vec<f32>,
+    pending: Vec<bool>,
+    /// The next block's plan was restarted by `set_action`: its initial state is set.
+    restarted: bool,
     plan_h: Vec<f32>,
     plan_scratch: GruScratch,
     eps: Vec<f32>,
@@ -157,6 +163,9 @@ impl VgruD {
             next_guides: vec![0.0; capacity * plan_steps * p],
             next_done: 0,
             plan_gi: vec![0.0; capacity * 3 * p],
+            pending_gi: vec![0.0; capacity * 3 * p],
+            pending: vec![false; capacity],
+            restarted: false,
             plan_h: vec![0.0; capacity * p],
             plan_scratch: GruScratch::new(p, capacity),
             eps: vec![0.0; capacity * p],
@@ -187,6 +196,8 @@ impl VgruD {
             state.next_guides = vec![0.0; state.capacity * steps * p];
         }
         state.next_done = 0;
+        state.pending.fill(false);
+        state.restarted = false;
         state.seed_len = seed_len;
         state.horizon = horizon;
         state.noise = noise;
@@ -202,22 +213,75 @@ impl VgruD {
 
     /// Runs `steps` plan steps for `batch` rows from fresh initial states, storing outputs `0..steps`.
     fn plan_block(&self, state: &mut VgruState, batch: usize, steps: usize) {
-        self.plan_start(state, batch);
+        self.plan_start(state, batch, true);
         for j in 0..steps {
             self.plan_step(state, batch, j, false);
         }
     }
 
-    /// A fresh plan initial state `mu + scale ⊙ eps` per row (the next `eps` of its source).
-    fn plan_start(&self, state: &mut VgruState, batch: usize) {
+    /// A fresh plan initial state `mu + scale ⊙ eps` per row: with `draw`, the next `eps` of its
+    /// source; without, the `eps` drawn last (a restarted plan of the same block).
+    fn plan_start(&self, state: &mut VgruState, batch: usize, draw: bool) {
         let p = self.plan_hidden();
         for b in 0..batch {
             let eps = &mut state.eps[b * p..(b + 1) * p];
-            state.noise[b].fill(eps);
+            if draw {
+                state.noise[b].fill(eps);
+            }
             let h0 = &mut state.plan_h[b * p..(b + 1) * p];
             for (((h, m), s), e) in h0.iter_mut().zip(&self.mu).zip(&self.scale).zip(eps.iter()) {
                 *h = m + s * e;
             }
+        }
+    }
+
+    /// Copies the pending action projections of the first `batch` rows into the plan input.
+    fn apply_pending(&self, state: &mut VgruState, batch: usize) {
+        let g = 3 * self.plan_hidden();
+        for b in 0..batch {
+            if std::mem::take(&mut state.pending[b]) {
+                state.plan_gi[b * g..(b + 1) * g]
+                    .copy_from_slice(&state.pending_gi[b * g..(b + 1) * g]);
+            }
+        }
+    }
+
+    /// The body step at which the block running at body step `t` ends (the next swap).
+    fn block_end(state: &VgruState, t: usize) -> usize {
+        let (s, h) = (state.seed_len, state.horizon);
+        s + (t.saturating_sub(s) / h + 1) * h
+    }
+
+    /// Conditions row `row` on `action` (one-hot index) from now on, without re-seeding: the plan
+    /// of the next block reads it. When the next block's plan (computed ahead, one step per body
+    /// step) can be redone before its block starts at no more than two plan steps per body step,
+    /// it is redone now from the same noise, so the new action shows from the next block on;
+    /// otherwise the block after it is the first one planned with the new action. No step pays
+    /// for a whole block. `t` is the body step the next [`step`](Self::step) will run.
+    pub fn set_action(
+        &self,
+        state: &mut VgruState,
+        batch: usize,
+        row: usize,
+        action: usize,
+        t: usize,
+    ) {
+        debug_assert!(action < self.actions && row < batch);
+        let g = 3 * self.plan_hidden();
+        self.plan
+            .project_one_hot(Some(action), &mut state.pending_gi[row * g..(row + 1) * g]);
+        state.pending[row] = true;
+        if t < state.seed_len {
+            return;
+        }
+        let calls_left = Self::block_end(state, t) - t;
+        if state.next_done == 0 {
+            // The next block's plan has not started: it starts with the new action.
+        } else if 2 * calls_left >= state.horizon {
+            self.apply_pending(state, batch);
+            self.plan_start(state, batch, false);
+            state.next_done = 0;
+            state.restarted = true;
         }
     }
 
@@ -241,16 +305,23 @@ impl VgruD {
         }
     }
 
-    /// One more plan step of the next block (started on its first step), if it is not complete.
-    fn plan_ahead(&self, state: &mut VgruState, batch: usize) {
-        if state.next_done >= state.horizon {
+    /// Plan steps of the next block (started on its first step) for body step `t`: as many as
+    /// finish it by the time its block starts — one in lockstep, two at most after a
+    /// [`set_action`](Self::set_action) restart.
+    fn plan_ahead(&self, state: &mut VgruState, batch: usize, t: usize) {
+        let h = state.horizon;
+        if state.next_done >= h {
             return;
         }
-        if state.next_done == 0 {
-            self.plan_start(state, batch);
+        let calls_left = (Self::block_end(state, t) - t).max(1);
+        for _ in 0..(h - state.next_done).div_ceil(calls_left) {
+            if state.next_done == 0 && !std::mem::take(&mut state.restarted) {
+                self.apply_pending(state, batch);
+                self.plan_start(state, batch, true);
+            }
+            self.plan_step(state, batch, state.next_done, true);
+            state.next_done += 1;
         }
-        self.plan_step(state, batch, state.next_done, true);
-        state.next_done += 1;
     }
 
     /// The plan output read by body step `t` (see the module doc): switches to the block planned
@@ -264,12 +335,12 @@ impl VgruD {
         let local = t - block * h;
         if block >= 1 && local == s {
             while state.next_done < h {
-                self.plan_ahead(state, batch); // only if steps were skipped: never in lockstep use
+                self.plan_ahead(state, batch, t); // only if steps were skipped: never in lockstep use
             }
             std::mem::swap(&mut state.guides, &mut state.next_guides);
             state.next_done = 0;
         }
-        self.plan_ahead(state, batch);
+        self.plan_ahead(state, batch, t);
         s + h - 1 - local
     }
 
