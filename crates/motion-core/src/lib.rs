@@ -48,6 +48,7 @@ pub mod protocol;
 pub mod resample;
 pub mod root;
 pub mod rotation;
+pub mod seed;
 pub mod skeleton;
 
 pub use error::{FormatError, MotionError, SkeletonError};

@@ -2,8 +2,6 @@
 //! exp-map text or `.npy`), one file or a whole directory in parallel.
 mod output;
 
-mod seed;
-
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -18,8 +16,8 @@ use serde_json::{json, Value};
 
 use super::UsageError;
 use crate::model_source::{describe, load_model};
+use motion_core::seed::load_seed;
 use output::{check_output, write_clips, Clips};
-use seed::load_seed;
 
 /// The long help after the options: formats, conventions, examples.
 const LONG_HELP: &str = "\

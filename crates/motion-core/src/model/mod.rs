@@ -26,6 +26,7 @@
 //! # }
 //! ```
 pub mod batch;
+pub mod character;
 pub mod classifier;
 pub mod config;
 pub mod dae_lstm;
@@ -39,6 +40,7 @@ pub mod vgru;
 pub mod weights;
 
 pub use batch::{BatchGenerator, FrameScalar, Noise};
+pub use character::{Character, CharacterError};
 pub use classifier::{ActionClassifier, ClassifierConfig, ClassifyError, CLASSIFIER_ARCHITECTURE};
 pub use config::{Architecture, ModelConfig, Provenance};
 pub use generate_error::GenerateError;

@@ -1,0 +1,173 @@
+//! One animated character for a game engine: a [`Generator`] whose frames come out as engine
+//! [`Pose`]s (f32 glam, metres, root motion split) at whatever rate the engine ticks, with the
+//! action switchable mid-stream. It chains the three streaming pieces — closed-loop generation,
+//! [`PoseDecoder`] (root integration from the seed on) and [`PoseResampler`] (one model frame of
+//! look-ahead) — and allocates nothing per tick.
+//!
+//! See the crate docs for a complete example.
+use std::sync::Arc;
+
+use ndarray::ArrayView2;
+
+use super::batch::Noise;
+use super::generate_error::GenerateError;
+use super::generator::Generator;
+use super::predictor::MotionModel;
+use crate::motion::{FrameScalar, RootEncoding};
+use crate::pose::{Pose, PoseDecoder};
+use crate::resample::{PoseResampler, ResampleError};
+use crate::skeleton::{Skeleton, H36M_SOURCE_FPS};
+
+/// Why a [`Character`] could not start or advance.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum CharacterError {
+    /// The generator refused the seed, action or noise, or was not started.
+    #[error(transparent)]
+    Generate(#[from] GenerateError),
+    /// A bad time step.
+    #[error(transparent)]
+    Resample(#[from] ResampleError),
+    /// The model's frames are on a skeleton this crate has no pose layout for.
+    #[error("the model's skeleton {0:?} has no built-in pose layout (h36m-32 has)")]
+    Skeleton(String),
+}
+
+/// A generator, a pose decoder and a resampler for one character (see the module docs).
+#[derive(Debug)]
+pub struct Character {
+    generator: Generator,
+    decoder: PoseDecoder,
+    resampler: PoseResampler,
+}
+
+impl Character {
+    /// A character driven by `model` (weights shared between characters).
+    ///
+    /// # Errors
+    /// A model whose skeleton is not the H3.6M one.
+    pub fn new(model: Arc<MotionModel>) -> Result<Character, CharacterError> {
+        let config = model.config();
+        if config.skeleton != "h36m-32" {
+            return Err(CharacterError::Skeleton(config.skeleton.clone()));
+        }
+        let skeleton = Arc::new(Skeleton::h36m());
+        // H3.6M root deltas are per 50 Hz source frame: a 25 Hz model frame spans 2.
+        let step = ((H36M_SOURCE_FPS / config.fps).round() as usize).max(1);
+        let resampler = PoseResampler::new(skeleton.len(), config.fps);
+        Ok(Character {
+            generator: Generator::new(model),
+            decoder: PoseDecoder::new(skeleton, RootEncoding::Deltas, step),
+            resampler,
+        })
+    }
+
+    /// The skeleton the poses are on (joint order of [`Pose::local_rotations`]).
+    pub fn skeleton(&self) -> &Arc<Skeleton> {
+        self.decoder.skeleton()
+    }
+
+    /// The generator (plan horizon, model).
+    pub fn generator_mut(&mut self) -> &mut Generator {
+        &mut self.generator
+    }
+
+    /// Seeds the character with `seed` (exp-map frames at the model's rate, at least its
+    /// `seed_frames`), conditioned on `action`; returns the pose of the last seed frame, where
+    /// the motion continues from (the root integrated over the seed from the origin).
+    pub fn start<T: FrameScalar>(
+        &mut self,
+        seed: ArrayView2<'_, T>,
+        action: Option<&str>,
+        noise: Noise<'_>,
+    ) -> Result<&Pose, CharacterError> {
+        self.generator.start(seed, action, noise)?;
+        self.decoder.reset();
+        self.resampler.reset();
+        for row in seed.rows() {
+            let frame = row.as_slice();
+            match frame {
+                Some(frame) => {
+                    self.decoder.push(frame);
+                }
+                None => {
+                    let owned: Vec<T> = row.iter().copied().collect();
+                    self.decoder.push(&owned);
+                }
+            }
+        }
+        self.resampler.push(self.decoder.pose())?;
+        Ok(self.resampler.advance(0.0)?)
+    }
+
+    /// Moves the character's clock by `dt` seconds (any rate, variable steps) and returns its
+    /// pose there, generating model frames as needed.
+    pub fn advance(&mut self, dt: f64) -> Result<&Pose, CharacterError> {
+        while self.resampler.needs(dt) {
+            let frame = self.generator.step()?;
+            self.resampler.push(self.decoder.push(frame))?;
+        }
+        Ok(self.resampler.advance(dt)?)
+    }
+
+    /// Changes the action without re-seeding ([`Generator::set_action`]).
+    pub fn set_action(&mut self, action: &str, crossfade: usize) -> Result<(), CharacterError> {
+        Ok(self.generator.set_action(action, crossfade)?)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn fixture() -> Arc<MotionModel> {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../tests/fixtures/parity/vgru_d.safetensors"
+        );
+        Arc::new(MotionModel::load(path).unwrap())
+    }
+
+    #[test]
+    fn ticks_at_60_hz_follow_the_model_frames() {
+        let model = fixture();
+        let seed = ndarray::Array2::<f32>::from_shape_fn((10, 99), |(t, d)| match d {
+            0 => 10.0,
+            1..6 => 0.0,
+            _ => 0.2 * ((t + d) as f32 * 0.3).sin(),
+        });
+        let mut a = Character::new(Arc::clone(&model)).unwrap();
+        let start = a
+            .start(seed.view(), Some("walking"), Noise::Seed(4))
+            .unwrap()
+            .clone();
+        // The last seed frame's pose: root integrated over the seed (10 mm x 2 per 25 Hz frame).
+        let walked = start.root_motion.ground_translation.length();
+        assert!((walked - 0.19).abs() < 1e-4, "{walked}");
+        let mut b = Character::new(model).unwrap();
+        b.start(seed.view(), Some("walking"), Noise::Seed(4))
+            .unwrap();
+        // 12 ticks of 1/60 s = 5 frames of 1/25 s: both clocks meet there.
+        for _ in 0..12 {
+            a.advance(1.0 / 60.0).unwrap();
+        }
+        for _ in 0..5 {
+            b.advance(1.0 / 25.0).unwrap();
+        }
+        let (pa, pb) = (
+            a.advance(0.0).unwrap().clone(),
+            b.advance(0.0).unwrap().clone(),
+        );
+        assert!((pa.root_translation - pb.root_translation).length() < 1e-5);
+        for (qa, qb) in pa.local_rotations.iter().zip(&pb.local_rotations) {
+            assert!(
+                qa.abs_diff_eq(*qb, 1e-5) || qa.abs_diff_eq(-*qb, 1e-5),
+                "{qa} {qb}"
+            );
+        }
+        assert!(a.set_action("eating", 0).is_ok());
+        assert!(matches!(
+            a.advance(-1.0),
+            Err(CharacterError::Resample(ResampleError::BadStep(_)))
+        ));
+    }
+}

@@ -1,0 +1,397 @@
+//! The one seed loader every front end uses (CLI, engines, bindings): a BVH on the model's
+//! skeleton, exp-map text or `.npy`, by extension; its units checked against the model's skeleton
+//! (a BVH in centimetres, metres, inches or any other scale is rescaled with a notice, never used
+//! as millimetres); every value finite; brought to the model's frame rate (a whole ratio keeps
+//! every k-th frame, any other interpolates by slerp, [`crate::resample`]).
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use ndarray::{s, Array2};
+
+use crate::error::FormatError;
+use crate::formats::bvh::{read_bvh, Bvh};
+use crate::formats::expmap_bvh::{bvh_to_expmap, expmap_to_bvh, ExpMapTarget};
+use crate::formats::h36m_text::read_expmap_text;
+use crate::formats::npy::read_npy_frames;
+use crate::formats::FileFormat;
+use crate::motion::{Motion, MotionLayout};
+use crate::resample::resample_bvh;
+use crate::root::{integrate_root, RootPose};
+use crate::skeleton::{Skeleton, H36M_SOURCE_FPS};
+
+/// Why a seed could not be loaded.
+#[derive(Debug, thiserror::Error)]
+pub enum SeedError {
+    /// The file could not be read or parsed.
+    #[error(transparent)]
+    Format(#[from] FormatError),
+    /// The file was read but cannot seed the model (skeleton, width, values, units); names the
+    /// file.
+    #[error("{}: {problem}", path.display())]
+    Invalid {
+        /// The seed file.
+        path: PathBuf,
+        /// What is wrong with it.
+        problem: String,
+    },
+}
+
+/// Two frame rates closer than this (relative) are the same: BVH frame times are rounded in files.
+const SAME_RATE: f64 = 1e-3;
+
+/// A seed at the model's frame rate.
+#[derive(Debug)]
+pub struct Seed {
+    /// Exp-map frames (`frames x frame_dims`, root as the target's encoding) at the model's rate.
+    pub frames: Array2<f64>,
+    /// The exact absolute root pose of each frame when the frames alone cannot give it: H3.6M
+    /// deltas downsampled from the source rate (integrating the kept deltas twice drifts over a
+    /// long take; these come from integrating every source frame).
+    pub poses: Option<Vec<RootPose>>,
+    /// One-line notices for the user (resampling).
+    pub notices: Vec<String>,
+}
+
+fn usage(path: &Path, problem: impl std::fmt::Display) -> SeedError {
+    SeedError::Invalid {
+        path: path.to_path_buf(),
+        problem: problem.to_string(),
+    }
+}
+
+/// Loads `path` as a seed for a model on `target` running at `fps`. Exp-map files (which carry no
+/// rate) are taken to be at `input_fps`.
+pub fn load_seed(
+    path: &Path,
+    target: ExpMapTarget,
+    fps: f64,
+    input_fps: f64,
+) -> Result<Seed, SeedError> {
+    let mut notices = Vec::new();
+    let mut poses = None;
+    let frames = match FileFormat::from_path(path)? {
+        FileFormat::Bvh => {
+            let mut bvh = read_bvh(path)?;
+            check_skeleton(&bvh, target).map_err(|e| usage(path, e))?;
+            let scale =
+                unit_scale(&bvh.skeleton, &target.skeleton()).map_err(|e| usage(path, e))?;
+            if !(UNITS_TOLERANCE.recip()..=UNITS_TOLERANCE).contains(&scale) {
+                notices.push(format!(
+                    "note: {}: the skeleton is {scale:.4} times the model's ({}): rescaled by {:.4}, root motion included",
+                    path.display(),
+                    units_guess(scale),
+                    scale.recip()
+                ));
+                bvh = rescale_bvh(&bvh, scale.recip()).map_err(|e| usage(path, e))?;
+            }
+            if let Some(frame) = first_non_finite(&bvh.frames) {
+                return Err(usage(
+                    path,
+                    format!("frame {frame} has a NaN or infinite value"),
+                ));
+            }
+            if !same_rate(bvh.fps(), fps) {
+                notices.push(format!(
+                    "note: {}: {} Hz resampled to the model's {} Hz (rotations by slerp)",
+                    path.display(),
+                    round_rate(bvh.fps()),
+                    round_rate(fps)
+                ));
+                bvh = resample_bvh(&bvh, fps);
+            }
+            bvh_to_expmap(&bvh, target)
+                .map_err(|e| usage(path, e))?
+                .into_frames()
+        }
+        format => {
+            let frames = if format == FileFormat::Npy {
+                read_npy_frames(path)?
+            } else {
+                read_expmap_text(path)?
+            };
+            let width = target.skeleton().expmap_width();
+            if frames.ncols() != width {
+                return Err(usage(
+                    path,
+                    format!(
+                        "{} values per frame, but the model's {} skeleton has {width}",
+                        frames.ncols(),
+                        target.name()
+                    ),
+                ));
+            }
+            if let Some(frame) = first_non_finite(&frames) {
+                return Err(usage(
+                    path,
+                    format!("frame {frame} has a NaN or infinite value"),
+                ));
+            }
+            if target == ExpMapTarget::H36m {
+                poses = downsampled_poses(&frames, input_fps, fps);
+            }
+            resample_expmap(frames, target, input_fps, fps, path, &mut notices)?
+        }
+    };
+    Ok(Seed {
+        frames,
+        poses,
+        notices,
+    })
+}
+
+/// Exact absolute root poses of H3.6M frames at `from` Hz kept every k-th frame for `to` Hz,
+/// when `from` is a whole multiple k > 1 of `to`.
+fn downsampled_poses(frames: &Array2<f64>, from: f64, to: f64) -> Option<Vec<RootPose>> {
+    let ratio = from / to;
+    let k = ratio.round();
+    if k < 2.0 || (ratio - k).abs() >= SAME_RATE * k {
+        return None;
+    }
+    let step = ((H36M_SOURCE_FPS / from).round() as usize).max(1);
+    let poses = integrate_root(frames.view(), step);
+    Some(poses.into_iter().step_by(k as usize).collect())
+}
+
+/// Exp-map frames at `from` Hz brought to `to` Hz: a whole ratio keeps every k-th frame (as the
+/// H3.6M protocol downsamples, keeping the per-source-frame root deltas), any other ratio goes
+/// through BVH and slerp.
+fn resample_expmap(
+    frames: Array2<f64>,
+    target: ExpMapTarget,
+    from: f64,
+    to: f64,
+    path: &Path,
+    notices: &mut Vec<String>,
+) -> Result<Array2<f64>, SeedError> {
+    if same_rate(from, to) {
+        return Ok(frames);
+    }
+    let ratio = from / to;
+    let k = ratio.round();
+    if k >= 1.0 && (ratio - k).abs() < SAME_RATE * k {
+        notices.push(format!(
+            "note: {}: read as {} Hz (--input-fps); one frame in {} kept for the model's {} Hz",
+            path.display(),
+            round_rate(from),
+            k as usize,
+            round_rate(to)
+        ));
+        return Ok(frames.slice(s![..;k as usize, ..]).to_owned());
+    }
+    notices.push(format!(
+        "note: {}: read as {} Hz (--input-fps); resampled to the model's {} Hz (rotations by slerp)",
+        path.display(),
+        round_rate(from),
+        round_rate(to)
+    ));
+    let motion = Motion::new(
+        Arc::new(target.skeleton()),
+        MotionLayout::ExpMap {
+            root: target.root(),
+        },
+        frames,
+        from,
+    )
+    .map_err(|e| usage(path, e))?;
+    let bvh = expmap_to_bvh(&motion).map_err(|e| usage(path, e))?;
+    let bvh = resample_bvh(&bvh, to);
+    Ok(bvh_to_expmap(&bvh, target)
+        .map_err(|e| usage(path, e))?
+        .into_frames())
+}
+
+/// Sizes within this factor of the model's skeleton are taken as millimetres (people differ);
+/// outside it a BVH is rescaled.
+pub const UNITS_TOLERANCE: f64 = 1.3;
+
+/// How large `skeleton` is against `reference`: the ratio of their summed bone lengths over the
+/// joints both have by name (End Sites aside). 1 for the same units and build; 0.1 for a
+/// skeleton in centimetres against one in millimetres.
+pub fn unit_scale(skeleton: &Skeleton, reference: &Skeleton) -> Result<f64, String> {
+    let (mut ours, mut theirs) = (0.0, 0.0);
+    for joint in reference.joints().iter().filter(|j| !j.is_end_site) {
+        if let Some(other) = skeleton
+            .joints()
+            .iter()
+            .find(|o| !o.is_end_site && o.name == joint.name)
+        {
+            let length = |o: [f64; 3]| (o[0] * o[0] + o[1] * o[1] + o[2] * o[2]).sqrt();
+            ours += length(other.offset);
+            theirs += length(joint.offset);
+        }
+    }
+    let scale = ours / theirs;
+    if !(scale.is_finite() && (1e-5..=1e3).contains(&scale)) {
+        return Err(format!(
+            "the skeleton's bones sum to {ours} units against the model's {theirs} mm: no unit makes them comparable"
+        ));
+    }
+    Ok(scale)
+}
+
+/// The unit a size ratio (against millimetres) most likely means, for notices.
+pub fn units_guess(scale: f64) -> &'static str {
+    const UNITS: [(f64, &str); 5] = [
+        (0.1, "centimetres?"),
+        (0.001, "metres?"),
+        (1.0 / 25.4, "inches?"),
+        (1.0 / 304.8, "feet?"),
+        (1.0, "millimetres, another build"),
+    ];
+    UNITS
+        .iter()
+        .find(|(u, _)| (scale / u).ln().abs() < 0.15)
+        .map_or("unknown units", |(_, name)| name)
+}
+
+/// `bvh` with every joint offset and position channel multiplied by `factor` (rotations as they
+/// are): the same motion in other length units.
+pub fn rescale_bvh(bvh: &Bvh, factor: f64) -> Result<Bvh, String> {
+    let mut joints = bvh.skeleton.joints().to_vec();
+    for joint in &mut joints {
+        joint.offset = joint.offset.map(|v| v * factor);
+    }
+    let skeleton = Skeleton::new(joints).map_err(|e| e.to_string())?;
+    let mut frames = bvh.frames.clone();
+    for (j, joint) in bvh.skeleton.joints().iter().enumerate() {
+        let start = bvh.skeleton.channel_start(j);
+        for (k, channel) in joint.channels.iter().enumerate() {
+            if !channel.is_rotation() {
+                frames.column_mut(start + k).mapv_inplace(|v| v * factor);
+            }
+        }
+    }
+    Ok(Bvh {
+        skeleton,
+        frames,
+        frame_time: bvh.frame_time,
+    })
+}
+
+/// Checks that the BVH's joints (End Sites aside) are the target skeleton's, in order; the error
+/// says what differs.
+pub fn check_skeleton(bvh: &Bvh, target: ExpMapTarget) -> Result<(), String> {
+    let expected = target.skeleton();
+    let found: Vec<&str> = bvh
+        .skeleton
+        .joints()
+        .iter()
+        .filter(|j| !j.is_end_site)
+        .map(|j| j.name.as_str())
+        .collect();
+    let first_difference = expected
+        .joints()
+        .iter()
+        .zip(&found)
+        .position(|(e, f)| e.name != *f);
+    let what = match first_difference {
+        None if found.len() == expected.len() => return Ok(()),
+        None => format!(
+            "the BVH has {} joints, the model's {} skeleton {}",
+            found.len(),
+            target.name(),
+            expected.len()
+        ),
+        Some(i) => format!(
+            "{}first differing joint is #{i}: {:?} in the BVH, {:?} in the model's",
+            if found.len() == expected.len() {
+                String::new()
+            } else {
+                format!(
+                    "the BVH has {} joints, the model's {}; ",
+                    found.len(),
+                    expected.len()
+                )
+            },
+            found[i],
+            expected.joint(i).name
+        ),
+    };
+    Err(format!(
+        "skeleton does not match the model's {} skeleton: {what}",
+        target.name()
+    ))
+}
+
+fn same_rate(a: f64, b: f64) -> bool {
+    (a - b).abs() <= SAME_RATE * b
+}
+
+/// A rate for messages: 120 rather than 120.00000048.
+fn round_rate(fps: f64) -> f64 {
+    (fps * 1000.0).round() / 1000.0
+}
+
+fn first_non_finite(frames: &Array2<f64>) -> Option<usize> {
+    frames
+        .rows()
+        .into_iter()
+        .position(|row| row.iter().any(|v| !v.is_finite()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::formats::bvh::write_bvh;
+
+    fn walking_bvh() -> Bvh {
+        let frames = Array2::from_shape_fn((30, 99), |(t, d)| match d {
+            0 => 12.0,
+            1..6 => 0.0,
+            _ => 0.3 * ((t as f64) * 0.2 + d as f64).sin(),
+        });
+        expmap_to_bvh(&Motion::h36m(frames, 25.0).unwrap()).unwrap()
+    }
+
+    fn scratch(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("motion-seed-{name}-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    #[test]
+    fn a_bvh_in_other_units_is_rescaled_with_a_notice() {
+        let dir = scratch("units");
+        let mm = dir.join("mm.bvh");
+        write_bvh(&mm, &walking_bvh()).unwrap();
+        let want = load_seed(&mm, ExpMapTarget::H36m, 25.0, 50.0).unwrap();
+        assert!(want.notices.is_empty(), "{:?}", want.notices);
+        for (factor, unit) in [
+            (0.1, "centimetres"),
+            (0.001, "metres"),
+            (1.0 / 25.4, "inches"),
+        ] {
+            let path = dir.join(format!("{unit}.bvh"));
+            write_bvh(&path, &rescale_bvh(&walking_bvh(), factor).unwrap()).unwrap();
+            let got = load_seed(&path, ExpMapTarget::H36m, 25.0, 50.0).unwrap();
+            assert_eq!(got.notices.len(), 1);
+            assert!(got.notices[0].contains(unit), "{}", got.notices[0]);
+            let worst = (&got.frames - &want.frames)
+                .mapv(f64::abs)
+                .fold(0.0f64, |m, &v| m.max(v));
+            assert!(worst < 1e-6, "{unit}: {worst}");
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn bad_seeds_are_errors_naming_the_file() {
+        let dir = scratch("bad");
+        let flat = dir.join("flat.bvh");
+        write_bvh(&flat, &rescale_bvh(&walking_bvh(), 0.0).unwrap()).unwrap();
+        let err = load_seed(&flat, ExpMapTarget::H36m, 25.0, 50.0).unwrap_err();
+        assert!(matches!(err, SeedError::Invalid { .. }));
+        assert!(
+            err.to_string().contains("flat.bvh") && err.to_string().contains("unit"),
+            "{err}"
+        );
+        let short = dir.join("short.npy");
+        crate::formats::npy::write_npy(&short, &Array2::<f64>::zeros((4, 98))).unwrap();
+        let err = load_seed(&short, ExpMapTarget::H36m, 25.0, 50.0).unwrap_err();
+        assert!(
+            err.to_string().contains("short.npy") && err.to_string().contains("98"),
+            "{err}"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
