@@ -2,6 +2,8 @@
 //! Sub-modules live in `benches/motion/`.
 use criterion::{criterion_group, criterion_main};
 
+#[path = "motion/engine.rs"]
+mod engine;
 #[path = "motion/foundations.rs"]
 mod foundations;
 #[path = "motion/gemm.rs"]
@@ -16,6 +18,7 @@ criterion_group!(
     foundations::benches,
     nn::benches,
     metrics::benches,
-    gemm::benches
+    gemm::benches,
+    engine::benches
 );
 criterion_main!(benches);

@@ -13,8 +13,48 @@
 //!   keeping the even frames. Dims 0..2 / 3..5 of an H3.6M frame are per-frame root translation /
 //!   rotation **deltas**.
 //! - Frames are stored row-major, `frames x channels`, in `f64` unless a model computes in `f32`.
+//! - The engine boundary is [`pose`]: f32 glam data, **metres**, rotations as unit quaternions on
+//!   **column vectors** (glam, Bevy, BVH); the H3.6M row-vector convention stays inside.
 //!
-//! ## Example: load weights, seed, step
+//! ## Example: a character in a game engine
+//! Load weights, seed from a BVH, tick at 60 Hz reading engine [`pose::Pose`]s (f32 glam,
+//! metres, column-vector quaternions) and the root motion for the character controller, and
+//! switch the action without re-seeding.
+//! ```
+//! use std::sync::Arc;
+//! use motion_core::formats::expmap_bvh::ExpMapTarget;
+//! use motion_core::model::{Character, MotionModel, Noise};
+//! use motion_core::seed::load_seed;
+//!
+//! let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");
+//! // A small random-weight fixture; `weights/vgru_d_multi.safetensors` is the shipped model.
+//! let model = Arc::new(MotionModel::load(format!("{root}/tests/fixtures/parity/vgru_d.safetensors"))?);
+//! let (fps, needed) = (model.config().fps, model.config().seed_frames);
+//! // The one seed loader: format by extension, units checked, resampled to the model's rate.
+//! let seed = load_seed(format!("{root}/examples/walk_seed.bvh").as_ref(), ExpMapTarget::H36m, fps, 50.0)?;
+//! let window = seed.frames.slice(ndarray::s![seed.frames.nrows() - needed.., ..]);
+//!
+//! let mut character = Character::new(Arc::clone(&model))?; // one per character, weights shared
+//! let mut pose = character.start(window, Some("walking"), Noise::Seed(7))?.clone();
+//! let mut travelled = glam::Vec3::ZERO;
+//! for tick in 0..180 {
+//!     if tick == 90 {
+//!         character.set_action("eating", 10)?; // no re-seeding, no stall
+//!     }
+//!     let next = character.advance(1.0 / 60.0)?; // generates model frames only when due
+//!     // Drive the controller with the ground motion, pose the rig with the rest:
+//!     travelled += next.root_motion.delta_translation; // metres, on the ground plane
+//!     let _heading = next.root_motion.ground_yaw; // rotation about +y
+//!     let _pelvis = (next.root_motion.pelvis_offset, next.root_motion.pelvis_rotation);
+//!     let _hips_to_spine = next.local_rotations[11]; // joint order of character.skeleton()
+//!     pose.clone_from(next);
+//! }
+//! assert_eq!(pose.local_rotations.len(), character.skeleton().len());
+//! assert!(travelled.is_finite());
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
+//! ## Example: load weights, seed, step (raw exp-map frames)
 //! ```
 //! use std::sync::Arc;
 //! use motion_core::model::{Generator, MotionModel, Noise};
