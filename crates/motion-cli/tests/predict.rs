@@ -541,3 +541,159 @@ fn fps_writes_bvh_at_any_rate_through_the_model_frames() {
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("p.npy") && err.contains("--fps"), "{err}");
 }
+
+/// The example walk on the library's CMU-style demo rig at 120 fps, written to `path`.
+fn write_rig_walk(path: &Path, rename: Option<(&str, &str)>) {
+    use motion_core::resample::resample_bvh;
+    use motion_core::retarget::{demo_rig, JointMap, Retargeter};
+    let rig = demo_rig("", false, 1.0 / 70.0);
+    let retargeter = Retargeter::new(&rig, JointMap::detect(&rig).unwrap()).unwrap();
+    let rest = ndarray::Array2::zeros((1, rig.channel_count()));
+    let mut bvh = resample_bvh(
+        &retargeter.to_rig(&read_bvh(walk_seed()).unwrap(), rest.view()),
+        120.0,
+    );
+    if let Some((from, to)) = rename {
+        let joints = bvh
+            .skeleton
+            .joints()
+            .iter()
+            .map(|j| {
+                let mut j = j.clone();
+                if j.name == from {
+                    j.name = to.into();
+                }
+                j
+            })
+            .collect();
+        bvh.skeleton = motion_core::skeleton::Skeleton::new(joints).unwrap();
+    }
+    write_bvh(path, &bvh).unwrap();
+}
+
+#[test]
+fn a_seed_on_another_rig_is_predicted_and_written_back_onto_it() {
+    use motion_core::kinematics::local_transform;
+    let dir = scratch("rig");
+    let (seed, out) = (dir.join("cmu_walk.bvh"), dir.join("pred.bvh"));
+    write_rig_walk(&seed, None);
+    let (_, stderr) = predict_ok(&[
+        &"--seed",
+        &seed,
+        &"--action",
+        &"walking",
+        &"--frames",
+        &"20",
+        &"--out",
+        &out,
+    ]);
+    assert!(stderr.contains("CMU mocap BVH rig retargeted"), "{stderr}");
+    let (input, pred) = (read_bvh(&seed).unwrap(), read_bvh(&out).unwrap());
+    assert_eq!(
+        pred.skeleton, input.skeleton,
+        "written on the user's own rig"
+    );
+    assert!((pred.fps() - 25.0).abs() < 1e-9);
+    // The seed part (the fixture model reads 10 frames) is the input at 25 Hz, unchanged.
+    let at25 = motion_core::resample::resample_bvh(&input, 25.0);
+    let (n, k) = (at25.frames.nrows(), 10);
+    assert_eq!(pred.frames.nrows(), k + 20);
+    let mut worst: f64 = 0.0;
+    for t in 0..k {
+        let (a, b) = (at25.frames.row(n - k + t), pred.frames.row(t));
+        for j in 0..input.skeleton.len() {
+            let qa = glam::DQuat::from_mat3(
+                &local_transform(&input.skeleton, j, a.as_slice().unwrap()).0,
+            );
+            let qb = glam::DQuat::from_mat3(
+                &local_transform(&input.skeleton, j, b.as_slice().unwrap()).0,
+            );
+            worst = worst.max(2.0 * (qa.inverse() * qb).xyz().length());
+        }
+        for c in 0..3 {
+            assert!(
+                (a[c] - b[c]).abs() < 1e-6,
+                "frame {t}: root {c}: {} vs {}",
+                a[c],
+                b[c]
+            );
+        }
+    }
+    assert!(
+        worst.to_degrees() < 1e-4,
+        "seed round trip {} deg",
+        worst.to_degrees()
+    );
+
+    // A rig no built-in map fits: one line naming the file and the joint without a match.
+    let odd = dir.join("odd.bvh");
+    write_rig_walk(&odd, Some(("LeftForeArm", "LeftElbow")));
+    let (code, _, err) = predict(&[&"--seed", &odd, &"--action", &"walking", &"--out", &out]);
+    assert_eq!(code, 2, "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.contains("odd.bvh") && err.contains("\"LeftForeArm\""),
+        "{err}"
+    );
+    // A joint map fixes it; one naming a joint the rig lacks is refused, naming both.
+    let names = [
+        "Hips",
+        "RightUpLeg",
+        "RightLeg",
+        "RightFoot",
+        "RightToeBase",
+        "LeftUpLeg",
+        "LeftLeg",
+        "LeftFoot",
+        "LeftToeBase",
+        "LowerBack",
+        "Spine",
+        "Neck",
+        "Head",
+        "LeftShoulder",
+        "LeftArm",
+        "LeftElbow",
+        "LeftHand",
+        "RightShoulder",
+        "RightArm",
+        "RightForeArm",
+        "RightHand",
+    ];
+    let pairs: Vec<String> = motion_core::retarget::MAPPED_JOINTS
+        .iter()
+        .zip(names)
+        .map(|(m, u)| format!("\"{m}\": \"{u}\""))
+        .collect();
+    let map = dir.join("map.json");
+    std::fs::write(&map, format!("{{{}}}", pairs.join(", "))).unwrap();
+    predict_ok(&[
+        &"--seed",
+        &odd,
+        &"--action",
+        &"walking",
+        &"--joint-map",
+        &map,
+        &"--out",
+        &out,
+    ]);
+    std::fs::write(
+        &map,
+        format!("{{{}}}", pairs.join(", ")).replace("LeftElbow", "LeftKnuckle"),
+    )
+    .unwrap();
+    let (code, _, err) = predict(&[
+        &"--seed",
+        &odd,
+        &"--action",
+        &"walking",
+        &"--joint-map",
+        &map,
+        &"--out",
+        &out,
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("map.json") && err.contains("LeftKnuckle"),
+        "{err}"
+    );
+}

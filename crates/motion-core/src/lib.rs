@@ -31,7 +31,7 @@
 //! let model = Arc::new(MotionModel::load(format!("{root}/tests/fixtures/parity/vgru_d.safetensors"))?);
 //! let (fps, needed) = (model.config().fps, model.config().seed_frames);
 //! // The one seed loader: format by extension, units checked, resampled to the model's rate.
-//! let seed = load_seed(format!("{root}/examples/walk_seed.bvh").as_ref(), ExpMapTarget::H36m, fps, 50.0)?;
+//! let seed = load_seed(format!("{root}/examples/walk_seed.bvh").as_ref(), ExpMapTarget::H36m, fps, 50.0, None)?;
 //! let window = seed.frames.slice(ndarray::s![seed.frames.nrows() - needed.., ..]);
 //!
 //! let mut character = Character::new(Arc::clone(&model))?; // one per character, weights shared
@@ -86,6 +86,7 @@ pub mod nn;
 pub mod pose;
 pub mod protocol;
 pub mod resample;
+pub mod retarget;
 pub mod root;
 pub mod rotation;
 pub mod seed;

@@ -16,6 +16,7 @@ use crate::formats::npy::read_npy_frames;
 use crate::formats::FileFormat;
 use crate::motion::{Motion, MotionLayout};
 use crate::resample::resample_bvh;
+use crate::retarget::{JointMap, Retargeter};
 use crate::root::{integrate_root, RootPose};
 use crate::skeleton::{Skeleton, H36M_SOURCE_FPS};
 
@@ -48,8 +49,20 @@ pub struct Seed {
     /// deltas downsampled from the source rate (integrating the kept deltas twice drifts over a
     /// long take; these come from integrating every source frame).
     pub poses: Option<Vec<RootPose>>,
-    /// One-line notices for the user (resampling).
+    /// One-line notices for the user (resampling, units, retargeting).
     pub notices: Vec<String>,
+    /// When the seed was a BVH on another rig: how to write results back onto it.
+    pub rig: Option<RigSeed>,
+}
+
+/// A seed read from a user's own rig ([`crate::retarget`]).
+#[derive(Debug, Clone)]
+pub struct RigSeed {
+    /// Rig ↔ H3.6M.
+    pub retargeter: Retargeter,
+    /// The seed's rig frames (BVH channels) at the model's rate: the references of the rig
+    /// joints the model does not have ([`Retargeter::to_rig`]).
+    pub frames: Array2<f64>,
 }
 
 fn usage(path: &Path, problem: impl std::fmt::Display) -> SeedError {
@@ -60,35 +73,72 @@ fn usage(path: &Path, problem: impl std::fmt::Display) -> SeedError {
 }
 
 /// Loads `path` as a seed for a model on `target` running at `fps`. Exp-map files (which carry no
-/// rate) are taken to be at `input_fps`.
+/// rate) are taken to be at `input_fps`. A BVH on another rig than the model's is retargeted
+/// ([`crate::retarget`]) under `joint_map` (a JSON file) or the built-in map its names fit.
 pub fn load_seed(
     path: &Path,
     target: ExpMapTarget,
     fps: f64,
     input_fps: f64,
+    joint_map: Option<&Path>,
 ) -> Result<Seed, SeedError> {
     let mut notices = Vec::new();
     let mut poses = None;
+    let mut rig = None;
     let frames = match FileFormat::from_path(path)? {
         FileFormat::Bvh => {
             let mut bvh = read_bvh(path)?;
-            check_skeleton(&bvh, target).map_err(|e| usage(path, e))?;
-            let scale =
-                unit_scale(&bvh.skeleton, &target.skeleton()).map_err(|e| usage(path, e))?;
-            if !(UNITS_TOLERANCE.recip()..=UNITS_TOLERANCE).contains(&scale) {
-                notices.push(format!(
-                    "note: {}: the skeleton is {scale:.4} times the model's ({}): rescaled by {:.4}, root motion included",
-                    path.display(),
-                    units_guess(scale),
-                    scale.recip()
-                ));
-                bvh = rescale_bvh(&bvh, scale.recip()).map_err(|e| usage(path, e))?;
-            }
             if let Some(frame) = first_non_finite(&bvh.frames) {
                 return Err(usage(
                     path,
                     format!("frame {frame} has a NaN or infinite value"),
                 ));
+            }
+            let exact = check_skeleton(&bvh, target);
+            if exact.is_ok() && joint_map.is_none() {
+                let scale =
+                    unit_scale(&bvh.skeleton, &target.skeleton()).map_err(|e| usage(path, e))?;
+                if !(UNITS_TOLERANCE.recip()..=UNITS_TOLERANCE).contains(&scale) {
+                    notices.push(format!(
+                        "note: {}: the skeleton is {scale:.4} times the model's ({}): rescaled by {:.4}, root motion included",
+                        path.display(),
+                        units_guess(scale),
+                        scale.recip()
+                    ));
+                    bvh = rescale_bvh(&bvh, scale.recip()).map_err(|e| usage(path, e))?;
+                }
+            } else {
+                // Another rig: retarget it onto the model's skeleton (H3.6M models only).
+                let exact_problem = exact.err().unwrap_or_default();
+                if target != ExpMapTarget::H36m {
+                    return Err(usage(path, exact_problem));
+                }
+                let map = match joint_map {
+                    Some(file) => {
+                        JointMap::read(&bvh.skeleton, file).map_err(|e| usage(path, e))?
+                    }
+                    None => JointMap::detect(&bvh.skeleton)
+                        .map_err(|e| usage(path, format!("{exact_problem}, and {e}")))?,
+                };
+                let retargeter = Retargeter::new(&bvh.skeleton, map).map_err(|e| usage(path, e))?;
+                notices.push(format!(
+                    "note: {}: {} rig retargeted onto the model's H3.6M skeleton ({:.4} rig units per mm{})",
+                    path.display(),
+                    retargeter.map().name,
+                    retargeter.scale(),
+                    match units_guess(retargeter.scale()) {
+                        "unknown units" => String::new(),
+                        unit => format!(", {unit}"),
+                    }
+                ));
+                let frames = if same_rate(bvh.fps(), fps) {
+                    bvh.frames.clone()
+                } else {
+                    resample_bvh(&bvh, fps).frames
+                };
+                let model_bvh = retargeter.to_model(bvh.frames.view(), bvh.frame_time);
+                rig = Some(RigSeed { retargeter, frames });
+                bvh = model_bvh;
             }
             if !same_rate(bvh.fps(), fps) {
                 notices.push(format!(
@@ -136,6 +186,7 @@ pub fn load_seed(
         frames,
         poses,
         notices,
+        rig,
     })
 }
 
@@ -354,7 +405,7 @@ mod tests {
         let dir = scratch("units");
         let mm = dir.join("mm.bvh");
         write_bvh(&mm, &walking_bvh()).unwrap();
-        let want = load_seed(&mm, ExpMapTarget::H36m, 25.0, 50.0).unwrap();
+        let want = load_seed(&mm, ExpMapTarget::H36m, 25.0, 50.0, None).unwrap();
         assert!(want.notices.is_empty(), "{:?}", want.notices);
         for (factor, unit) in [
             (0.1, "centimetres"),
@@ -363,7 +414,7 @@ mod tests {
         ] {
             let path = dir.join(format!("{unit}.bvh"));
             write_bvh(&path, &rescale_bvh(&walking_bvh(), factor).unwrap()).unwrap();
-            let got = load_seed(&path, ExpMapTarget::H36m, 25.0, 50.0).unwrap();
+            let got = load_seed(&path, ExpMapTarget::H36m, 25.0, 50.0, None).unwrap();
             assert_eq!(got.notices.len(), 1);
             assert!(got.notices[0].contains(unit), "{}", got.notices[0]);
             let worst = (&got.frames - &want.frames)
@@ -379,7 +430,7 @@ mod tests {
         let dir = scratch("bad");
         let flat = dir.join("flat.bvh");
         write_bvh(&flat, &rescale_bvh(&walking_bvh(), 0.0).unwrap()).unwrap();
-        let err = load_seed(&flat, ExpMapTarget::H36m, 25.0, 50.0).unwrap_err();
+        let err = load_seed(&flat, ExpMapTarget::H36m, 25.0, 50.0, None).unwrap_err();
         assert!(matches!(err, SeedError::Invalid { .. }));
         assert!(
             err.to_string().contains("flat.bvh") && err.to_string().contains("unit"),
@@ -387,7 +438,7 @@ mod tests {
         );
         let short = dir.join("short.npy");
         crate::formats::npy::write_npy(&short, &Array2::<f64>::zeros((4, 98))).unwrap();
-        let err = load_seed(&short, ExpMapTarget::H36m, 25.0, 50.0).unwrap_err();
+        let err = load_seed(&short, ExpMapTarget::H36m, 25.0, 50.0, None).unwrap_err();
         assert!(
             err.to_string().contains("short.npy") && err.to_string().contains("98"),
             "{err}"

@@ -97,6 +97,11 @@ pub struct Args {
     /// Frame rate of exp-map seeds (.txt, .txt.gz, .npy), which files do not store.
     #[arg(long, value_name = "HZ", default_value_t = H36M_SOURCE_FPS)]
     pub input_fps: f64,
+    /// A JSON file mapping the H3.6M body joints to a BVH seed's own joint names
+    /// (`{"Hips": "pelvis", "LeftArm": "upperarm_l", ...}`, all 21 of them), for rigs the
+    /// built-in maps (CMU mocap BVH, Mixamo, Unreal mannequin) do not fit.
+    #[arg(long, value_name = "FILE.json")]
+    pub joint_map: Option<PathBuf>,
     /// Write BVH output at this rate (any, >= 1; rotations by slerp, the root linearly) instead
     /// of the model's (25 Hz for H3.6M models).
     #[arg(long, value_name = "HZ")]
@@ -122,6 +127,8 @@ struct Job {
     seed_end: Option<usize>,
     /// BVH output rate (`--fps`).
     out_fps: Option<f64>,
+    /// `--joint-map`.
+    joint_map: Option<PathBuf>,
 }
 
 /// What one prediction produced.
@@ -208,6 +215,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         input_fps: args.input_fps,
         seed_end: args.seed_end,
         out_fps: args.fps,
+        joint_map: args.joint_map.clone(),
     };
     if args.samples > 1 && job.model.config().architecture.name() == "gru-d" {
         args.reporting.notice(format_args!(
@@ -350,7 +358,13 @@ fn predict_one(
 ) -> anyhow::Result<Done> {
     let format = check_output(out)?;
     let config = job.model.config();
-    let seed = load_seed(seed_path, job.target, config.fps, job.input_fps)?;
+    let seed = load_seed(
+        seed_path,
+        job.target,
+        config.fps,
+        job.input_fps,
+        job.joint_map.as_deref(),
+    )?;
     let needed = config.seed_frames.max(1);
     let total = seed.frames.nrows();
     let end = job.seed_end.unwrap_or(total);
@@ -404,11 +418,22 @@ fn predict_one(
         .outer_iter()
         .map(|prediction| written(prediction, format))
         .collect();
+    // A seed on the user's own rig: BVH output goes back onto it, the rig's joints the model
+    // lacks taken from the written seed frames (then the last seed frame).
+    let rig = seed.rig.as_ref().map(|r| {
+        let last = end.max(1) - 1;
+        let from = first_written.min(last);
+        (
+            &r.retargeter,
+            r.frames.slice(s![from..end.max(from + 1), ..]),
+        )
+    });
     let clips = |samples| Clips {
         samples,
         fps: config.fps,
         out_fps: job.out_fps,
         target: job.target,
+        rig: rig.clone(),
     };
     let mut outputs = write_clips(out, format, &clips(&samples))?;
     if let Some(truth) = truth {

@@ -2,6 +2,8 @@
 //! several samples as `OUT_0`, `OUT_1`, ... or one `.npy` with a samples axis. Every file goes
 //! through a temporary file and a rename (the writers of `motion_core::formats` do that).
 use motion_core::resample::resample_bvh;
+use motion_core::retarget::Retargeter;
+use ndarray::ArrayView2;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -23,6 +25,9 @@ pub struct Clips<'a> {
     pub fps: f64,
     /// The rate BVH output is written at (`None`: `fps`).
     pub out_fps: Option<f64>,
+    /// The user's rig and its reference frames, when the seed was retargeted: BVH output goes
+    /// back onto the rig.
+    pub rig: Option<(&'a Retargeter, ArrayView2<'a, f64>)>,
     /// Their skeleton.
     pub target: ExpMapTarget,
 }
@@ -102,6 +107,10 @@ pub fn write_clips(
                         path.display()
                     )
                 })?;
+                let bvh = match &clips.rig {
+                    Some((retargeter, references)) => retargeter.to_rig(&bvh, references.view()),
+                    None => bvh,
+                };
                 let bvh = match clips.out_fps {
                     Some(fps) => resample_bvh(&bvh, fps),
                     None => bvh,

@@ -1,0 +1,836 @@
+//! Retargeting between a user's BVH rig and the H3.6M skeleton the models are trained on, both
+//! ways, through world-space rotations (`../shared/reference/skeletons.md`).
+//!
+//! ## Method
+//! - A [`JointMap`] pairs each of the 21 H3.6M body joints ([`MAPPED_JOINTS`]) with a joint of the
+//!   user's rig: built in for CMU mocap BVH conversions, Mixamo (any `prefix:`), the Unreal
+//!   mannequin, and the H3.6M names themselves; or read from a JSON file
+//!   (`{"LeftArm": "upperarm_l", ...}`: H3.6M name → rig name, [`JointMap::from_json`]).
+//!   Names match case-insensitively, on the part after the last `:`.
+//! - Rest poses: both skeletons with every channel 0. A global rotation `G` takes the rig's world
+//!   axes to the model's (from the hips → head and right → left hip directions, so z-up rigs
+//!   work); per mapped joint `m` an offset `Q_m` turns the model's rest bone direction (towards
+//!   its mapped child) onto the rig's (T-pose or A-pose against H3.6M's arms-up rest).
+//! - Rig → model: world rotation `W_m = G W_u G⁻¹ Q_m` for each mapped pair, identity local
+//!   rotation for unmapped model joints (fingers, sites); the hips' world position scaled from
+//!   the rig's units to millimetres by the ratio of body sizes.
+//! - Model → rig: `W_u = G⁻¹ W_m Q_m⁻¹ G` for mapped joints; every unmapped rig joint (an extra
+//!   spine or neck bone, fingers, twist bones, a `root` above the pelvis) keeps its local rotation
+//!   from a reference frame of the rig (the seed's own frames, then its last one), and the rig's
+//!   root position is solved so that its hips land where the model's are. A rig frame taken to
+//!   the model and back is unchanged (to float rounding).
+use std::path::Path;
+
+use glam::{DMat3, DQuat, DVec3};
+use ndarray::{Array2, ArrayView2};
+
+use crate::formats::bvh::Bvh;
+use crate::formats::expmap_bvh::continuous_euler_degrees;
+use crate::kinematics::local_transform;
+use crate::rotation::EulerOrder;
+use crate::skeleton::Skeleton;
+
+/// The H3.6M joints a rig must provide, in skeleton order (the thumbs, wrist ends and sites are
+/// left at rest).
+pub const MAPPED_JOINTS: [&str; 21] = [
+    "Hips",
+    "RightUpLeg",
+    "RightLeg",
+    "RightFoot",
+    "RightToeBase",
+    "LeftUpLeg",
+    "LeftLeg",
+    "LeftFoot",
+    "LeftToeBase",
+    "Spine",
+    "Spine1",
+    "Neck",
+    "Head",
+    "LeftShoulder",
+    "LeftArm",
+    "LeftForeArm",
+    "LeftHand",
+    "RightShoulder",
+    "RightArm",
+    "RightForeArm",
+    "RightHand",
+];
+
+/// Each mapped H3.6M joint's child that gives its bone direction (`None`: the joint keeps its
+/// parent's rest offset; the hips use the global alignment).
+const DIRECTION_CHILD: [Option<&str>; 21] = [
+    None,
+    Some("RightLeg"),
+    Some("RightFoot"),
+    Some("RightToeBase"),
+    None,
+    Some("LeftLeg"),
+    Some("LeftFoot"),
+    Some("LeftToeBase"),
+    None,
+    Some("Spine1"),
+    Some("Neck"),
+    Some("Head"),
+    None,
+    Some("LeftArm"),
+    Some("LeftForeArm"),
+    Some("LeftHand"),
+    None,
+    Some("RightArm"),
+    Some("RightForeArm"),
+    Some("RightHand"),
+    None,
+];
+
+/// Built-in rig name maps, in [`MAPPED_JOINTS`] order; the first whose names a rig has wins, so
+/// the rigs with a distinctive bone (CMU's `LowerBack`, Mixamo's `Spine2`) come first.
+const PRESETS: [(&str, [&str; 21]); 4] = [
+    (
+        "CMU mocap BVH",
+        [
+            "Hips",
+            "RightUpLeg",
+            "RightLeg",
+            "RightFoot",
+            "RightToeBase",
+            "LeftUpLeg",
+            "LeftLeg",
+            "LeftFoot",
+            "LeftToeBase",
+            "LowerBack",
+            "Spine",
+            "Neck",
+            "Head",
+            "LeftShoulder",
+            "LeftArm",
+            "LeftForeArm",
+            "LeftHand",
+            "RightShoulder",
+            "RightArm",
+            "RightForeArm",
+            "RightHand",
+        ],
+    ),
+    (
+        "Mixamo",
+        [
+            "Hips",
+            "RightUpLeg",
+            "RightLeg",
+            "RightFoot",
+            "RightToeBase",
+            "LeftUpLeg",
+            "LeftLeg",
+            "LeftFoot",
+            "LeftToeBase",
+            "Spine",
+            "Spine2",
+            "Neck",
+            "Head",
+            "LeftShoulder",
+            "LeftArm",
+            "LeftForeArm",
+            "LeftHand",
+            "RightShoulder",
+            "RightArm",
+            "RightForeArm",
+            "RightHand",
+        ],
+    ),
+    (
+        "Unreal mannequin",
+        [
+            "pelvis",
+            "thigh_r",
+            "calf_r",
+            "foot_r",
+            "ball_r",
+            "thigh_l",
+            "calf_l",
+            "foot_l",
+            "ball_l",
+            "spine_01",
+            "spine_03",
+            "neck_01",
+            "head",
+            "clavicle_l",
+            "upperarm_l",
+            "lowerarm_l",
+            "hand_l",
+            "clavicle_r",
+            "upperarm_r",
+            "lowerarm_r",
+            "hand_r",
+        ],
+    ),
+    ("H3.6M", MAPPED_JOINTS),
+];
+
+/// Why a rig cannot be retargeted.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum RetargetError {
+    /// No built-in map fits and no joint map was given: names the first H3.6M joint without a
+    /// match under the closest map.
+    #[error("the rig has no joint matching H3.6M {joint:?} (looked for {looked_for:?} as in a {rig} rig); give a joint map (--joint-map FILE.json)")]
+    Unmapped {
+        /// The H3.6M joint.
+        joint: String,
+        /// The name looked for.
+        looked_for: String,
+        /// The built-in map tried.
+        rig: String,
+    },
+    /// A joint map names a rig joint the rig does not have, or an H3.6M joint that does not exist.
+    #[error("the joint map names {name:?}, which the {side} has not")]
+    MapNamesMissingJoint {
+        /// The name.
+        name: String,
+        /// "rig" or "H3.6M skeleton".
+        side: &'static str,
+    },
+    /// A joint map leaves a required H3.6M joint out.
+    #[error("the joint map has no entry for H3.6M {0:?} (every one of {joints} is needed)", joints = MAPPED_JOINTS.join(", "))]
+    MapIncomplete(String),
+    /// The joint map file is not a JSON object of strings.
+    #[error("the joint map is not a JSON object of H3.6M name -> rig name strings: {0}")]
+    MapSyntax(String),
+    /// A rig joint whose rotation channels are not three about distinct axes.
+    #[error("rig joint {0:?} needs 3 rotation channels about distinct axes")]
+    Channels(String),
+    /// The rig's rest pose is degenerate (bones of zero length where a direction is needed).
+    #[error("the rig's rest pose gives no direction for {0:?} (zero-length bones)")]
+    Degenerate(String),
+}
+
+/// Which rig joint stands for each of [`MAPPED_JOINTS`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct JointMap {
+    /// Rig joint index per entry of [`MAPPED_JOINTS`].
+    user: [usize; 21],
+    /// What the map is (a built-in rig's name, or "joint map").
+    pub name: String,
+}
+
+/// A name as rigs are matched: after the last `:`, lower case.
+fn key(name: &str) -> String {
+    name.rsplit(':').next().unwrap_or(name).to_ascii_lowercase()
+}
+
+fn find(rig: &Skeleton, name: &str) -> Option<usize> {
+    let k = key(name);
+    rig.joints()
+        .iter()
+        .position(|j| !j.is_end_site && key(&j.name) == k)
+}
+
+impl JointMap {
+    /// The built-in map whose names the rig has; the error names the first H3.6M joint without
+    /// a match under the map that matched most.
+    pub fn detect(rig: &Skeleton) -> Result<JointMap, RetargetError> {
+        let mut best: Option<(usize, &str, usize)> = None;
+        for (name, names) in PRESETS {
+            let found: Vec<Option<usize>> = names.iter().map(|n| find(rig, n)).collect();
+            if let Some(user) = found.iter().copied().collect::<Option<Vec<_>>>() {
+                return Ok(JointMap {
+                    user: user.try_into().expect("21 joints"),
+                    name: name.to_string(),
+                });
+            }
+            let hits = found.iter().filter(|f| f.is_some()).count();
+            let missing = found
+                .iter()
+                .position(|f| f.is_none())
+                .expect("one is missing");
+            if best.is_none_or(|(h, _, _)| hits > h) {
+                best = Some((hits, name, missing));
+            }
+        }
+        let (_, rig_name, missing) = best.expect("presets exist");
+        let names = PRESETS
+            .iter()
+            .find(|p| p.0 == rig_name)
+            .expect("a preset")
+            .1;
+        Err(RetargetError::Unmapped {
+            joint: MAPPED_JOINTS[missing].to_string(),
+            looked_for: names[missing].to_string(),
+            rig: rig_name.to_string(),
+        })
+    }
+
+    /// A map from `(H3.6M name, rig name)` pairs covering every one of [`MAPPED_JOINTS`].
+    pub fn from_pairs(
+        rig: &Skeleton,
+        pairs: &[(String, String)],
+    ) -> Result<JointMap, RetargetError> {
+        let mut user = [usize::MAX; 21];
+        for (model, rig_name) in pairs {
+            let slot = MAPPED_JOINTS
+                .iter()
+                .position(|m| key(m) == key(model))
+                .ok_or_else(|| RetargetError::MapNamesMissingJoint {
+                    name: model.clone(),
+                    side: "H3.6M skeleton (or it is not one of the mapped body joints)",
+                })?;
+            user[slot] =
+                find(rig, rig_name).ok_or_else(|| RetargetError::MapNamesMissingJoint {
+                    name: rig_name.clone(),
+                    side: "rig",
+                })?;
+        }
+        if let Some(missing) = user.iter().position(|&u| u == usize::MAX) {
+            return Err(RetargetError::MapIncomplete(
+                MAPPED_JOINTS[missing].to_string(),
+            ));
+        }
+        Ok(JointMap {
+            user,
+            name: "joint map".into(),
+        })
+    }
+
+    /// A map from JSON text `{"Hips": "pelvis", "LeftArm": "upperarm_l", ...}` (H3.6M name → rig
+    /// name, every one of [`MAPPED_JOINTS`]).
+    pub fn from_json(rig: &Skeleton, text: &str) -> Result<JointMap, RetargetError> {
+        let value: serde_json::Value =
+            serde_json::from_str(text).map_err(|e| RetargetError::MapSyntax(e.to_string()))?;
+        let object = value
+            .as_object()
+            .ok_or_else(|| RetargetError::MapSyntax("not an object".into()))?;
+        let pairs = object
+            .iter()
+            .map(|(k, v)| {
+                v.as_str()
+                    .map(|s| (k.clone(), s.to_string()))
+                    .ok_or_else(|| {
+                        RetargetError::MapSyntax(format!("{k:?} maps to {v}, not a name"))
+                    })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        JointMap::from_pairs(rig, &pairs)
+    }
+
+    /// Whether the rig is the H3.6M skeleton itself (no retargeting needed).
+    pub fn is_identity(&self, rig: &Skeleton) -> bool {
+        self.name == "H3.6M" && rig.joints().iter().filter(|j| !j.is_end_site).count() == 32
+    }
+
+    /// Reads a joint map file (see [`JointMap::from_json`]); errors carry the path.
+    pub fn read(rig: &Skeleton, path: &Path) -> Result<JointMap, String> {
+        let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        JointMap::from_json(rig, &text).map_err(|e| format!("{}: {e}", path.display()))
+    }
+}
+
+/// A rig joint's channel layout.
+#[derive(Debug, Clone)]
+struct Layout {
+    start: usize,
+    rotation: Option<(EulerOrder, [usize; 3])>,
+    position: Vec<(usize, usize)>,
+}
+
+fn layouts(skeleton: &Skeleton) -> Result<Vec<Layout>, RetargetError> {
+    skeleton
+        .joints()
+        .iter()
+        .enumerate()
+        .map(|(j, joint)| {
+            let start = skeleton.channel_start(j);
+            let mut axes = Vec::new();
+            let mut cols = Vec::new();
+            let mut position = Vec::new();
+            for (k, c) in joint.channels.iter().enumerate() {
+                if c.is_rotation() {
+                    axes.push(c.axis());
+                    cols.push(k);
+                } else {
+                    position.push((c.axis(), k));
+                }
+            }
+            let rotation = match axes.len() {
+                0 => None,
+                3 => {
+                    let order = EulerOrder::from_axes([axes[0], axes[1], axes[2]])
+                        .ok_or_else(|| RetargetError::Channels(joint.name.clone()))?;
+                    Some((order, [cols[0], cols[1], cols[2]]))
+                }
+                _ => return Err(RetargetError::Channels(joint.name.clone())),
+            };
+            Ok(Layout {
+                start,
+                rotation,
+                position,
+            })
+        })
+        .collect()
+}
+
+/// Rest world positions (every channel 0).
+fn rest_positions(skeleton: &Skeleton) -> Vec<DVec3> {
+    let mut out: Vec<DVec3> = Vec::with_capacity(skeleton.len());
+    for joint in skeleton.joints() {
+        let p = DVec3::from_array(joint.offset);
+        out.push(joint.parent.map_or(p, |q| out[q] + p));
+    }
+    out
+}
+
+/// The rotation whose columns are the orthonormal frame of `up` and `side` (side made
+/// perpendicular).
+fn frame(up: DVec3, side: DVec3) -> Option<DMat3> {
+    let e1 = up.try_normalize()?;
+    let e2 = (side - e1 * side.dot(e1)).try_normalize()?;
+    Some(DMat3::from_cols(e1, e2, e1.cross(e2)))
+}
+
+/// Rig ↔ H3.6M retargeting (see the module docs).
+#[derive(Debug, Clone)]
+pub struct Retargeter {
+    model: Skeleton,
+    rig: Skeleton,
+    map: JointMap,
+    /// Rig world axes → model world axes.
+    g: DQuat,
+    /// Per entry of [`MAPPED_JOINTS`]: the rest offset `Q_m`.
+    q: [DQuat; 21],
+    /// Model index per entry of [`MAPPED_JOINTS`].
+    model_index: [usize; 21],
+    /// Rig length units per millimetre of the model (body size ratio).
+    scale: f64,
+    rig_layouts: Vec<Layout>,
+    /// For each rig joint, its entry in [`MAPPED_JOINTS`], if mapped.
+    rig_slot: Vec<Option<usize>>,
+}
+
+impl Retargeter {
+    /// Prepares retargeting between `rig` and the H3.6M skeleton under `map`.
+    pub fn new(rig: &Skeleton, map: JointMap) -> Result<Retargeter, RetargetError> {
+        let model = Skeleton::h36m();
+        let model_index: [usize; 21] = MAPPED_JOINTS.map(|n| find(&model, n).expect("H3.6M joint"));
+        let (pm, pu) = (rest_positions(&model), rest_positions(rig));
+        let slot_of = |name: &str| {
+            MAPPED_JOINTS
+                .iter()
+                .position(|m| *m == name)
+                .expect("mapped")
+        };
+        let at = |p: &[DVec3], idx: &[usize; 21], name: &str| p[idx[slot_of(name)]];
+        let span = |p: &[DVec3], idx: &[usize; 21]| {
+            (
+                at(p, idx, "Head") - at(p, idx, "Hips"),
+                at(p, idx, "LeftUpLeg") - at(p, idx, "RightUpLeg"),
+            )
+        };
+        let (mu, ms) = span(&pm, &model_index);
+        let (uu, us) = span(&pu, &map.user);
+        let fm = frame(mu, ms).expect("the H3.6M rest pose has a frame");
+        let fu = frame(uu, us).ok_or_else(|| RetargetError::Degenerate("Hips".into()))?;
+        let g = DQuat::from_mat3(&(fm * fu.transpose())).normalize();
+        // Body size: hips to head plus a leg, in each skeleton's units.
+        let size = |p: &[DVec3], idx: &[usize; 21]| {
+            (at(p, idx, "Head") - at(p, idx, "Hips")).length()
+                + (at(p, idx, "LeftFoot") - at(p, idx, "LeftUpLeg")).length()
+        };
+        let scale = size(&pu, &map.user) / size(&pm, &model_index);
+        if !(scale.is_finite() && scale > 0.0) {
+            return Err(RetargetError::Degenerate("Head".into()));
+        }
+        let mut q = [DQuat::IDENTITY; 21];
+        for s in 0..21 {
+            let Some(child) = DIRECTION_CHILD[s] else {
+                // Leaves keep their parent's offset (the hips: none).
+                if s > 0 {
+                    let parent = model.joint(model_index[s]).parent.expect("not the root");
+                    let ps = model_index
+                        .iter()
+                        .position(|&i| i == parent)
+                        .expect("mapped parent");
+                    q[s] = q[ps];
+                }
+                continue;
+            };
+            let c = slot_of(child);
+            let dm = pm[model_index[c]] - pm[model_index[s]];
+            let du = g * (pu[map.user[c]] - pu[map.user[s]]);
+            let (dm, du) = (
+                dm.try_normalize().expect("H3.6M bones have length"),
+                du.try_normalize().ok_or_else(|| {
+                    RetargetError::Degenerate(rig.joint(map.user[s]).name.clone())
+                })?,
+            );
+            q[s] = DQuat::from_rotation_arc(dm, du);
+        }
+        let mut rig_slot = vec![None; rig.len()];
+        for (s, &u) in map.user.iter().enumerate() {
+            rig_slot[u] = Some(s);
+        }
+        Ok(Retargeter {
+            rig_layouts: layouts(rig)?,
+            model,
+            rig: rig.clone(),
+            map,
+            g,
+            q,
+            model_index,
+            scale,
+            rig_slot,
+        })
+    }
+
+    /// The rig's size against the H3.6M skeleton's (rig units per millimetre).
+    pub fn scale(&self) -> f64 {
+        self.scale
+    }
+
+    /// The map in use.
+    pub fn map(&self) -> &JointMap {
+        &self.map
+    }
+
+    /// Rig BVH frames → a BVH on the H3.6M skeleton (millimetres, the rig's rate): mapped joints'
+    /// world rotations carried over, the others at rest, the hips' path scaled to millimetres.
+    pub fn to_model(&self, rig_frames: ArrayView2<'_, f64>, frame_time: f64) -> Bvh {
+        let model = &self.model;
+        let mut frames = Array2::zeros((rig_frames.nrows(), model.channel_count()));
+        let (mut wu, mut pu) = (
+            vec![DQuat::IDENTITY; self.rig.len()],
+            vec![DVec3::ZERO; self.rig.len()],
+        );
+        let mut wm = vec![DQuat::IDENTITY; model.len()];
+        let layouts = layouts(model).expect("the H3.6M skeleton has BVH channels");
+        let g_inv = self.g.inverse();
+        let hips = self.map.user[0];
+        for (t, row) in rig_frames.rows().into_iter().enumerate() {
+            let row = row.to_vec();
+            Retargeter::model_world(&self.rig, &row, &mut wu, &mut pu);
+            for (m, joint) in model.joints().iter().enumerate() {
+                let parent = joint.parent.map_or(DQuat::IDENTITY, |p| wm[p]);
+                wm[m] = match self.model_index.iter().position(|&i| i == m) {
+                    Some(s) => (self.g * wu[self.map.user[s]] * g_inv * self.q[s]).normalize(),
+                    None => parent,
+                };
+            }
+            let hips_mm = self.g * pu[hips] / self.scale;
+            let mut out = vec![0.0; model.channel_count()];
+            for (m, joint) in model.joints().iter().enumerate() {
+                let layout = &layouts[m];
+                let parent = joint.parent.map_or(DQuat::IDENTITY, |p| wm[p]);
+                if joint.parent.is_none() {
+                    let p = hips_mm - DVec3::from_array(joint.offset);
+                    for &(axis, k) in &layout.position {
+                        out[layout.start + k] = p[axis];
+                    }
+                }
+                if let Some((order, cols)) = layout.rotation {
+                    let before = (t > 0).then(|| cols.map(|c| frames[[t - 1, layout.start + c]]));
+                    let angles = continuous_euler_degrees(order, parent.inverse() * wm[m], before);
+                    for axis in 0..3 {
+                        out[layout.start + cols[axis]] = angles[axis];
+                    }
+                }
+            }
+            frames.row_mut(t).assign(&ndarray::ArrayView1::from(&out));
+        }
+        Bvh {
+            skeleton: model.clone(),
+            frames,
+            frame_time,
+        }
+    }
+
+    /// A BVH on the H3.6M skeleton → the rig's BVH at the same rate. Rig joints the map leaves
+    /// out take their local rotation (and non-root position channels) from `references` (row
+    /// `min(t, rows - 1)` for frame `t`: the seed's own frames, then its last).
+    pub fn to_rig(&self, model_bvh: &Bvh, references: ArrayView2<'_, f64>) -> Bvh {
+        let rig = &self.rig;
+        let model = &model_bvh.skeleton;
+        let n = model_bvh.frames.nrows();
+        let mut frames = Array2::zeros((n, rig.channel_count()));
+        let mut wm = vec![DQuat::IDENTITY; model.len()];
+        let mut pm = vec![DVec3::ZERO; model.len()];
+        let mut wu = vec![DQuat::IDENTITY; rig.len()];
+        let g_inv = self.g.inverse();
+        for t in 0..n {
+            Retargeter::model_world(
+                model,
+                model_bvh.frames.row(t).as_slice().expect("contiguous"),
+                &mut wm,
+                &mut pm,
+            );
+            let reference = references.row(t.min(references.nrows() - 1));
+            let mut row = reference.to_vec();
+            for (j, joint) in rig.joints().iter().enumerate() {
+                let parent = joint.parent.map_or(DQuat::IDENTITY, |p| wu[p]);
+                wu[j] = match self.rig_slot[j] {
+                    Some(s) => {
+                        (g_inv * wm[self.model_index[s]] * self.q[s].inverse() * self.g).normalize()
+                    }
+                    None => {
+                        let (r, _) =
+                            local_transform(rig, j, reference.as_slice().expect("contiguous"));
+                        parent * DQuat::from_mat3(&r).normalize()
+                    }
+                };
+                let layout = &self.rig_layouts[j];
+                if let Some((order, cols)) = layout.rotation {
+                    let local = parent.inverse() * wu[j];
+                    let before = (t > 0).then(|| cols.map(|c| frames[[t - 1, layout.start + c]]));
+                    let angles = continuous_euler_degrees(order, local, before);
+                    for axis in 0..3 {
+                        row[layout.start + cols[axis]] = angles[axis];
+                    }
+                }
+            }
+            // The root's position: the hips where the model's are (in rig units), through the
+            // chain of offsets (and position channels) from the root down to the hips.
+            let target = g_inv * pm[self.model_index[0]] * self.scale;
+            let mut chain = Vec::new();
+            let mut j = self.map.user[0];
+            while let Some(p) = rig.joint(j).parent {
+                chain.push(j);
+                j = p;
+            }
+            let mut offset = DVec3::ZERO;
+            for &k in &chain {
+                let (_, local_t) = local_transform(rig, k, &row);
+                let parent = rig.joint(k).parent.expect("in the chain");
+                offset += wu[parent] * local_t;
+            }
+            let root = rig.joint(0);
+            let p = target - offset - DVec3::from_array(root.offset);
+            let layout = &self.rig_layouts[0];
+            for &(axis, k) in &layout.position {
+                row[layout.start + k] = p[axis];
+            }
+            frames.row_mut(t).assign(&ndarray::ArrayView1::from(&row));
+        }
+        Bvh {
+            skeleton: rig.clone(),
+            frames,
+            frame_time: model_bvh.frame_time,
+        }
+    }
+
+    /// World rotations and positions (column vectors) of one frame of a BVH on `skeleton`.
+    fn model_world(
+        skeleton: &Skeleton,
+        frame: &[f64],
+        world: &mut [DQuat],
+        position: &mut [DVec3],
+    ) {
+        for (j, joint) in skeleton.joints().iter().enumerate() {
+            let (r, t) = local_transform(skeleton, j, frame);
+            let r = DQuat::from_mat3(&r).normalize();
+            match joint.parent {
+                None => {
+                    world[j] = r;
+                    position[j] = t;
+                }
+                Some(p) => {
+                    world[j] = world[p] * r;
+                    position[j] = position[p] + world[p] * t;
+                }
+            }
+        }
+    }
+}
+
+/// A CMU-style rig for examples and tests (not from any dataset): the 26 bones of the CMU mocap
+/// BVH conversions without fingers (extra hip, lower-back and neck bones), a T-pose, `ZYX`
+/// rotation channels, sized like an adult at `units_per_mm` (0.1: centimetres), names with
+/// `prefix` (e.g. `"mixamorig:"`), y up or (`z_up`) z up.
+pub fn demo_rig(prefix: &str, z_up: bool, units_per_mm: f64) -> Skeleton {
+    use crate::skeleton::{Channel::*, Joint};
+    let rot = vec![Zrotation, Yrotation, Xrotation];
+    let s = units_per_mm;
+    let o = |x: f64, y: f64, z: f64| {
+        let v = [x * s, y * s, z * s];
+        if z_up {
+            [v[0], -v[2], v[1]]
+        } else {
+            v
+        }
+    };
+    let spec: Vec<(&str, Option<usize>, [f64; 3])> = vec![
+        ("Hips", None, o(0.0, 0.0, 0.0)),                 // 0
+        ("LHipJoint", Some(0), o(60.0, -60.0, 20.0)),     // 1
+        ("LeftUpLeg", Some(1), o(60.0, -40.0, -20.0)),    // 2
+        ("LeftLeg", Some(2), o(0.0, -430.0, 0.0)),        // 3
+        ("LeftFoot", Some(3), o(0.0, -420.0, 0.0)),       // 4
+        ("LeftToeBase", Some(4), o(0.0, -30.0, 140.0)),   // 5
+        ("RHipJoint", Some(0), o(-60.0, -60.0, 20.0)),    // 6
+        ("RightUpLeg", Some(6), o(-60.0, -40.0, -20.0)),  // 7
+        ("RightLeg", Some(7), o(0.0, -430.0, 0.0)),       // 8
+        ("RightFoot", Some(8), o(0.0, -420.0, 0.0)),      // 9
+        ("RightToeBase", Some(9), o(0.0, -30.0, 140.0)),  // 10
+        ("LowerBack", Some(0), o(0.0, 20.0, 0.0)),        // 11
+        ("Spine", Some(11), o(0.0, 200.0, 0.0)),          // 12
+        ("Spine1", Some(12), o(0.0, 200.0, 0.0)),         // 13
+        ("Neck", Some(13), o(0.0, 80.0, 0.0)),            // 14
+        ("Neck1", Some(14), o(0.0, 60.0, 0.0)),           // 15
+        ("Head", Some(15), o(0.0, 80.0, 0.0)),            // 16
+        ("LeftShoulder", Some(13), o(30.0, 60.0, 0.0)),   // 17
+        ("LeftArm", Some(17), o(150.0, 0.0, 0.0)),        // 18
+        ("LeftForeArm", Some(18), o(280.0, 0.0, 0.0)),    // 19
+        ("LeftHand", Some(19), o(250.0, 0.0, 0.0)),       // 20
+        ("LThumb", Some(20), o(30.0, 0.0, 30.0)),         // 21
+        ("RightShoulder", Some(13), o(-30.0, 60.0, 0.0)), // 22
+        ("RightArm", Some(22), o(-150.0, 0.0, 0.0)),      // 23
+        ("RightForeArm", Some(23), o(-280.0, 0.0, 0.0)),  // 24
+        ("RightHand", Some(24), o(-250.0, 0.0, 0.0)),     // 25
+    ];
+    let joints = spec
+        .into_iter()
+        .map(|(name, parent, offset)| {
+            let mut channels = rot.clone();
+            if parent.is_none() {
+                channels = vec![
+                    Xposition, Yposition, Zposition, Zrotation, Yrotation, Xrotation,
+                ];
+            }
+            Joint::new(format!("{prefix}{name}"), parent, offset, channels)
+        })
+        .collect();
+    Skeleton::new(joints).unwrap()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kinematics::channel_positions;
+    use crate::skeleton::Joint;
+
+    fn cmu_rig(prefix: &str, z_up: bool) -> Skeleton {
+        demo_rig(prefix, z_up, 1.0 / 70.0)
+    }
+
+    /// Smooth rig frames: every rotation channel moving, the root walking.
+    fn frames(rig: &Skeleton, n: usize) -> Array2<f64> {
+        Array2::from_shape_fn((n, rig.channel_count()), |(t, c)| {
+            if c < 3 {
+                [3.0 * t as f64, 13.0, 0.5 * t as f64][c]
+            } else {
+                25.0 * ((t as f64) * 0.1 + c as f64 * 1.3).sin()
+            }
+        })
+    }
+
+    fn local_quats(rig: &Skeleton, frame: &[f64]) -> Vec<DQuat> {
+        (0..rig.len())
+            .map(|j| DQuat::from_mat3(&local_transform(rig, j, frame).0))
+            .collect()
+    }
+
+    #[test]
+    fn built_in_rigs_are_detected_and_a_missing_joint_is_named() {
+        assert_eq!(
+            JointMap::detect(&cmu_rig("", false)).unwrap().name,
+            "CMU mocap BVH"
+        );
+        assert_eq!(JointMap::detect(&Skeleton::h36m()).unwrap().name, "H3.6M");
+        let joints: Vec<Joint> = cmu_rig("", false)
+            .joints()
+            .iter()
+            .map(|j| {
+                let mut j = j.clone();
+                if j.name == "LeftForeArm" {
+                    j.name = "LeftElbow".into();
+                }
+                j
+            })
+            .collect();
+        let err = JointMap::detect(&Skeleton::new(joints).unwrap()).unwrap_err();
+        assert!(err.to_string().contains("\"LeftForeArm\""), "{err}");
+    }
+
+    #[test]
+    fn a_joint_map_file_maps_any_names_and_bad_maps_are_named() {
+        let rig = cmu_rig("Beta:", false);
+        let preset = PRESETS[0].1;
+        let pairs: Vec<String> = MAPPED_JOINTS
+            .iter()
+            .zip(preset)
+            .map(|(m, u)| format!("\"{m}\": \"Beta:{u}\""))
+            .collect();
+        let json = format!("{{{}}}", pairs.join(", "));
+        let map = JointMap::from_json(&rig, &json).unwrap();
+        assert_eq!(
+            map,
+            JointMap {
+                name: "joint map".into(),
+                ..JointMap::detect(&rig).unwrap()
+            }
+        );
+        let bad = json.replace("Beta:LeftHand\"", "Beta:LeftPaw\"");
+        assert!(JointMap::from_json(&rig, &bad)
+            .unwrap_err()
+            .to_string()
+            .contains("LeftPaw"));
+        let short = json.replace("\"Head\": \"Beta:Head\", ", "");
+        assert_eq!(
+            JointMap::from_json(&rig, &short),
+            Err(RetargetError::MapIncomplete("Head".into()))
+        );
+    }
+
+    #[test]
+    fn rig_to_model_and_back_is_the_identity_and_bones_keep_their_world_directions() {
+        for (prefix, z_up) in [("", false), ("mixamorig:", false), ("", true)] {
+            let rig = cmu_rig(prefix, z_up);
+            let r = Retargeter::new(&rig, JointMap::detect(&rig).unwrap()).unwrap();
+            assert!((r.scale() - 1.0 / 70.0).abs() < 0.2 / 70.0, "{}", r.scale());
+            let rig_frames = frames(&rig, 40);
+            let model = r.to_model(rig_frames.view(), 1.0 / 120.0);
+            // Bone directions: the model's bone towards its direction child points where the
+            // rig's does (in the model's axes).
+            let pm = channel_positions(&model.skeleton, model.frames.view()).unwrap();
+            let pu = channel_positions(&rig, rig_frames.view()).unwrap();
+            let h36m = Skeleton::h36m();
+            for t in [0, 17, 39] {
+                for (s, child) in DIRECTION_CHILD.iter().enumerate() {
+                    let Some(child) = child else { continue };
+                    let c = MAPPED_JOINTS.iter().position(|m| m == child).unwrap();
+                    // Only rigid segments: an unmapped rig bone between the two (CMU's Neck1)
+                    // moves the child in ways the model's one bone cannot show.
+                    if rig.joint(r.map.user[c]).parent != Some(r.map.user[s]) {
+                        continue;
+                    }
+                    let point = |p: &ndarray::Array3<f64>, j: usize| {
+                        DVec3::new(p[[t, j, 0]], p[[t, j, 1]], p[[t, j, 2]])
+                    };
+                    let (mj, mc) = (
+                        find(&h36m, MAPPED_JOINTS[s]).unwrap(),
+                        find(&h36m, child).unwrap(),
+                    );
+                    let dm = (point(&pm, mc) - point(&pm, mj)).normalize();
+                    let du =
+                        r.g * (point(&pu, r.map.user[c]) - point(&pu, r.map.user[s])).normalize();
+                    assert!(
+                        (dm - du).length() < 1e-9,
+                        "{prefix} t {t} {}: {dm} vs {du}",
+                        MAPPED_JOINTS[s]
+                    );
+                }
+            }
+            // And back: every local rotation and the root position as they were.
+            let back = r.to_rig(&model, rig_frames.view());
+            let mut worst: f64 = 0.0;
+            for t in 0..40 {
+                let a = local_quats(&rig, rig_frames.row(t).as_slice().unwrap());
+                let b = local_quats(&rig, back.frames.row(t).as_slice().unwrap());
+                for (qa, qb) in a.iter().zip(&b) {
+                    worst = worst.max(2.0 * (qa.inverse() * *qb).xyz().length());
+                }
+                for c in 0..3 {
+                    assert!((rig_frames[[t, c]] - back.frames[[t, c]]).abs() < 1e-9);
+                }
+            }
+            assert!(
+                worst.to_degrees() < 1e-4,
+                "{prefix}: {} deg",
+                worst.to_degrees()
+            );
+        }
+    }
+}
