@@ -433,7 +433,7 @@ fn predict_one(
         fps: config.fps,
         out_fps: job.out_fps,
         target: job.target,
-        rig: rig.clone(),
+        rig,
     };
     let mut outputs = write_clips(out, format, &clips(&samples))?;
     if let Some(truth) = truth {
