@@ -699,7 +699,7 @@ pub fn demo_rig(prefix: &str, z_up: bool, units_per_mm: f64) -> Skeleton {
 mod tests {
     use super::*;
     use crate::kinematics::channel_positions;
-    use crate::skeleton::Joint;
+    use crate::skeleton::{Channel, Joint};
 
     fn cmu_rig(prefix: &str, z_up: bool) -> Skeleton {
         demo_rig(prefix, z_up, 1.0 / 70.0)
@@ -829,6 +829,196 @@ mod tests {
             assert!(
                 worst.to_degrees() < 1e-4,
                 "{prefix}: {} deg",
+                worst.to_degrees()
+            );
+        }
+    }
+
+    /// A rig from `(name, parent, offset, rotation order)` rows (the root also gets positions).
+    fn rig(rows: &[(&str, &str, [f64; 3], &str)]) -> Skeleton {
+        let mut names: Vec<&str> = Vec::new();
+        let joints = rows
+            .iter()
+            .map(|&(name, parent, offset, order)| {
+                let parent = names.iter().position(|n| *n == parent);
+                names.push(name);
+                let mut channels: Vec<Channel> = order
+                    .chars()
+                    .map(|c| match c {
+                        'X' => Channel::Xrotation,
+                        'Y' => Channel::Yrotation,
+                        _ => Channel::Zrotation,
+                    })
+                    .collect();
+                if parent.is_none() {
+                    channels.splice(
+                        0..0,
+                        [Channel::Xposition, Channel::Yposition, Channel::Zposition],
+                    );
+                }
+                Joint::new(name, parent, offset, channels)
+            })
+            .collect();
+        Skeleton::new(joints).unwrap()
+    }
+
+    /// A Mixamo-style rig: centimetres, y up, T-pose, three spine bones, per-joint orders.
+    fn mixamo() -> Skeleton {
+        let m = |n: &str| format!("mixamorig:{n}");
+        let names: Vec<String> = [
+            "Hips",
+            "Spine",
+            "Spine1",
+            "Spine2",
+            "Neck",
+            "Head",
+            "LeftShoulder",
+            "LeftArm",
+            "LeftForeArm",
+            "LeftHand",
+            "LeftHandIndex1",
+            "RightShoulder",
+            "RightArm",
+            "RightForeArm",
+            "RightHand",
+            "LeftUpLeg",
+            "LeftLeg",
+            "LeftFoot",
+            "LeftToeBase",
+            "RightUpLeg",
+            "RightLeg",
+            "RightFoot",
+            "RightToeBase",
+        ]
+        .iter()
+        .map(|n| m(n))
+        .collect();
+        let n = |k: usize| names[k].as_str();
+        rig(&[
+            (n(0), "", [0.0, 100.0, 0.0], "YXZ"),
+            (n(1), n(0), [0.0, 10.0, 0.0], "ZXY"),
+            (n(2), n(1), [0.0, 12.0, 0.0], "ZXY"),
+            (n(3), n(2), [0.0, 14.0, 0.0], "ZXY"),
+            (n(4), n(3), [0.0, 16.0, 0.0], "ZXY"),
+            (n(5), n(4), [0.0, 10.0, 2.0], "ZXY"),
+            (n(6), n(3), [6.0, 12.0, 0.0], "ZXY"),
+            (n(7), n(6), [12.0, 0.0, 0.0], "ZXY"),
+            (n(8), n(7), [27.0, 0.0, 0.0], "XZY"),
+            (n(9), n(8), [26.0, 0.0, 0.0], "ZXY"),
+            (n(10), n(9), [9.0, 0.0, 2.0], "ZXY"),
+            (n(11), n(3), [-6.0, 12.0, 0.0], "ZXY"),
+            (n(12), n(11), [-12.0, 0.0, 0.0], "ZXY"),
+            (n(13), n(12), [-27.0, 0.0, 0.0], "XZY"),
+            (n(14), n(13), [-26.0, 0.0, 0.0], "ZXY"),
+            (n(15), n(0), [9.0, -6.0, 0.0], "ZXY"),
+            (n(16), n(15), [0.0, -42.0, 0.0], "ZXY"),
+            (n(17), n(16), [0.0, -41.0, 0.0], "ZXY"),
+            (n(18), n(17), [0.0, -8.0, 11.0], "ZXY"),
+            (n(19), n(0), [-9.0, -6.0, 0.0], "ZXY"),
+            (n(20), n(19), [0.0, -42.0, 0.0], "ZXY"),
+            (n(21), n(20), [0.0, -41.0, 0.0], "ZXY"),
+            (n(22), n(21), [0.0, -8.0, 11.0], "ZXY"),
+        ])
+    }
+
+    /// An Unreal-mannequin-style rig: centimetres, z up (x forward, y left), A-pose arms, a
+    /// `root` bone under the pelvis' parent, twist bones.
+    fn unreal() -> Skeleton {
+        let a = std::f64::consts::FRAC_1_SQRT_2;
+        rig(&[
+            ("root", "", [0.0, 0.0, 0.0], "ZXY"),
+            ("pelvis", "root", [0.0, 0.0, 96.0], "ZXY"),
+            ("spine_01", "pelvis", [0.0, 0.0, 11.0], "ZXY"),
+            ("spine_02", "spine_01", [0.0, 0.0, 14.0], "ZXY"),
+            ("spine_03", "spine_02", [0.0, 0.0, 14.0], "ZXY"),
+            ("neck_01", "spine_03", [0.0, 0.0, 16.0], "ZXY"),
+            ("head", "neck_01", [2.0, 0.0, 10.0], "ZXY"),
+            ("clavicle_l", "spine_03", [0.0, 6.0, 12.0], "ZXY"),
+            ("upperarm_l", "clavicle_l", [0.0, 14.0, 0.0], "ZXY"),
+            (
+                "upperarm_twist_01_l",
+                "upperarm_l",
+                [0.0, 5.0 * a, -5.0 * a],
+                "ZXY",
+            ),
+            (
+                "lowerarm_l",
+                "upperarm_l",
+                [0.0, 28.0 * a, -28.0 * a],
+                "ZXY",
+            ),
+            ("hand_l", "lowerarm_l", [0.0, 26.0 * a, -26.0 * a], "ZXY"),
+            ("clavicle_r", "spine_03", [0.0, -6.0, 12.0], "ZXY"),
+            ("upperarm_r", "clavicle_r", [0.0, -14.0, 0.0], "ZXY"),
+            (
+                "lowerarm_r",
+                "upperarm_r",
+                [0.0, -28.0 * a, -28.0 * a],
+                "ZXY",
+            ),
+            ("hand_r", "lowerarm_r", [0.0, -26.0 * a, -26.0 * a], "ZXY"),
+            ("thigh_l", "pelvis", [0.0, 9.0, -5.0], "ZXY"),
+            ("calf_l", "thigh_l", [0.0, 0.0, -43.0], "ZXY"),
+            ("foot_l", "calf_l", [0.0, 0.0, -42.0], "ZXY"),
+            ("ball_l", "foot_l", [12.0, 0.0, -8.0], "ZXY"),
+            ("thigh_r", "pelvis", [0.0, -9.0, -5.0], "ZXY"),
+            ("calf_r", "thigh_r", [0.0, 0.0, -43.0], "ZXY"),
+            ("foot_r", "calf_r", [0.0, 0.0, -42.0], "ZXY"),
+            ("ball_r", "foot_r", [12.0, 0.0, -8.0], "ZXY"),
+        ])
+    }
+
+    #[test]
+    fn mixamo_and_unreal_rigs_round_trip_and_stand_upright_on_the_model() {
+        for (rig, name) in [(mixamo(), "Mixamo"), (unreal(), "Unreal mannequin")] {
+            let map = JointMap::detect(&rig).unwrap();
+            assert_eq!(map.name, name);
+            let r = Retargeter::new(&rig, map).unwrap();
+            assert!(
+                (r.scale() - 0.1).abs() < 0.03,
+                "{name}: {} (centimetres)",
+                r.scale()
+            );
+            // The rest pose on the model: the head above the hips, the feet below, whatever
+            // the rig's up axis.
+            let rest = Array2::zeros((1, rig.channel_count()));
+            let model = r.to_model(rest.view(), 1.0 / 30.0);
+            let p = channel_positions(&model.skeleton, model.frames.view()).unwrap();
+            let h36m = Skeleton::h36m();
+            let y = |joint: &str| p[[0, find(&h36m, joint).unwrap(), 1]] - p[[0, 0, 1]];
+            assert!(
+                y("Head") > 400.0 && y("LeftFoot") < -600.0,
+                "{name}: {} {}",
+                y("Head"),
+                y("LeftFoot")
+            );
+            // T-pose / A-pose arms become the model's arms: hands level with or below the neck.
+            assert!(
+                y("LeftHand") < y("Neck") + 50.0,
+                "{name}: hand {} neck {}",
+                y("LeftHand"),
+                y("Neck")
+            );
+            let frames = frames(&rig, 30);
+            let model = r.to_model(frames.view(), 1.0 / 30.0);
+            let back = r.to_rig(&model, frames.view());
+            let mut worst: f64 = 0.0;
+            for t in 0..30 {
+                let a = local_quats(&rig, frames.row(t).as_slice().unwrap());
+                let b = local_quats(&rig, back.frames.row(t).as_slice().unwrap());
+                for (qa, qb) in a.iter().zip(&b) {
+                    worst = worst.max(2.0 * (qa.inverse() * *qb).xyz().length());
+                }
+                for c in 0..3 {
+                    assert!(
+                        (frames[[t, c]] - back.frames[[t, c]]).abs() < 1e-9,
+                        "{name}"
+                    );
+                }
+            }
+            assert!(
+                worst.to_degrees() < 1e-4,
+                "{name}: {} deg",
                 worst.to_degrees()
             );
         }
