@@ -5,42 +5,22 @@
 use std::path::Path;
 use std::sync::Arc;
 
-use motion_core::model::{ActionClassifier, MotionModel, WeightStore};
+use motion_core::model::{builtin, ActionClassifier, MotionModel};
 
 use crate::commands::UsageError;
 
-/// The file name of the default weights (as shipped in `weights/`).
-pub const DEFAULT_WEIGHTS_NAME: &str = "vgru_d_multi.safetensors";
-
-/// The embedded default weights, if the binary was built with them.
-#[cfg(default_weights)]
-const DEFAULT_WEIGHTS: Option<&[u8]> = Some(include_bytes!(env!("MOTION_DEFAULT_WEIGHTS")));
-#[cfg(not(default_weights))]
-const DEFAULT_WEIGHTS: Option<&[u8]> = None;
-
-/// The file name of the default action classifier (as shipped in `weights/`).
-pub const DEFAULT_CLASSIFIER_NAME: &str = "action_classifier.safetensors";
-
-#[cfg(default_classifier)]
-const DEFAULT_CLASSIFIER: Option<&[u8]> = Some(include_bytes!(env!("MOTION_DEFAULT_CLASSIFIER")));
-#[cfg(not(default_classifier))]
-const DEFAULT_CLASSIFIER: Option<&[u8]> = None;
+pub use motion_core::model::builtin::DEFAULT_WEIGHTS_NAME;
 
 /// Loads the action classifier of `--classifier PATH`, or the built-in one when `path` is `None`
 /// (usage errors, exit 2, as [`load_model`]).
 pub fn load_classifier(path: Option<&Path>) -> anyhow::Result<Arc<ActionClassifier>> {
     let classifier = match path {
         Some(path) => ActionClassifier::load(path),
-        None => {
-            let bytes = DEFAULT_CLASSIFIER.ok_or_else(|| {
-                UsageError(
-                    "no action classifier was built into this binary; pass --classifier FILE"
-                        .into(),
-                )
-            })?;
-            WeightStore::from_bytes(bytes, format!("<built-in {DEFAULT_CLASSIFIER_NAME}>"))
-                .and_then(|store| ActionClassifier::from_store(&store))
-        }
+        None => builtin::default_action_classifier().ok_or_else(|| {
+            UsageError(
+                "no action classifier was built into this binary; pass --classifier FILE".into(),
+            )
+        })?,
     };
     classifier
         .map(Arc::new)
@@ -49,7 +29,7 @@ pub fn load_classifier(path: Option<&Path>) -> anyhow::Result<Arc<ActionClassifi
 
 /// Whether this binary carries a built-in action classifier.
 pub fn has_default_classifier() -> bool {
-    DEFAULT_CLASSIFIER.is_some()
+    builtin::default_classifier().is_some()
 }
 
 /// Loads the model of `--model PATH`, or the built-in default weights when `path` is `None`.
@@ -60,15 +40,9 @@ pub fn has_default_classifier() -> bool {
 pub fn load_model(path: Option<&Path>) -> anyhow::Result<Arc<MotionModel>> {
     let model = match path {
         Some(path) => MotionModel::load(path),
-        None => {
-            let bytes = DEFAULT_WEIGHTS.ok_or_else(|| {
-                UsageError(
-                    "no default weights were built into this binary; pass --model FILE".into(),
-                )
-            })?;
-            WeightStore::from_bytes(bytes, format!("<built-in {DEFAULT_WEIGHTS_NAME}>"))
-                .and_then(|store| MotionModel::from_store(&store))
-        }
+        None => builtin::default_model().ok_or_else(|| {
+            UsageError("no default weights were built into this binary; pass --model FILE".into())
+        })?,
     };
     model
         .map(Arc::new)

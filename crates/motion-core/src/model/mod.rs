@@ -26,6 +26,7 @@
 //! # }
 //! ```
 pub mod batch;
+pub mod builtin;
 pub mod character;
 pub mod classifier;
 pub mod config;

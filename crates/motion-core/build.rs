@@ -1,6 +1,8 @@
-//! Embeds the default weights (`weights/vgru_d_multi.safetensors`) into `motion-cli` when the
-//! file exists at build time: sets `cfg(default_weights)` and `MOTION_DEFAULT_WEIGHTS` (the
-//! file's absolute path, for `include_bytes!`). Without the file the binary needs `--model`.
+//! With the `builtin-weights` feature, embeds the default weights
+//! (`weights/vgru_d_multi.safetensors`) into motion-core when the file exists at build time: sets
+//! `cfg(default_weights)` and `MOTION_DEFAULT_WEIGHTS` (the file's absolute path, for
+//! `include_bytes!`); [`model::builtin`](src/model/builtin.rs) hands them out to every front end
+//! (CLI, C ABI, web). Without the feature or the file, nothing is embedded.
 //!
 //! `MOTION_DEFAULT_WEIGHTS_FILE=PATH` at build time embeds another file instead (to try a
 //! candidate, or to test the embedding without touching `weights/`).
@@ -21,6 +23,9 @@ fn main() {
     println!("cargo::rustc-check-cfg=cfg(default_classifier)");
     println!("cargo::rerun-if-changed=build.rs");
     println!("cargo::rerun-if-env-changed={OVERRIDE_VAR}");
+    if std::env::var_os("CARGO_FEATURE_BUILTIN_WEIGHTS").is_none() {
+        return;
+    }
     let manifest = std::env::var("CARGO_MANIFEST_DIR").expect("cargo sets CARGO_MANIFEST_DIR");
     let root = Path::new(&manifest).join("../..");
     let weights_dir = root.join("weights");
