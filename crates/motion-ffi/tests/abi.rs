@@ -1,0 +1,122 @@
+//! The C ABI called as C would: status codes, `motion_last_error`, NULL handling, poses.
+use std::ffi::{CStr, CString};
+use std::ptr::{null, null_mut};
+
+use motion_ffi::*;
+
+fn last_error() -> String {
+    unsafe { CStr::from_ptr(motion_last_error()) }
+        .to_string_lossy()
+        .into_owned()
+}
+
+fn c(s: &str) -> CString {
+    CString::new(s).unwrap()
+}
+
+#[test]
+fn statuses_messages_and_poses() {
+    unsafe {
+        let fixture = c(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../tests/fixtures/parity/vgru_d.safetensors"
+        ));
+        let model = motion_model_load(fixture.as_ptr());
+        assert!(!model.is_null(), "{}", last_error());
+        assert_eq!(motion_model_joint_count(model), 32);
+        assert_eq!(
+            CStr::from_ptr(motion_model_joint_name(model, 0)).to_str(),
+            Ok("Hips")
+        );
+        assert!(motion_model_joint_name(model, 32).is_null());
+        assert_eq!(motion_model_action_index(model, c("walking").as_ptr()), 12);
+        assert_eq!(
+            motion_model_action_index(model, c("moonwalk").as_ptr()),
+            MotionStatus::BadInput as i32
+        );
+        assert!(
+            last_error().contains("walking"),
+            "lists the valid actions: {}",
+            last_error()
+        );
+        assert_eq!(
+            motion_model_action_index(null(), c("walking").as_ptr()),
+            MotionStatus::InvalidArgument as i32
+        );
+
+        let generator = motion_generator_new(model, 3);
+        let (mut p, mut r, mut q) = ([0f32; 3], [0f32; 4], vec![0f32; 4 * 32]);
+        let (pp, rp, qp) = (p.as_mut_ptr(), r.as_mut_ptr(), q.as_mut_ptr());
+        let step = |g| motion_generator_step_pose(g, pp, rp, qp, 32);
+        assert_eq!(step(generator), MotionStatus::State as i32);
+        assert!(last_error().contains("before a start"));
+        let frames = vec![0.1f32; 10 * 99];
+        assert_eq!(
+            motion_generator_start_frames(
+                generator,
+                frames.as_ptr(),
+                10,
+                98,
+                c("walking").as_ptr()
+            ),
+            MotionStatus::InvalidArgument as i32
+        );
+        assert_eq!(
+            motion_generator_start_frames(generator, frames.as_ptr(), 5, 99, c("walking").as_ptr()),
+            MotionStatus::BadInput as i32
+        );
+        assert_eq!(
+            motion_generator_start_frames(
+                generator,
+                frames.as_ptr(),
+                10,
+                99,
+                c("walking").as_ptr()
+            ),
+            0,
+            "{}",
+            last_error()
+        );
+        for _ in 0..30 {
+            assert_eq!(step(generator), 0, "{}", last_error());
+        }
+        let norm = |q: &[f32]| q.iter().map(|v| v * v).sum::<f32>().sqrt();
+        assert!((norm(&r) - 1.0).abs() < 1e-5);
+        assert!(q.chunks(4).all(|x| (norm(x) - 1.0).abs() < 1e-5));
+        assert_eq!(
+            r,
+            [q[0], q[1], q[2], q[3]],
+            "entry 0 is the root's rotation"
+        );
+        assert_eq!(
+            motion_generator_set_action(generator, c("eating").as_ptr()),
+            0
+        );
+        assert_eq!(
+            motion_generator_advance_pose(
+                generator,
+                1.0 / 60.0,
+                p.as_mut_ptr(),
+                r.as_mut_ptr(),
+                q.as_mut_ptr(),
+                31
+            ),
+            MotionStatus::InvalidArgument as i32
+        );
+        assert_eq!(
+            motion_generator_advance_pose(
+                generator,
+                1.0 / 60.0,
+                null_mut(),
+                r.as_mut_ptr(),
+                q.as_mut_ptr(),
+                32
+            ),
+            MotionStatus::InvalidArgument as i32
+        );
+        motion_generator_free(generator);
+        motion_generator_free(null_mut());
+        motion_model_free(model);
+        motion_model_free(null_mut());
+    }
+}
