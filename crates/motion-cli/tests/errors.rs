@@ -205,12 +205,8 @@ fn skeleton_mismatch_says_what_differs() {
         &[
             &"predict", &"--model", &m, &"--seed", &"cmu.bvh", &"--out", &"p.bvh",
         ],
-        &[
-            "cmu.bvh",
-            "skeleton does not match",
-            "joints",
-            "first differing joint is #1",
-        ],
+        // A CMU-style rig is retargeted (it is not refused), but 5 frames are too few.
+        &["cmu.bvh", "needs at least 10"],
     );
     // Same joint count, one joint renamed.
     let text = std::fs::read_to_string(walk_seed())

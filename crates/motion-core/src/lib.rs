@@ -76,6 +76,7 @@
 //! ```
 #![warn(missing_docs)]
 
+pub mod clip;
 pub mod derivatives;
 pub mod error;
 pub mod formats;

@@ -17,7 +17,7 @@ use crate::formats::FileFormat;
 use crate::motion::{Motion, MotionLayout};
 use crate::resample::resample_bvh;
 use crate::retarget::{JointMap, Retargeter};
-use crate::root::{integrate_root, RootPose};
+use crate::root::{delta_between, integrate_root, RootPose};
 use crate::skeleton::{Skeleton, H36M_SOURCE_FPS};
 
 /// Why a seed could not be loaded.
@@ -251,6 +251,62 @@ fn resample_expmap(
         .into_frames())
 }
 
+/// The seed window `start..end` the model reads. A window that starts at the clip's first frame
+/// has that frame's root "delta" relative to the world origin (the absolute start pose); the
+/// model was trained on frame-to-frame deltas, so that frame gets its successor's delta instead.
+pub fn model_window(
+    frames: &Array2<f64>,
+    start: usize,
+    end: usize,
+    target: ExpMapTarget,
+) -> Array2<f64> {
+    let mut window = frames.slice(s![start..end, ..]).to_owned();
+    if start == 0 && target == ExpMapTarget::H36m && window.nrows() > 1 {
+        let next = window.slice(s![1, 0..6]).to_owned();
+        window.slice_mut(s![0, 0..6]).assign(&next);
+    }
+    window
+}
+
+/// Frames `start..end` of the clip. With `anchor` (BVH output), the first frame's root delta is
+/// replaced by the absolute pose it has in the whole clip, so that the written frames stay where
+/// they were in the input; `poses` (exact absolute poses of the first frames, if known) are
+/// preferred to integrating the deltas.
+pub fn clip_window(
+    frames: &Array2<f64>,
+    start: usize,
+    end: usize,
+    target: ExpMapTarget,
+    fps: f64,
+    anchor: Option<Option<&[RootPose]>>,
+) -> Array2<f64> {
+    let mut window = frames.slice(s![start..end, ..]).to_owned();
+    let Some(poses) = anchor else {
+        return window;
+    };
+    if target == ExpMapTarget::H36m && start > 0 && end > start {
+        let step = ((H36M_SOURCE_FPS / fps).round() as usize).max(1);
+        let delta = |t: usize| {
+            let r = frames.row(t);
+            ([r[0], r[1], r[2]], [r[3], r[4], r[5]])
+        };
+        let pose = match poses {
+            Some(p) if start < p.len() => p[start],
+            Some(p) if start == p.len() && start > 0 => {
+                let (d, rd) = delta(start);
+                p[start - 1].advanced(d, rd, step)
+            }
+            _ => integrate_root(frames.slice(s![..=start, ..]), step)[start],
+        };
+        let (d, rd) = delta_between(&RootPose::IDENTITY, &pose, 1);
+        for axis in 0..3 {
+            window[[0, axis]] = d[axis];
+            window[[0, 3 + axis]] = rd[axis];
+        }
+    }
+    window
+}
+
 /// Sizes within this factor of the model's skeleton are taken as millimetres (people differ);
 /// outside it a BVH is rescaled.
 pub const UNITS_TOLERANCE: f64 = 1.3;
@@ -444,5 +500,19 @@ mod tests {
             "{err}"
         );
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn anchoring_puts_the_window_where_it_was() {
+        let mut frames = Array2::zeros((6, 99));
+        for t in 0..6 {
+            frames[[t, 2]] = 10.0; // 10 mm forward per source frame
+        }
+        let window = clip_window(&frames, 3, 6, ExpMapTarget::H36m, 25.0, Some(None));
+        // Frame 3 at 25 Hz: 10 (frame 0, once) + 3 steps * 2 source frames * 10 = 70 mm.
+        assert!((window[[0, 2]] - 70.0).abs() < 1e-9);
+        assert_eq!(window[[1, 2]], 10.0);
+        let input = model_window(&frames, 0, 6, ExpMapTarget::H36m);
+        assert_eq!(input[[0, 2]], 10.0);
     }
 }

@@ -1,6 +1,5 @@
 //! `motion-cli predict --seed SEQ --out OUT`: closed-loop prediction from a seed sequence (BVH,
 //! exp-map text or `.npy`), one file or a whole directory in parallel.
-mod output;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -8,7 +7,6 @@ use std::sync::Arc;
 use motion_core::formats::expmap_bvh::ExpMapTarget;
 use motion_core::formats::FileFormat;
 use motion_core::model::{ActionClassifier, BatchGenerator, ModelConfig, MotionModel, Noise};
-use motion_core::root::{delta_between, integrate_root, RootPose};
 use motion_core::skeleton::H36M_SOURCE_FPS;
 use ndarray::{s, Array2, Array3};
 use rayon::prelude::*;
@@ -16,8 +14,8 @@ use serde_json::{json, Value};
 
 use super::UsageError;
 use crate::model_source::{describe, load_model};
-use motion_core::seed::load_seed;
-use output::{check_output, write_clips, Clips};
+use motion_core::clip::{check_output, write_clips, Clips};
+use motion_core::seed::{clip_window, load_seed, model_window};
 
 /// The long help after the options: formats, conventions, examples.
 const LONG_HELP: &str = "\
@@ -268,16 +266,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 
 /// The built-in skeleton of the model's frames.
 fn target_of(config: &ModelConfig, model: &str) -> anyhow::Result<ExpMapTarget> {
-    [ExpMapTarget::H36m, ExpMapTarget::Cmu]
-        .into_iter()
-        .find(|t| t.skeleton().expmap_width() == config.frame_dims)
-        .ok_or_else(|| {
-            UsageError(format!(
-                "{model}: frames of {} values fit no built-in skeleton (99 = H3.6M, 117 = CMU)",
-                config.frame_dims
-            ))
-            .into()
-        })
+    ExpMapTarget::for_frame_dims(config.frame_dims).ok_or_else(|| {
+        UsageError(format!(
+            "{model}: frames of {} values fit no built-in skeleton (99 = H3.6M, 117 = CMU)",
+            config.frame_dims
+        ))
+        .into()
+    })
 }
 
 /// The classifier that infers each seed's action, if it can read the model's frames; otherwise
@@ -397,7 +392,7 @@ fn predict_one(
         ))
         .into());
     }
-    let input = model_input(&seed.frames, start, end, job.target);
+    let input = model_window(&seed.frames, start, end, job.target);
     let (action, inferred, action_notice) = resolve_action(job, &input, seed_path)?;
     let predictions = generate(job, action.as_deref(), &input)?;
     // What is written runs from the seed window's start (or, with --prediction-only, from the
@@ -450,62 +445,6 @@ fn predict_one(
         seed_frames: needed,
         notices,
     })
-}
-
-/// The seed window `start..end` the model reads. A window that starts at the clip's first frame
-/// has that frame's root "delta" relative to the world origin (the absolute start pose); the
-/// model was trained on frame-to-frame deltas, so that frame gets its successor's delta instead.
-fn model_input(
-    frames: &Array2<f64>,
-    start: usize,
-    end: usize,
-    target: ExpMapTarget,
-) -> Array2<f64> {
-    let mut window = frames.slice(s![start..end, ..]).to_owned();
-    if start == 0 && target == ExpMapTarget::H36m && window.nrows() > 1 {
-        let next = window.slice(s![1, 0..6]).to_owned();
-        window.slice_mut(s![0, 0..6]).assign(&next);
-    }
-    window
-}
-
-/// Frames `start..end` of the clip. With `anchor` (BVH output), the first frame's root delta is
-/// replaced by the absolute pose it has in the whole clip, so that the written frames stay where
-/// they were in the input; `poses` (exact absolute poses of the first frames, if known) are
-/// preferred to integrating the deltas.
-fn clip_window(
-    frames: &Array2<f64>,
-    start: usize,
-    end: usize,
-    target: ExpMapTarget,
-    fps: f64,
-    anchor: Option<Option<&[RootPose]>>,
-) -> Array2<f64> {
-    let mut window = frames.slice(s![start..end, ..]).to_owned();
-    let Some(poses) = anchor else {
-        return window;
-    };
-    if target == ExpMapTarget::H36m && start > 0 && end > start {
-        let step = ((H36M_SOURCE_FPS / fps).round() as usize).max(1);
-        let delta = |t: usize| {
-            let r = frames.row(t);
-            ([r[0], r[1], r[2]], [r[3], r[4], r[5]])
-        };
-        let pose = match poses {
-            Some(p) if start < p.len() => p[start],
-            Some(p) if start == p.len() && start > 0 => {
-                let (d, rd) = delta(start);
-                p[start - 1].advanced(d, rd, step)
-            }
-            _ => integrate_root(frames.slice(s![..=start, ..]), step)[start],
-        };
-        let (d, rd) = delta_between(&RootPose::IDENTITY, &pose, 1);
-        for axis in 0..3 {
-            window[[0, axis]] = d[axis];
-            window[[0, 3 + axis]] = rd[axis];
-        }
-    }
-    window
 }
 
 /// `job.samples` predictions of `job.frames` frames each: `[samples, frames, frame_dims]`.
@@ -691,19 +630,5 @@ mod tests {
                 PathBuf::from("o/b.bvh")
             ]
         );
-    }
-
-    #[test]
-    fn anchoring_puts_the_window_where_it_was() {
-        let mut frames = Array2::zeros((6, 99));
-        for t in 0..6 {
-            frames[[t, 2]] = 10.0; // 10 mm forward per source frame
-        }
-        let window = clip_window(&frames, 3, 6, ExpMapTarget::H36m, 25.0, Some(None));
-        // Frame 3 at 25 Hz: 10 (frame 0, once) + 3 steps * 2 source frames * 10 = 70 mm.
-        assert!((window[[0, 2]] - 70.0).abs() < 1e-9);
-        assert_eq!(window[[1, 2]], 10.0);
-        let input = model_input(&frames, 0, 6, ExpMapTarget::H36m);
-        assert_eq!(input[[0, 2]], 10.0);
     }
 }

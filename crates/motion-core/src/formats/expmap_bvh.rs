@@ -330,6 +330,13 @@ impl ExpMapTarget {
         }
     }
 
+    /// The built-in skeleton whose exp-map frames have `frame_dims` values (99: H3.6M, 117: CMU).
+    pub fn for_frame_dims(frame_dims: usize) -> Option<ExpMapTarget> {
+        [ExpMapTarget::H36m, ExpMapTarget::Cmu]
+            .into_iter()
+            .find(|t| t.skeleton().expmap_width() == frame_dims)
+    }
+
     /// The built-in skeleton.
     pub fn skeleton(self) -> Skeleton {
         match self {

@@ -1,21 +1,41 @@
-//! Writing predictions: `.bvh` (root integrated, imports into Blender), `.npy` or exp-map `.txt`;
-//! several samples as `OUT_0`, `OUT_1`, ... or one `.npy` with a samples axis. Every file goes
-//! through a temporary file and a rename (the writers of `motion_core::formats` do that).
-use motion_core::resample::resample_bvh;
-use motion_core::retarget::Retargeter;
-use ndarray::ArrayView2;
+//! Writing generated clips, the counterpart of [`crate::seed`]: `.bvh` (root integrated, on the
+//! model's skeleton or back on the user's rig, at the model's rate or any other), `.npy` or
+//! exp-map `.txt`; several samples as `OUT_0`, `OUT_1`, ... or one `.npy` with a samples axis.
+//! Every file goes through a temporary file and a rename (the writers of [`crate::formats`] do
+//! that).
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use motion_core::formats::bvh::write_bvh;
-use motion_core::formats::expmap_bvh::{expmap_to_bvh, ExpMapTarget};
-use motion_core::formats::h36m_text::write_expmap_text;
-use motion_core::formats::npy::write_npy;
-use motion_core::formats::FileFormat;
-use motion_core::motion::{Motion, MotionLayout};
-use ndarray::{Array2, Array3, Axis};
+use ndarray::{Array2, Array3, ArrayView2, Axis};
 
-use crate::commands::UsageError;
+use crate::error::{FormatError, MotionError};
+use crate::formats::bvh::write_bvh;
+use crate::formats::expmap_bvh::{expmap_to_bvh, ExpMapTarget};
+use crate::formats::h36m_text::write_expmap_text;
+use crate::formats::npy::write_npy;
+use crate::formats::FileFormat;
+use crate::motion::{Motion, MotionLayout};
+use crate::resample::resample_bvh;
+use crate::retarget::Retargeter;
+
+/// Why a clip could not be written.
+#[derive(Debug, thiserror::Error)]
+pub enum ClipError {
+    /// Writing failed (or the extension names no format).
+    #[error(transparent)]
+    Format(#[from] FormatError),
+    /// The frames do not form a motion on the skeleton.
+    #[error(transparent)]
+    Motion(#[from] MotionError),
+    /// The output cannot be written where it was asked (names the path).
+    #[error("{}: {problem}", path.display())]
+    Output {
+        /// The output path.
+        path: PathBuf,
+        /// What is wrong.
+        problem: String,
+    },
+}
 
 /// The clips to write: one `frames x frame_dims` exp-map array per sample, all of one length.
 pub struct Clips<'a> {
@@ -33,19 +53,17 @@ pub struct Clips<'a> {
 }
 
 /// Checks that `out` can be written (known extension, existing directory) before any work.
-pub fn check_output(out: &Path) -> anyhow::Result<FileFormat> {
+pub fn check_output(out: &Path) -> Result<FileFormat, ClipError> {
     let format = FileFormat::from_path(out)?;
     let dir = match out.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
     };
     if !dir.is_dir() {
-        return Err(UsageError(format!(
-            "{}: the output directory {} does not exist",
-            out.display(),
-            dir.display()
-        ))
-        .into());
+        return Err(ClipError::Output {
+            path: out.to_path_buf(),
+            problem: format!("the output directory {} does not exist", dir.display()),
+        });
     }
     Ok(format)
 }
@@ -71,7 +89,7 @@ pub fn write_clips(
     out: &Path,
     format: FileFormat,
     clips: &Clips<'_>,
-) -> anyhow::Result<Vec<PathBuf>> {
+) -> Result<Vec<PathBuf>, ClipError> {
     let n = clips.samples.len();
     if format == FileFormat::Npy && n > 1 {
         let (frames, dims) = clips.samples[0].dim();
@@ -101,11 +119,9 @@ pub fn write_clips(
                     frames.clone(),
                     clips.fps,
                 )?;
-                let bvh = expmap_to_bvh(&motion).map_err(|e| {
-                    anyhow::anyhow!(
-                        "{}: the prediction cannot be written as BVH: {e}",
-                        path.display()
-                    )
+                let bvh = expmap_to_bvh(&motion).map_err(|e| ClipError::Output {
+                    path: path.clone(),
+                    problem: format!("the prediction cannot be written as BVH: {e}"),
                 })?;
                 let bvh = match &clips.rig {
                     Some((retargeter, references)) => retargeter.to_rig(&bvh, references.view()),
