@@ -1,21 +1,13 @@
 //! `motion-cli convert IN OUT [--fps HZ] [--positions]`: between exp-map text, BVH and `.npy`,
 //! or from any of them to world joint positions.
-use std::path::{Path, PathBuf};
-use std::sync::Arc;
+use std::path::PathBuf;
 
-use anyhow::Context;
-use motion_core::formats::bvh::{read_bvh, write_bvh, Bvh};
-use motion_core::formats::expmap_bvh::{
-    bvh_to_expmap, expmap_to_bvh, offset_difference, ExpMapTarget,
+use motion_core::formats::any::{
+    format_name, positions, read_any, resample_any, write_channels, Described,
 };
-use motion_core::formats::h36m_text::{read_expmap_text, write_expmap_text};
-use motion_core::formats::npy::{read_npy_frames, write_npy};
+use motion_core::formats::npy::write_npy;
 use motion_core::formats::FileFormat;
-use motion_core::kinematics::channel_positions;
-use motion_core::motion::{Motion, MotionLayout, RootEncoding};
-use motion_core::resample::resample_bvh;
-use motion_core::skeleton::{Skeleton, CMU_FRAME_DIMS, H36M_FRAME_DIMS, H36M_SOURCE_FPS};
-use ndarray::{s, Array2, Array3};
+use motion_core::skeleton::H36M_SOURCE_FPS;
 use serde_json::json;
 
 use super::UsageError;
@@ -81,16 +73,6 @@ pub struct Args {
     pub reporting: super::output::Output,
 }
 
-/// A loaded input.
-enum Loaded {
-    /// Exp-map frames on a built-in skeleton.
-    ExpMap(Motion),
-    /// Exp-map frames of a width no built-in skeleton has (copy only).
-    Unknown { frames: Array2<f64>, fps: f64 },
-    /// A BVH file.
-    Bvh(Bvh),
-}
-
 /// Runs the command.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let in_format = FileFormat::from_path(&args.input)?;
@@ -112,12 +94,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
     }
 
-    let mut loaded = load(&args.input, in_format, args.input_fps)?;
+    let mut loaded = read_any(&args.input, args.input_fps)?;
     let input = Described::of(&loaded);
     let mut notices = Vec::new();
     if let Some(target) = args.fps {
         let how;
-        (loaded, how) = resample(loaded, target, &args.input)?;
+        (loaded, how) = resample_any(loaded, target, &args.input)?;
         notices.push(format!(
             "note: resampled {} fps to {} fps by {how} ({} -> {} frames)",
             input.fps,
@@ -133,7 +115,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         write_npy(&args.output, &positions)?;
         ("positions", positions.shape().to_vec())
     } else {
-        let shape = write_channels(&args, loaded, out_format, &mut notices)?;
+        let shape = write_channels(loaded, &args.input, &args.output, out_format, &mut notices)?;
         ("channels", shape)
     };
 
@@ -171,201 +153,4 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         ));
     }
     Ok(())
-}
-
-/// Writes the channels of `loaded` (BVH, exp-map text or `.npy`); returns the written shape
-/// (BVH: frames x channels).
-fn write_channels(
-    args: &Args,
-    loaded: Loaded,
-    out_format: FileFormat,
-    notices: &mut Vec<String>,
-) -> anyhow::Result<Vec<usize>> {
-    match out_format {
-        FileFormat::Bvh => {
-            let bvh = match loaded {
-                Loaded::Bvh(bvh) => bvh,
-                Loaded::ExpMap(motion) => expmap_to_bvh(&motion)
-                    .map_err(|e| UsageError(format!("{}: {e}", args.input.display())))?,
-                Loaded::Unknown { frames, .. } => {
-                    return Err(no_skeleton(&args.input, frames.ncols()))
-                }
-            };
-            write_bvh(&args.output, &bvh)?;
-            Ok(bvh.frames.shape().to_vec())
-        }
-        FileFormat::ExpMapText | FileFormat::Npy => {
-            let frames = match loaded {
-                Loaded::ExpMap(motion) => motion.into_frames(),
-                Loaded::Unknown { frames, .. } => frames,
-                Loaded::Bvh(bvh) => {
-                    let bad = |e: motion_core::formats::expmap_bvh::ConvertError| {
-                        UsageError(format!("{}: {e}", args.input.display()))
-                    };
-                    let target = ExpMapTarget::detect(&bvh).map_err(bad)?;
-                    let difference = offset_difference(&bvh, target);
-                    if difference > 1e-6 {
-                        notices.push(format!(
-                            "warning: {}: joint offsets differ from the built-in {} skeleton by up to {difference}; exp-map frames keep only rotations and the root motion (in the BVH's units)",
-                            args.input.display(),
-                            target.name()
-                        ));
-                    }
-                    bvh_to_expmap(&bvh, target).map_err(bad)?.into_frames()
-                }
-            };
-            if out_format == FileFormat::Npy {
-                write_npy(&args.output, &frames)?;
-            } else {
-                write_expmap_text(&args.output, frames.view())?;
-            }
-            Ok(frames.shape().to_vec())
-        }
-    }
-}
-
-/// Frames, rate and skeleton of a loaded motion, for the report.
-struct Described {
-    frames: usize,
-    fps: f64,
-    /// `None` for exp-map columns no built-in skeleton has.
-    skeleton: Option<String>,
-}
-
-impl Described {
-    fn of(loaded: &Loaded) -> Described {
-        match loaded {
-            Loaded::ExpMap(motion) => Described {
-                frames: motion.len(),
-                fps: motion.fps(),
-                // `load` puts H3.6M (root deltas) and CMU (absolute root) frames on their skeletons.
-                skeleton: Some(match motion.layout() {
-                    MotionLayout::ExpMap {
-                        root: RootEncoding::Deltas,
-                    } => format!("H3.6M {}-joint", motion.skeleton().len()),
-                    _ => format!("CMU {}-joint", motion.skeleton().len()),
-                }),
-            },
-            Loaded::Unknown { frames, fps } => Described {
-                frames: frames.nrows(),
-                fps: *fps,
-                skeleton: None,
-            },
-            Loaded::Bvh(bvh) => Described {
-                frames: bvh.frames.nrows(),
-                fps: bvh.fps(),
-                skeleton: Some(match ExpMapTarget::detect(bvh) {
-                    Ok(target) => format!("{} {}-joint", target.name(), target.skeleton().len()),
-                    Err(_) => format!("BVH {}-joint", bvh.skeleton.len()),
-                }),
-            },
-        }
-    }
-}
-
-fn format_name(format: FileFormat) -> &'static str {
-    match format {
-        FileFormat::ExpMapText => "exp-map text",
-        FileFormat::Bvh => "bvh",
-        FileFormat::Npy => "npy",
-    }
-}
-
-fn load(path: &Path, format: FileFormat, input_fps: f64) -> anyhow::Result<Loaded> {
-    let frames = match format {
-        FileFormat::Bvh => return Ok(Loaded::Bvh(read_bvh(path)?)),
-        FileFormat::ExpMapText => read_expmap_text(path)?,
-        FileFormat::Npy => read_npy_frames(path)?,
-    };
-    let (skeleton, root) = match frames.ncols() {
-        H36M_FRAME_DIMS => (Skeleton::h36m(), RootEncoding::Deltas),
-        CMU_FRAME_DIMS => (Skeleton::cmu(), RootEncoding::Absolute),
-        _ => {
-            return Ok(Loaded::Unknown {
-                frames,
-                fps: input_fps,
-            })
-        }
-    };
-    let motion = Motion::new(
-        Arc::new(skeleton),
-        MotionLayout::ExpMap { root },
-        frames,
-        input_fps,
-    )
-    .with_context(|| format!("{}: cannot be read as a motion", path.display()))?;
-    Ok(Loaded::ExpMap(motion))
-}
-
-/// `loaded` at `target` fps: a whole ratio k keeps every k-th frame (0, k, 2k, ...; for H3.6M the
-/// protocol's downsampling, root deltas untouched); any other ratio resamples by slerp in BVH
-/// space ([`motion_core::resample::resample_bvh`]). Returns the result and how it was done.
-fn resample(loaded: Loaded, target: f64, input: &Path) -> anyhow::Result<(Loaded, String)> {
-    let source_fps = match &loaded {
-        Loaded::ExpMap(motion) => motion.fps(),
-        Loaded::Unknown { fps, .. } => *fps,
-        Loaded::Bvh(bvh) => bvh.fps(),
-    };
-    let ratio = source_fps / target;
-    let k = ratio.round();
-    // BVH frame times are rounded in files (0.00833333 for 120 Hz): allow for that.
-    if k >= 1.0 && (ratio - k).abs() < 1e-3 * k {
-        let k = k as usize;
-        let keep = |frames: &Array2<f64>| frames.slice(s![..;k, ..]).to_owned();
-        let resampled = match loaded {
-            Loaded::ExpMap(motion) => {
-                let frames = keep(&motion.frames().to_owned());
-                Loaded::ExpMap(Motion::new(
-                    motion.skeleton().clone(),
-                    motion.layout(),
-                    frames,
-                    target,
-                )?)
-            }
-            Loaded::Unknown { frames, .. } => Loaded::Unknown {
-                frames: keep(&frames),
-                fps: target,
-            },
-            Loaded::Bvh(bvh) => Loaded::Bvh(Bvh {
-                frames: keep(&bvh.frames),
-                frame_time: bvh.frame_time * k as f64,
-                skeleton: bvh.skeleton,
-            }),
-        };
-        return Ok((resampled, format!("keeping 1 frame in {k}")));
-    }
-    let bvh = match loaded {
-        Loaded::Bvh(bvh) => bvh,
-        Loaded::ExpMap(motion) => expmap_to_bvh(&motion)
-            .map_err(|e| UsageError(format!("{}: {e}", input.display())))?,
-        Loaded::Unknown { frames, .. } => {
-            return Err(UsageError(format!(
-                "{}: {} columns fit no built-in skeleton, so only whole-ratio resampling (keeping every k-th frame) is possible, not {source_fps} fps to {target} fps",
-                input.display(),
-                frames.ncols()
-            ))
-            .into())
-        }
-    };
-    Ok((
-        Loaded::Bvh(resample_bvh(&bvh, target)),
-        "interpolating (rotations by slerp, positions linearly)".into(),
-    ))
-}
-
-fn positions(loaded: &Loaded, input: &Path) -> anyhow::Result<Array3<f64>> {
-    Ok(match loaded {
-        Loaded::ExpMap(motion) => motion.positions(),
-        Loaded::Bvh(bvh) => channel_positions(&bvh.skeleton, bvh.frames.view())
-            .with_context(|| format!("{}: forward kinematics", input.display()))?,
-        Loaded::Unknown { frames, .. } => return Err(no_skeleton(input, frames.ncols())),
-    })
-}
-
-fn no_skeleton(input: &Path, columns: usize) -> anyhow::Error {
-    UsageError(format!(
-        "{}: {columns} columns per frame fit no built-in skeleton ({H36M_FRAME_DIMS} = H3.6M, {CMU_FRAME_DIMS} = CMU), so there is no skeleton for BVH or positions",
-        input.display()
-    ))
-    .into()
 }

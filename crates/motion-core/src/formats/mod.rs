@@ -3,6 +3,7 @@ use std::path::Path;
 
 use crate::error::FormatError;
 
+pub mod any;
 pub mod bvh;
 pub mod expmap_bvh;
 pub mod h36m_text;

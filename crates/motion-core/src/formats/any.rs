@@ -1,0 +1,268 @@
+//! Any motion file, as `motion-cli convert` (and any front end) handles it: exp-map text or `.npy`
+//! on a built-in skeleton (by column count: 99 H3.6M, 117 CMU), exp-map columns of no known
+//! skeleton (copied only), or a BVH; read by extension, resampled to any rate, turned into world
+//! positions, and written as BVH, exp-map text or `.npy`.
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use ndarray::{s, Array2, Array3};
+
+use super::bvh::{read_bvh, write_bvh, Bvh};
+use super::expmap_bvh::{bvh_to_expmap, expmap_to_bvh, offset_difference, ExpMapTarget};
+use super::h36m_text::{read_expmap_text, write_expmap_text};
+use super::npy::{read_npy_frames, write_npy};
+use super::FileFormat;
+use crate::error::{FormatError, MotionError};
+use crate::kinematics::channel_positions;
+use crate::motion::{Motion, MotionLayout, RootEncoding};
+use crate::resample::resample_bvh;
+use crate::skeleton::{Skeleton, CMU_FRAME_DIMS, H36M_FRAME_DIMS};
+
+/// Why a motion file could not be read, converted or written.
+#[derive(Debug, thiserror::Error)]
+pub enum AnyMotionError {
+    /// Reading or writing failed.
+    #[error(transparent)]
+    Format(#[from] FormatError),
+    /// Frames that are not a motion on their skeleton.
+    #[error(transparent)]
+    Motion(#[from] MotionError),
+    /// The motion cannot be converted as asked (names the file).
+    #[error("{}: {problem}", path.display())]
+    Invalid {
+        /// The input file.
+        path: PathBuf,
+        /// What is impossible.
+        problem: String,
+    },
+}
+
+fn invalid(path: &Path, problem: impl std::fmt::Display) -> AnyMotionError {
+    AnyMotionError::Invalid {
+        path: path.to_path_buf(),
+        problem: problem.to_string(),
+    }
+}
+
+/// A motion read from any file.
+#[derive(Debug, Clone)]
+pub enum AnyMotion {
+    /// Exp-map frames on a built-in skeleton.
+    ExpMap(Motion),
+    /// Exp-map frames of a width no built-in skeleton has (copy only).
+    Unknown {
+        /// `frames x columns`.
+        frames: Array2<f64>,
+        /// The rate it was read at.
+        fps: f64,
+    },
+    /// A BVH file.
+    Bvh(Bvh),
+}
+
+/// Reads `path` (format by extension); exp-map files are taken to be at `input_fps`.
+pub fn read_any(path: &Path, input_fps: f64) -> Result<AnyMotion, AnyMotionError> {
+    let format = FileFormat::from_path(path)?;
+    let frames = match format {
+        FileFormat::Bvh => return Ok(AnyMotion::Bvh(read_bvh(path)?)),
+        FileFormat::ExpMapText => read_expmap_text(path)?,
+        FileFormat::Npy => read_npy_frames(path)?,
+    };
+    let (skeleton, root) = match frames.ncols() {
+        H36M_FRAME_DIMS => (Skeleton::h36m(), RootEncoding::Deltas),
+        CMU_FRAME_DIMS => (Skeleton::cmu(), RootEncoding::Absolute),
+        _ => {
+            return Ok(AnyMotion::Unknown {
+                frames,
+                fps: input_fps,
+            })
+        }
+    };
+    let motion = Motion::new(
+        Arc::new(skeleton),
+        MotionLayout::ExpMap { root },
+        frames,
+        input_fps,
+    )
+    .map_err(|e| invalid(path, format!("cannot be read as a motion: {e}")))?;
+    Ok(AnyMotion::ExpMap(motion))
+}
+
+/// `loaded` at `target` fps: a whole ratio k keeps every k-th frame (0, k, 2k, ...; for H3.6M the
+/// protocol's downsampling, root deltas untouched); any other ratio resamples by slerp in BVH
+/// space ([`motion_core::resample::resample_bvh`]). Returns the result and how it was done.
+pub fn resample_any(
+    loaded: AnyMotion,
+    target: f64,
+    input: &Path,
+) -> Result<(AnyMotion, String), AnyMotionError> {
+    let source_fps = match &loaded {
+        AnyMotion::ExpMap(motion) => motion.fps(),
+        AnyMotion::Unknown { fps, .. } => *fps,
+        AnyMotion::Bvh(bvh) => bvh.fps(),
+    };
+    let ratio = source_fps / target;
+    let k = ratio.round();
+    // BVH frame times are rounded in files (0.00833333 for 120 Hz): allow for that.
+    if k >= 1.0 && (ratio - k).abs() < 1e-3 * k {
+        let k = k as usize;
+        let keep = |frames: &Array2<f64>| frames.slice(s![..;k, ..]).to_owned();
+        let resampled = match loaded {
+            AnyMotion::ExpMap(motion) => {
+                let frames = keep(&motion.frames().to_owned());
+                AnyMotion::ExpMap(Motion::new(
+                    motion.skeleton().clone(),
+                    motion.layout(),
+                    frames,
+                    target,
+                )?)
+            }
+            AnyMotion::Unknown { frames, .. } => AnyMotion::Unknown {
+                frames: keep(&frames),
+                fps: target,
+            },
+            AnyMotion::Bvh(bvh) => AnyMotion::Bvh(Bvh {
+                frames: keep(&bvh.frames),
+                frame_time: bvh.frame_time * k as f64,
+                skeleton: bvh.skeleton,
+            }),
+        };
+        return Ok((resampled, format!("keeping 1 frame in {k}")));
+    }
+    let bvh = match loaded {
+        AnyMotion::Bvh(bvh) => bvh,
+        AnyMotion::ExpMap(motion) => expmap_to_bvh(&motion).map_err(|e| invalid(input, e))?,
+        AnyMotion::Unknown { frames, .. } => {
+            return Err(invalid(
+                input,
+                format!(
+                    "{} columns fit no built-in skeleton, so only whole-ratio resampling (keeping every k-th frame) is possible, not {source_fps} fps to {target} fps",
+                    frames.ncols()
+                ),
+            ))
+        }
+    };
+    Ok((
+        AnyMotion::Bvh(resample_bvh(&bvh, target)),
+        "interpolating (rotations by slerp, positions linearly)".into(),
+    ))
+}
+
+/// Writes the channels of `loaded` (BVH, exp-map text or `.npy`); returns the written shape
+/// (BVH: frames x channels).
+pub fn write_channels(
+    loaded: AnyMotion,
+    input: &Path,
+    output: &Path,
+    out_format: FileFormat,
+    notices: &mut Vec<String>,
+) -> Result<Vec<usize>, AnyMotionError> {
+    match out_format {
+        FileFormat::Bvh => {
+            let bvh = match loaded {
+                AnyMotion::Bvh(bvh) => bvh,
+                AnyMotion::ExpMap(motion) => {
+                    expmap_to_bvh(&motion).map_err(|e| invalid(input, e))?
+                }
+                AnyMotion::Unknown { frames, .. } => {
+                    return Err(no_skeleton(input, frames.ncols()))
+                }
+            };
+            write_bvh(output, &bvh)?;
+            Ok(bvh.frames.shape().to_vec())
+        }
+        FileFormat::ExpMapText | FileFormat::Npy => {
+            let frames = match loaded {
+                AnyMotion::ExpMap(motion) => motion.into_frames(),
+                AnyMotion::Unknown { frames, .. } => frames,
+                AnyMotion::Bvh(bvh) => {
+                    let bad = |e: super::expmap_bvh::ConvertError| invalid(input, e);
+                    let target = ExpMapTarget::detect(&bvh).map_err(bad)?;
+                    let difference = offset_difference(&bvh, target);
+                    if difference > 1e-6 {
+                        notices.push(format!(
+                            "warning: {}: joint offsets differ from the built-in {} skeleton by up to {difference}; exp-map frames keep only rotations and the root motion (in the BVH's units)",
+                            input.display(),
+                            target.name()
+                        ));
+                    }
+                    bvh_to_expmap(&bvh, target).map_err(bad)?.into_frames()
+                }
+            };
+            if out_format == FileFormat::Npy {
+                write_npy(output, &frames)?;
+            } else {
+                write_expmap_text(output, frames.view())?;
+            }
+            Ok(frames.shape().to_vec())
+        }
+    }
+}
+
+/// Frames, rate and skeleton of a loaded motion, for the report.
+pub struct Described {
+    /// Frames.
+    pub frames: usize,
+    /// Frame rate.
+    pub fps: f64,
+    /// `None` for exp-map columns no built-in skeleton has.
+    pub skeleton: Option<String>,
+}
+
+impl Described {
+    /// Describes `loaded`.
+    pub fn of(loaded: &AnyMotion) -> Described {
+        match loaded {
+            AnyMotion::ExpMap(motion) => Described {
+                frames: motion.len(),
+                fps: motion.fps(),
+                // `load` puts H3.6M (root deltas) and CMU (absolute root) frames on their skeletons.
+                skeleton: Some(match motion.layout() {
+                    MotionLayout::ExpMap {
+                        root: RootEncoding::Deltas,
+                    } => format!("H3.6M {}-joint", motion.skeleton().len()),
+                    _ => format!("CMU {}-joint", motion.skeleton().len()),
+                }),
+            },
+            AnyMotion::Unknown { frames, fps } => Described {
+                frames: frames.nrows(),
+                fps: *fps,
+                skeleton: None,
+            },
+            AnyMotion::Bvh(bvh) => Described {
+                frames: bvh.frames.nrows(),
+                fps: bvh.fps(),
+                skeleton: Some(match ExpMapTarget::detect(bvh) {
+                    Ok(target) => format!("{} {}-joint", target.name(), target.skeleton().len()),
+                    Err(_) => format!("BVH {}-joint", bvh.skeleton.len()),
+                }),
+            },
+        }
+    }
+}
+
+/// A format's name in reports.
+pub fn format_name(format: FileFormat) -> &'static str {
+    match format {
+        FileFormat::ExpMapText => "exp-map text",
+        FileFormat::Bvh => "bvh",
+        FileFormat::Npy => "npy",
+    }
+}
+
+/// World joint positions (`frames x joints x 3`, the file's units) of `loaded`.
+pub fn positions(loaded: &AnyMotion, input: &Path) -> Result<Array3<f64>, AnyMotionError> {
+    Ok(match loaded {
+        AnyMotion::ExpMap(motion) => motion.positions(),
+        AnyMotion::Bvh(bvh) => channel_positions(&bvh.skeleton, bvh.frames.view())
+            .map_err(|e| invalid(input, format!("forward kinematics: {e}")))?,
+        AnyMotion::Unknown { frames, .. } => return Err(no_skeleton(input, frames.ncols())),
+    })
+}
+
+fn no_skeleton(input: &Path, columns: usize) -> AnyMotionError {
+    invalid(
+        input,
+        format!("{columns} columns per frame fit no built-in skeleton ({H36M_FRAME_DIMS} = H3.6M, {CMU_FRAME_DIMS} = CMU), so there is no skeleton for BVH or positions"),
+    )
+}
