@@ -49,6 +49,16 @@ pub struct Motion {
     layout: MotionLayout,
 }
 
+/// The built-in skeleton and root encoding of exp-map frames `width` values wide: 99 = H3.6M
+/// (root deltas), 117 = CMU (absolute root); `None` for any other width.
+pub fn expmap_layout_for_width(width: usize) -> Option<(Skeleton, RootEncoding)> {
+    match width {
+        crate::skeleton::H36M_FRAME_DIMS => Some((Skeleton::h36m(), RootEncoding::Deltas)),
+        crate::skeleton::CMU_FRAME_DIMS => Some((Skeleton::cmu(), RootEncoding::Absolute)),
+        _ => None,
+    }
+}
+
 impl Motion {
     /// A motion; checks that the frame width fits the layout and that `fps` is finite and at
     /// least 1 (slower rates are not motion capture, and would make [`Motion::root_step`] integrate
@@ -89,6 +99,18 @@ impl Motion {
             frames,
             fps,
         )
+    }
+
+    /// Exp-map frames on the built-in skeleton their width names: 99 columns are H3.6M (root
+    /// deltas), 117 CMU (absolute root). `None` for any other width.
+    pub fn expmap_of_width(frames: Array2<f64>, fps: f64) -> Option<Result<Motion, MotionError>> {
+        let (skeleton, root) = expmap_layout_for_width(frames.ncols())?;
+        Some(Motion::new(
+            Arc::new(skeleton),
+            MotionLayout::ExpMap { root },
+            frames,
+            fps,
+        ))
     }
 
     /// All frames, `frames x channels`.

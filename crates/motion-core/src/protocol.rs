@@ -293,6 +293,20 @@ fn load_windows(
     Ok(out)
 }
 
+/// World joint positions (mm, `T x J x 3`) of protocol frames (25 Hz H3.6M exp-map frames, root
+/// deltas each applied [`ROOT_STEP_25HZ`] times, integrated from the first frame).
+pub fn protocol_positions(
+    skeleton: &crate::Skeleton,
+    frames: ArrayView2<'_, f64>,
+) -> Result<Array3<f64>, crate::MotionError> {
+    crate::kinematics::expmap_positions(
+        skeleton,
+        frames,
+        crate::RootEncoding::Deltas,
+        ROOT_STEP_25HZ,
+    )
+}
+
 /// The zero-velocity baseline of the angle protocols (Euler error, NPSS): the last seed frame
 /// repeated `horizon` times, dims 0..5 included.
 ///

@@ -22,7 +22,9 @@ use motion_core::formats::h36m_text::{downsample_protocol, read_expmap_text};
 use motion_core::formats::npy::read_npy_dyn;
 use motion_core::formats::FileFormat;
 use motion_core::kinematics::expmap_positions;
+use motion_core::motion::expmap_layout_for_width;
 use motion_core::protocol::expmap_batch_to_euler_protocol;
+use motion_core::protocol::ROOT_STEP_25HZ;
 use motion_core::skeleton::{CMU_FRAME_DIMS, H36M_FRAME_DIMS, H36M_JOINT_COUNT};
 use motion_core::{RootEncoding, Skeleton};
 use motion_metrics::ndms::{NdmsConfig, NdmsDatabase, NnMethod, WordFrame};
@@ -696,16 +698,18 @@ fn score_against_ground_truth(
 
 /// The exp-map skeleton of a frame width: (skeleton, root encoding, root step at 25 Hz).
 fn expmap_skeleton(width: usize, what: &str) -> Result<(Skeleton, RootEncoding, usize)> {
-    if width == H36M_FRAME_DIMS {
-        // Protocol data are 25 Hz frames whose root deltas each span two 50 Hz source frames.
-        Ok((Skeleton::h36m(), RootEncoding::Deltas, 2))
-    } else if width == CMU_FRAME_DIMS {
-        Ok((Skeleton::cmu(), RootEncoding::Absolute, 1))
-    } else {
-        Err(usage(format!(
+    let (skeleton, root) = expmap_layout_for_width(width).ok_or_else(|| {
+        usage(format!(
             "{what}: no built-in skeleton has {width}-dim exp-map frames (99 = H3.6M, 117 = CMU); give positions with --input-space raw"
-        )))
-    }
+        ))
+    })?;
+    // Protocol data are 25 Hz frames whose H3.6M root deltas each span two 50 Hz source frames.
+    let step = if root == RootEncoding::Deltas {
+        ROOT_STEP_25HZ
+    } else {
+        1
+    };
+    Ok((skeleton, root, step))
 }
 
 /// `T x J x 3` positions of one `T x W` sequence (FK of exp-map frames, or raw positions).

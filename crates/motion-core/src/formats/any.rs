@@ -3,7 +3,6 @@
 //! skeleton (copied only), or a BVH; read by extension, resampled to any rate, turned into world
 //! positions, and written as BVH, exp-map text or `.npy`.
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 
 use ndarray::{s, Array2, Array3};
 
@@ -14,9 +13,9 @@ use super::npy::{read_npy_frames, write_npy};
 use super::FileFormat;
 use crate::error::{FormatError, MotionError};
 use crate::kinematics::channel_positions;
-use crate::motion::{Motion, MotionLayout, RootEncoding};
+use crate::motion::{expmap_layout_for_width, Motion, MotionLayout, RootEncoding};
 use crate::resample::resample_bvh;
-use crate::skeleton::{Skeleton, CMU_FRAME_DIMS, H36M_FRAME_DIMS};
+use crate::skeleton::{CMU_FRAME_DIMS, H36M_FRAME_DIMS};
 
 /// Why a motion file could not be read, converted or written.
 #[derive(Debug, thiserror::Error)]
@@ -68,23 +67,15 @@ pub fn read_any(path: &Path, input_fps: f64) -> Result<AnyMotion, AnyMotionError
         FileFormat::ExpMapText => read_expmap_text(path)?,
         FileFormat::Npy => read_npy_frames(path)?,
     };
-    let (skeleton, root) = match frames.ncols() {
-        H36M_FRAME_DIMS => (Skeleton::h36m(), RootEncoding::Deltas),
-        CMU_FRAME_DIMS => (Skeleton::cmu(), RootEncoding::Absolute),
-        _ => {
-            return Ok(AnyMotion::Unknown {
-                frames,
-                fps: input_fps,
-            })
-        }
-    };
-    let motion = Motion::new(
-        Arc::new(skeleton),
-        MotionLayout::ExpMap { root },
-        frames,
-        input_fps,
-    )
-    .map_err(|e| invalid(path, format!("cannot be read as a motion: {e}")))?;
+    if expmap_layout_for_width(frames.ncols()).is_none() {
+        return Ok(AnyMotion::Unknown {
+            frames,
+            fps: input_fps,
+        });
+    }
+    let motion = Motion::expmap_of_width(frames, input_fps)
+        .expect("a built-in width")
+        .map_err(|e| invalid(path, format!("cannot be read as a motion: {e}")))?;
     Ok(AnyMotion::ExpMap(motion))
 }
 

@@ -22,19 +22,15 @@ use std::sync::Arc;
 use anyhow::Result;
 use ndarray::{concatenate, s, Array2, Array3, ArrayView2, ArrayView4, Axis};
 
-use motion_core::kinematics::expmap_positions;
-use motion_core::protocol::{expmap_batch_to_euler_protocol, WindowData};
+use motion_core::protocol::{expmap_batch_to_euler_protocol, protocol_positions, WindowData};
 use motion_core::skeleton::H36M_NDMS_JOINTS;
-use motion_core::{RootEncoding, Skeleton};
+use motion_core::Skeleton;
 use motion_metrics::ndms::{NdmsConfig, NdmsDatabase, NdmsReport};
 use motion_metrics::npss::{
     Npss, NpssWindow, SpectrumPower, NPSS_LONG_WINDOWS_25HZ, NPSS_WINDOWS_25HZ,
 };
 use motion_metrics::{apd, euler_error};
 
-/// Source frames per 25 Hz step: protocol frames are every other 50 Hz frame, so each root delta
-/// is applied twice when the root is integrated (`h36m.md`).
-const ROOT_STEP_25HZ: usize = 2;
 /// Frames of the last second at 25 Hz (joint-speed check).
 const LAST_SECOND_FRAMES: usize = 25;
 
@@ -132,12 +128,7 @@ impl ActionTruth {
             .min(horizon);
         let mut positions = Vec::with_capacity(reference_sequences.len());
         for sequence in reference_sequences {
-            positions.push(expmap_positions(
-                &skeleton,
-                sequence.view(),
-                RootEncoding::Deltas,
-                ROOT_STEP_25HZ,
-            )?);
+            positions.push(protocol_positions(&skeleton, sequence.view())?);
         }
         let position_views: Vec<_> = positions.iter().map(|p| p.view()).collect();
         let database = NdmsDatabase::from_sequences(
@@ -286,12 +277,7 @@ impl ActionTruth {
             for k in 0..samples {
                 let forecast = predictions.slice(s![w, k, .., ..]);
                 let joined = concatenate(Axis(0), &[window.seed.view(), forecast])?;
-                let positions = expmap_positions(
-                    &self.skeleton,
-                    joined.view(),
-                    RootEncoding::Deltas,
-                    ROOT_STEP_25HZ,
-                )?;
+                let positions = protocol_positions(&self.skeleton, joined.view())?;
                 let split = window.seed.nrows();
                 let future = positions.slice(s![split.., .., ..]);
                 flattened
@@ -426,7 +412,7 @@ fn last_second_speed(positions: ndarray::ArrayView3<'_, f64>, split: usize) -> f
 fn pose_speed(skeleton: &Skeleton, frames: ArrayView2<'_, f64>, split: usize) -> Result<f64> {
     let mut still = frames.to_owned();
     still.slice_mut(s![.., ..6]).fill(0.0);
-    let positions = expmap_positions(skeleton, still.view(), RootEncoding::Deltas, ROOT_STEP_25HZ)?;
+    let positions = protocol_positions(skeleton, still.view())?;
     Ok(last_second_speed(positions.view(), split))
 }
 
@@ -437,12 +423,7 @@ fn joined_speed(
     future: ArrayView2<'_, f64>,
 ) -> Result<Speed> {
     let joined = concatenate(Axis(0), &[seed.view(), future])?;
-    let positions = expmap_positions(
-        skeleton,
-        joined.view(),
-        RootEncoding::Deltas,
-        ROOT_STEP_25HZ,
-    )?;
+    let positions = protocol_positions(skeleton, joined.view())?;
     Ok(Speed {
         world: last_second_speed(positions.view(), seed.nrows()),
         pose: pose_speed(skeleton, joined.view(), seed.nrows())?,

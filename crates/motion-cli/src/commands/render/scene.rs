@@ -2,14 +2,13 @@
 //! `.npy`), their bones, and a fixed orthographic camera (a 3/4 view from the front right,
 //! slightly from above; y up).
 use std::path::Path;
-use std::sync::Arc;
 
 use motion_core::formats::bvh::read_bvh;
 use motion_core::formats::h36m_text::read_expmap_text;
 use motion_core::formats::npy::read_npy_dyn;
 use motion_core::formats::FileFormat;
 use motion_core::kinematics::channel_positions;
-use motion_core::motion::{Motion, MotionLayout, RootEncoding};
+use motion_core::motion::Motion;
 use motion_core::skeleton::{Skeleton, CMU_FRAME_DIMS, H36M_FRAME_DIMS};
 use ndarray::{Array2, Array3, Ix2, Ix3};
 
@@ -176,23 +175,16 @@ fn expmap_positions(
             format!("frame {t} has a NaN or infinite value"),
         ));
     }
-    let (skeleton, root) = match frames.ncols() {
-        H36M_FRAME_DIMS => (Skeleton::h36m(), RootEncoding::Deltas),
-        CMU_FRAME_DIMS => (Skeleton::cmu(), RootEncoding::Absolute),
-        n => {
-            return Err(usage(
+    let width = frames.ncols();
+    let motion = Motion::expmap_of_width(frames, fps)
+        .ok_or_else(|| {
+            usage(
                 path,
-                format!("{n} values per frame fit no built-in skeleton ({H36M_FRAME_DIMS} = H3.6M, {CMU_FRAME_DIMS} = CMU)"),
-            ))
-        }
-    };
-    let motion = Motion::new(
-        Arc::new(skeleton.clone()),
-        MotionLayout::ExpMap { root },
-        frames,
-        fps,
-    )
-    .map_err(|e| usage(path, e))?;
+                format!("{width} values per frame fit no built-in skeleton ({H36M_FRAME_DIMS} = H3.6M, {CMU_FRAME_DIMS} = CMU)"),
+            )
+        })?
+        .map_err(|e| usage(path, e))?;
+    let skeleton = (**motion.skeleton()).clone();
     Ok((skeleton, motion.positions()))
 }
 
