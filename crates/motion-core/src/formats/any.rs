@@ -4,18 +4,18 @@
 //! positions, and written as BVH, exp-map text or `.npy`.
 use std::path::{Path, PathBuf};
 
-use ndarray::{s, Array2, Array3};
+use ndarray::{s, Array2, Array3, Ix2, Ix3};
 
 use super::bvh::{read_bvh, write_bvh, Bvh};
 use super::expmap_bvh::{bvh_to_expmap, expmap_to_bvh, offset_difference, ExpMapTarget};
 use super::h36m_text::{read_expmap_text, write_expmap_text};
-use super::npy::{read_npy_frames, write_npy};
+use super::npy::{read_npy_dyn, read_npy_frames, write_npy};
 use super::FileFormat;
 use crate::error::{FormatError, MotionError};
 use crate::kinematics::channel_positions;
 use crate::motion::{expmap_layout_for_width, Motion, MotionLayout, RootEncoding};
 use crate::resample::resample_bvh;
-use crate::skeleton::{CMU_FRAME_DIMS, H36M_FRAME_DIMS};
+use crate::skeleton::{Skeleton, CMU_FRAME_DIMS, H36M_FRAME_DIMS};
 
 /// Why a motion file could not be read, converted or written.
 #[derive(Debug, thiserror::Error)]
@@ -256,4 +256,128 @@ fn no_skeleton(input: &Path, columns: usize) -> AnyMotionError {
         input,
         format!("{columns} columns per frame fit no built-in skeleton ({H36M_FRAME_DIMS} = H3.6M, {CMU_FRAME_DIMS} = CMU), so there is no skeleton for BVH or positions"),
     )
+}
+
+/// The positions of a motion file ([`read_positions`]).
+#[derive(Debug, Clone)]
+pub struct PositionTrack {
+    /// The skeleton the joints are of.
+    pub skeleton: Skeleton,
+    /// `frames x joints x 3`, the file's units.
+    pub positions: Array3<f64>,
+    /// Frames per second.
+    pub fps: f64,
+}
+
+/// World joint positions of a motion file, for drawing: exp-map files (no stored rate) are read
+/// at `input_fps`; a 3-D `.npy` is `samples x frames x dims` (sample `sample` is taken) or
+/// positions `frames x joints x 3` on the H3.6M (32) or CMU (38) skeleton. Every value finite,
+/// at least one frame.
+pub fn read_positions(
+    path: &Path,
+    input_fps: f64,
+    sample: usize,
+) -> Result<PositionTrack, AnyMotionError> {
+    let (skeleton, positions, fps) = match FileFormat::from_path(path)? {
+        FileFormat::Bvh => {
+            let bvh = read_bvh(path)?;
+            let positions = channel_positions(&bvh.skeleton, bvh.frames.view())
+                .map_err(|e| invalid(path, e))?;
+            let fps = bvh.fps();
+            (bvh.skeleton, positions, fps)
+        }
+        FileFormat::ExpMapText => {
+            let frames = read_expmap_text(path)?;
+            let (skeleton, positions) = frames_positions(path, frames, input_fps)?;
+            (skeleton, positions, input_fps)
+        }
+        FileFormat::Npy => {
+            let array = read_npy_dyn(path)?;
+            match array.ndim() {
+                2 => {
+                    let frames = array.into_dimensionality::<Ix2>().expect("2-D");
+                    let (skeleton, positions) = frames_positions(path, frames, input_fps)?;
+                    (skeleton, positions, input_fps)
+                }
+                3 => {
+                    let array = array.into_dimensionality::<Ix3>().expect("3-D");
+                    let (a, _, c) = array.dim();
+                    if c == 3 {
+                        let skeleton = match array.dim().1 {
+                            32 => Skeleton::h36m(),
+                            38 => Skeleton::cmu(),
+                            j => {
+                                return Err(invalid(
+                                    path,
+                                    format!("positions of {j} joints fit no built-in skeleton (32 = H3.6M, 38 = CMU)"),
+                                ))
+                            }
+                        };
+                        (skeleton, array, input_fps)
+                    } else {
+                        if sample >= a {
+                            return Err(invalid(
+                                path,
+                                format!(
+                                    "--sample {sample} is out of range: the file has {a} samples"
+                                ),
+                            ));
+                        }
+                        let frames = array.index_axis(ndarray::Axis(0), sample).to_owned();
+                        let (skeleton, positions) = frames_positions(path, frames, input_fps)?;
+                        (skeleton, positions, input_fps)
+                    }
+                }
+                _ => {
+                    return Err(invalid(
+                        path,
+                        format!(
+                            "expected a 2-D or 3-D array, found shape {:?}",
+                            array.shape()
+                        ),
+                    ))
+                }
+            }
+        }
+    };
+    if positions.dim().0 == 0 {
+        return Err(invalid(path, "no frames"));
+    }
+    if positions.iter().any(|v| !v.is_finite()) {
+        return Err(invalid(path, "has NaN or infinite values"));
+    }
+    Ok(PositionTrack {
+        skeleton,
+        positions,
+        fps,
+    })
+}
+
+/// World positions of exp-map frames on the skeleton their width names.
+fn frames_positions(
+    path: &Path,
+    frames: Array2<f64>,
+    fps: f64,
+) -> Result<(Skeleton, Array3<f64>), AnyMotionError> {
+    if let Some(t) = frames
+        .rows()
+        .into_iter()
+        .position(|r| r.iter().any(|v| !v.is_finite()))
+    {
+        return Err(invalid(
+            path,
+            format!("frame {t} has a NaN or infinite value"),
+        ));
+    }
+    let width = frames.ncols();
+    let motion = Motion::expmap_of_width(frames, fps)
+        .ok_or_else(|| {
+            invalid(
+                path,
+                format!("{width} values per frame fit no built-in skeleton ({H36M_FRAME_DIMS} = H3.6M, {CMU_FRAME_DIMS} = CMU)"),
+            )
+        })?
+        .map_err(|e| invalid(path, e))?;
+    let skeleton = (**motion.skeleton()).clone();
+    Ok((skeleton, motion.positions()))
 }

@@ -3,16 +3,9 @@
 //! slightly from above; y up).
 use std::path::Path;
 
-use motion_core::formats::bvh::read_bvh;
-use motion_core::formats::h36m_text::read_expmap_text;
-use motion_core::formats::npy::read_npy_dyn;
-use motion_core::formats::FileFormat;
-use motion_core::kinematics::channel_positions;
-use motion_core::motion::Motion;
-use motion_core::skeleton::{Skeleton, CMU_FRAME_DIMS, H36M_FRAME_DIMS};
-use ndarray::{Array2, Array3, Ix2, Ix3};
-
-use crate::commands::UsageError;
+use motion_core::formats::any::read_positions;
+use motion_core::skeleton::Skeleton;
+use ndarray::Array3;
 
 /// Which side of the body a bone is on (drawn in different shades).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -71,121 +64,21 @@ impl Track {
     }
 }
 
-fn usage(path: &Path, problem: impl std::fmt::Display) -> anyhow::Error {
-    UsageError(format!("{}: {problem}", path.display())).into()
-}
-
-/// Loads a motion file as a track. Exp-map files (no stored rate) are read at `input_fps`; a
-/// 3-D `.npy` is `samples x frames x dims` (sample `sample` is drawn) or positions
-/// `frames x joints x 3` on the H3.6M (32) or CMU (38) skeleton.
+/// Loads a motion file as a track ([`motion_core::formats::any::read_positions`]: BVH, exp-map
+/// text or `.npy` frames, a `samples x frames x dims` `.npy` (sample `sample` drawn) or positions
+/// `frames x joints x 3`).
 pub fn load_track(path: &Path, input_fps: f64, sample: usize) -> anyhow::Result<Track> {
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    let (skeleton, positions, fps) = match FileFormat::from_path(path)? {
-        FileFormat::Bvh => {
-            let bvh = read_bvh(path)?;
-            let positions =
-                channel_positions(&bvh.skeleton, bvh.frames.view()).map_err(|e| usage(path, e))?;
-            let fps = bvh.fps();
-            (bvh.skeleton, positions, fps)
-        }
-        FileFormat::ExpMapText => {
-            let frames = read_expmap_text(path)?;
-            let (skeleton, positions) = expmap_positions(path, frames, input_fps)?;
-            (skeleton, positions, input_fps)
-        }
-        FileFormat::Npy => {
-            let array = read_npy_dyn(path)?;
-            match array.ndim() {
-                2 => {
-                    let frames = array.into_dimensionality::<Ix2>().expect("2-D");
-                    let (skeleton, positions) = expmap_positions(path, frames, input_fps)?;
-                    (skeleton, positions, input_fps)
-                }
-                3 => {
-                    let array = array.into_dimensionality::<Ix3>().expect("3-D");
-                    let (a, _, c) = array.dim();
-                    if c == 3 {
-                        let skeleton = match array.dim().1 {
-                            32 => Skeleton::h36m(),
-                            38 => Skeleton::cmu(),
-                            j => {
-                                return Err(usage(
-                                    path,
-                                    format!("positions of {j} joints fit no built-in skeleton (32 = H3.6M, 38 = CMU)"),
-                                ))
-                            }
-                        };
-                        (skeleton, array, input_fps)
-                    } else {
-                        if sample >= a {
-                            return Err(usage(
-                                path,
-                                format!(
-                                    "--sample {sample} is out of range: the file has {a} samples"
-                                ),
-                            ));
-                        }
-                        let frames = array.index_axis(ndarray::Axis(0), sample).to_owned();
-                        let (skeleton, positions) = expmap_positions(path, frames, input_fps)?;
-                        (skeleton, positions, input_fps)
-                    }
-                }
-                _ => {
-                    return Err(usage(
-                        path,
-                        format!(
-                            "expected a 2-D or 3-D array, found shape {:?}",
-                            array.shape()
-                        ),
-                    ))
-                }
-            }
-        }
-    };
-    if positions.dim().0 == 0 {
-        return Err(usage(path, "no frames"));
-    }
-    if positions.iter().any(|v| !v.is_finite()) {
-        return Err(usage(path, "has NaN or infinite values"));
-    }
+    let track = read_positions(path, input_fps, sample)?;
     Ok(Track {
         name,
-        bones: bones(&skeleton, &positions),
-        positions,
-        fps,
+        bones: bones(&track.skeleton, &track.positions),
+        positions: track.positions,
+        fps: track.fps,
     })
-}
-
-/// World positions of exp-map frames on the skeleton their width names.
-fn expmap_positions(
-    path: &Path,
-    frames: Array2<f64>,
-    fps: f64,
-) -> anyhow::Result<(Skeleton, Array3<f64>)> {
-    if let Some(t) = frames
-        .rows()
-        .into_iter()
-        .position(|r| r.iter().any(|v| !v.is_finite()))
-    {
-        return Err(usage(
-            path,
-            format!("frame {t} has a NaN or infinite value"),
-        ));
-    }
-    let width = frames.ncols();
-    let motion = Motion::expmap_of_width(frames, fps)
-        .ok_or_else(|| {
-            usage(
-                path,
-                format!("{width} values per frame fit no built-in skeleton ({H36M_FRAME_DIMS} = H3.6M, {CMU_FRAME_DIMS} = CMU)"),
-            )
-        })?
-        .map_err(|e| usage(path, e))?;
-    let skeleton = (**motion.skeleton()).clone();
-    Ok((skeleton, motion.positions()))
 }
 
 /// Bones of the skeleton whose length (at frame 0) is over 1 mm; sides from the joint names.
