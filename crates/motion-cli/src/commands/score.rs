@@ -16,10 +16,8 @@ use ndarray::{
 use serde_json::{json, Map, Value};
 
 use crate::plot::{bin_points, per_frame_points, window_points, Chart, Series};
+use motion_core::formats::any::read_array;
 use motion_core::formats::bvh::read_bvh;
-use motion_core::formats::expmap_bvh::{bvh_to_expmap, ExpMapTarget};
-use motion_core::formats::h36m_text::{downsample_protocol, read_expmap_text};
-use motion_core::formats::npy::read_npy_dyn;
 use motion_core::formats::FileFormat;
 use motion_core::kinematics::expmap_positions;
 use motion_core::motion::expmap_layout_for_width;
@@ -461,59 +459,10 @@ fn load_group(paths: &[PathBuf], flag: &str) -> Result<Vec<(PathBuf, ArrayD<f64>
     files
         .into_iter()
         .map(|path| {
-            let array = read_any(&path, false)?;
+            let array = read_array(&path, false)?;
             Ok((path, array))
         })
         .collect()
-}
-
-/// One file as an array: .npy as stored, exp-map text and BVH as `T x D` exp-map frames
-/// (`downsample_text`: keep the even frames of text files, the protocol's 50 -> 25 Hz).
-fn read_any(path: &Path, downsample_text: bool) -> Result<ArrayD<f64>> {
-    let array = match FileFormat::from_path(path)? {
-        FileFormat::Npy => read_npy_dyn(path)?,
-        FileFormat::ExpMapText => {
-            let frames = read_expmap_text(path)?;
-            let frames = if downsample_text {
-                downsample_protocol(frames.view())
-            } else {
-                frames
-            };
-            frames.into_dyn()
-        }
-        FileFormat::Bvh => {
-            let bvh = read_bvh(path)?;
-            let target = ExpMapTarget::detect(&bvh).map_err(|e| {
-                usage(format!(
-                    "{}: {e} (scoring reads H3.6M or CMU skeletons)",
-                    path.display()
-                ))
-            })?;
-            let motion = bvh_to_expmap(&bvh, target)
-                .map_err(|e| usage(format!("{}: {e}", path.display())))?;
-            motion.frames().to_owned().into_dyn()
-        }
-    };
-    if array.is_empty() {
-        return Err(usage(format!(
-            "{}: empty input (shape {:?})",
-            path.display(),
-            array.shape()
-        )));
-    }
-    if let Some(flat) = array.iter().position(|v| !v.is_finite()) {
-        let mut index = vec![0; array.ndim()];
-        let mut rest = flat;
-        for (slot, &len) in index.iter_mut().zip(array.shape()).rev() {
-            *slot = rest % len;
-            rest /= len;
-        }
-        return Err(usage(format!(
-            "{}: non-finite value (NaN or infinity) at index {index:?}",
-            path.display()
-        )));
-    }
-    Ok(array)
 }
 
 fn default_space(group: &[(PathBuf, ArrayD<f64>)]) -> InputSpace {
@@ -809,7 +758,7 @@ fn score_ndms(
     let config = ndms_config(pred, skeleton)?;
     let mut references = Vec::new();
     for path in expand(db_paths)? {
-        let array = read_any(&path, true)?;
+        let array = read_array(&path, true)?;
         let what = path.display().to_string();
         // The database reads positions by shape: `T x J x 3` / `N x T x J x 3`; otherwise exp-map.
         let batch = if array.shape().last() == Some(&3) && array.ndim() >= 3 {

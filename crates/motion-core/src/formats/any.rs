@@ -4,11 +4,11 @@
 //! positions, and written as BVH, exp-map text or `.npy`.
 use std::path::{Path, PathBuf};
 
-use ndarray::{s, Array2, Array3, Ix2, Ix3};
+use ndarray::{s, Array2, Array3, ArrayD, Ix2, Ix3};
 
 use super::bvh::{read_bvh, write_bvh, Bvh};
 use super::expmap_bvh::{bvh_to_expmap, expmap_to_bvh, offset_difference, ExpMapTarget};
-use super::h36m_text::{read_expmap_text, write_expmap_text};
+use super::h36m_text::{downsample_protocol, read_expmap_text, write_expmap_text};
 use super::npy::{read_npy_dyn, read_npy_frames, write_npy};
 use super::FileFormat;
 use crate::error::{FormatError, MotionError};
@@ -380,4 +380,49 @@ fn frames_positions(
         .map_err(|e| invalid(path, e))?;
     let skeleton = (**motion.skeleton()).clone();
     Ok((skeleton, motion.positions()))
+}
+
+/// One file as an array, for scoring: `.npy` as stored (any rank), exp-map text and BVH (H3.6M
+/// or CMU skeleton) as `T x D` exp-map frames (`downsample_text`: keep the even frames of text
+/// files, the protocol's 50 -> 25 Hz). Not empty; every value finite (the error gives the index).
+pub fn read_array(path: &Path, downsample_text: bool) -> Result<ArrayD<f64>, AnyMotionError> {
+    let array = match FileFormat::from_path(path)? {
+        FileFormat::Npy => read_npy_dyn(path)?,
+        FileFormat::ExpMapText => {
+            let frames = read_expmap_text(path)?;
+            let frames = if downsample_text {
+                downsample_protocol(frames.view())
+            } else {
+                frames
+            };
+            frames.into_dyn()
+        }
+        FileFormat::Bvh => {
+            let bvh = read_bvh(path)?;
+            let target = ExpMapTarget::detect(&bvh).map_err(|e| {
+                invalid(path, format!("{e} (scoring reads H3.6M or CMU skeletons)"))
+            })?;
+            let motion = bvh_to_expmap(&bvh, target).map_err(|e| invalid(path, e))?;
+            motion.frames().to_owned().into_dyn()
+        }
+    };
+    if array.is_empty() {
+        return Err(invalid(
+            path,
+            format!("empty input (shape {:?})", array.shape()),
+        ));
+    }
+    if let Some(flat) = array.iter().position(|v| !v.is_finite()) {
+        let mut index = vec![0; array.ndim()];
+        let mut rest = flat;
+        for (slot, &len) in index.iter_mut().zip(array.shape()).rev() {
+            *slot = rest % len;
+            rest /= len;
+        }
+        return Err(invalid(
+            path,
+            format!("non-finite value (NaN or infinity) at index {index:?}"),
+        ));
+    }
+    Ok(array)
 }
