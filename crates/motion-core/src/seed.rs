@@ -379,13 +379,7 @@ pub fn rescale_bvh(bvh: &Bvh, factor: f64) -> Result<Bvh, String> {
 /// says what differs.
 pub fn check_skeleton(bvh: &Bvh, target: ExpMapTarget) -> Result<(), String> {
     let expected = target.skeleton();
-    let found: Vec<&str> = bvh
-        .skeleton
-        .joints()
-        .iter()
-        .filter(|j| !j.is_end_site)
-        .map(|j| j.name.as_str())
-        .collect();
+    let found: Vec<&str> = bvh.skeleton.body_joint_names();
     let first_difference = expected
         .joints()
         .iter()

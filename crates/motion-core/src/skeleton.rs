@@ -200,6 +200,15 @@ impl Skeleton {
         })
     }
 
+    /// The names of the joints that carry channels (End Sites aside), in skeleton order.
+    pub fn body_joint_names(&self) -> Vec<&str> {
+        self.joints
+            .iter()
+            .filter(|j| !j.is_end_site)
+            .map(|j| j.name.as_str())
+            .collect()
+    }
+
     /// All joints (including End Sites) in FK order (parents first).
     pub fn joints(&self) -> &[Joint] {
         &self.joints

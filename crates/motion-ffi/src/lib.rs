@@ -403,6 +403,24 @@ fn write_pose(
     Ok(0)
 }
 
+/// Moves `generator`'s clock by `dt` seconds (`None`: one model frame) and writes the pose.
+fn advance_and_write(
+    generator: *mut motion_generator,
+    dt: Option<f64>,
+    outputs: (*mut f32, *mut f32, *mut f32, usize),
+) -> Result<c_int, (MotionStatus, String)> {
+    let g = unsafe { generator.as_mut() }.ok_or_else(|| invalid("generator is NULL"))?;
+    if !g.started {
+        return Err((
+            MotionStatus::State,
+            "a pose was asked for before a start: seed the generator first".into(),
+        ));
+    }
+    let dt = dt.unwrap_or(1.0 / g.model.config().fps);
+    let pose = g.character.advance(dt).map_err(bad)?;
+    write_pose(pose, outputs.0, outputs.1, outputs.2, outputs.3)
+}
+
 /// The next model frame as a pose: the root's world position (metres) and rotation (`x, y, z,
 /// w`), and `joint_count` local rotations (`4 * joint_count` floats, `x, y, z, w` each, joint
 /// order of `motion_model_joint_name`; entry 0 is the root's world rotation again).
@@ -418,27 +436,8 @@ pub unsafe extern "C" fn motion_generator_step_pose(
     joint_rotations: *mut f32,
     joint_count: usize,
 ) -> c_int {
-    guard(|| {
-        let g = unsafe { generator.as_mut() }.ok_or_else(|| invalid("generator is NULL"))?;
-        if !g.started {
-            return Err((
-                MotionStatus::State,
-                "step before a start: seed the generator first".into(),
-            ));
-        }
-        let dt = 1.0 / g.model.config().fps;
-        let pose = g
-            .character
-            .advance(dt)
-            .map_err(|e| (MotionStatus::State, e.to_string()))?;
-        write_pose(
-            pose,
-            root_position,
-            root_rotation,
-            joint_rotations,
-            joint_count,
-        )
-    })
+    let outputs = (root_position, root_rotation, joint_rotations, joint_count);
+    guard(|| advance_and_write(generator, None, outputs))
 }
 
 /// Like `motion_generator_step_pose` at any rate: moves the character's clock by `dt` seconds
@@ -456,21 +455,6 @@ pub unsafe extern "C" fn motion_generator_advance_pose(
     joint_rotations: *mut f32,
     joint_count: usize,
 ) -> c_int {
-    guard(|| {
-        let g = unsafe { generator.as_mut() }.ok_or_else(|| invalid("generator is NULL"))?;
-        if !g.started {
-            return Err((
-                MotionStatus::State,
-                "advance before a start: seed the generator first".into(),
-            ));
-        }
-        let pose = g.character.advance(dt).map_err(bad)?;
-        write_pose(
-            pose,
-            root_position,
-            root_rotation,
-            joint_rotations,
-            joint_count,
-        )
-    })
+    let outputs = (root_position, root_rotation, joint_rotations, joint_count);
+    guard(|| advance_and_write(generator, Some(dt), outputs))
 }

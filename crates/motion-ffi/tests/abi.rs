@@ -49,7 +49,7 @@ fn statuses_messages_and_poses() {
         let (pp, rp, qp) = (p.as_mut_ptr(), r.as_mut_ptr(), q.as_mut_ptr());
         let step = |g| motion_generator_step_pose(g, pp, rp, qp, 32);
         assert_eq!(step(generator), MotionStatus::State as i32);
-        assert!(last_error().contains("before a start"));
+        assert!(last_error().contains("before a start"), "{}", last_error());
         let frames = vec![0.1f32; 10 * 99];
         assert_eq!(
             motion_generator_start_frames(

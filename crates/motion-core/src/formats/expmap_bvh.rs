@@ -355,13 +355,7 @@ impl ExpMapTarget {
 
     /// The built-in skeleton whose joints (End Sites aside) this BVH has, by name.
     pub fn detect(bvh: &Bvh) -> Result<ExpMapTarget, ConvertError> {
-        let joints: Vec<&str> = bvh
-            .skeleton
-            .joints()
-            .iter()
-            .filter(|j| !j.is_end_site)
-            .map(|j| j.name.as_str())
-            .collect();
+        let joints: Vec<&str> = bvh.skeleton.body_joint_names();
         for target in [ExpMapTarget::H36m, ExpMapTarget::Cmu] {
             let skeleton = target.skeleton();
             if joints.len() == skeleton.len()
