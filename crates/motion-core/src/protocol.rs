@@ -293,6 +293,23 @@ fn load_windows(
     Ok(out)
 }
 
+/// Both takes of `action` by `subject` at the protocol's 25 Hz (the even frames), those whose file
+/// exists (the NDMS word database of an action; paper 003 fills it from the test subject).
+pub fn load_subject_sequences(
+    dataset: &Path,
+    subject: &str,
+    action: &str,
+) -> Result<Vec<Array2<f64>>, FormatError> {
+    let mut out = Vec::new();
+    for sub in [1, 2] {
+        let path = sequence_file(dataset, subject, action, sub);
+        if path.is_file() {
+            out.push(downsample_protocol(read_expmap_text(&path)?.view()));
+        }
+    }
+    Ok(out)
+}
+
 /// World joint positions (mm, `T x J x 3`) of protocol frames (25 Hz H3.6M exp-map frames, root
 /// deltas each applied [`ROOT_STEP_25HZ`] times, integrated from the first frame).
 pub fn protocol_positions(

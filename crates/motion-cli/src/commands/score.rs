@@ -19,12 +19,12 @@ use crate::plot::{bin_points, per_frame_points, window_points, Chart, Series};
 use motion_core::formats::any::read_array;
 use motion_core::formats::bvh::read_bvh;
 use motion_core::formats::FileFormat;
-use motion_core::kinematics::expmap_positions;
-use motion_core::motion::expmap_layout_for_width;
+use motion_core::motion::Motion;
 use motion_core::protocol::expmap_batch_to_euler_protocol;
-use motion_core::protocol::ROOT_STEP_25HZ;
-use motion_core::skeleton::{CMU_FRAME_DIMS, H36M_FRAME_DIMS, H36M_JOINT_COUNT};
-use motion_core::{RootEncoding, Skeleton};
+use motion_core::skeleton::{
+    CMU_FRAME_DIMS, H36M_FRAME_DIMS, H36M_JOINT_COUNT, H36M_PROTOCOL_FPS as PROTOCOL_FPS,
+};
+use motion_core::Skeleton;
 use motion_metrics::ndms::{NdmsConfig, NdmsDatabase, NnMethod, WordFrame};
 use motion_metrics::npss::{Npss, SpectrumPower, NPSS_WINDOWS_25HZ};
 use motion_metrics::{
@@ -645,22 +645,6 @@ fn score_against_ground_truth(
 
 // ---------- positions (NDMS, APD) ----------
 
-/// The exp-map skeleton of a frame width: (skeleton, root encoding, root step at 25 Hz).
-fn expmap_skeleton(width: usize, what: &str) -> Result<(Skeleton, RootEncoding, usize)> {
-    let (skeleton, root) = expmap_layout_for_width(width).ok_or_else(|| {
-        usage(format!(
-            "{what}: no built-in skeleton has {width}-dim exp-map frames (99 = H3.6M, 117 = CMU); give positions with --input-space raw"
-        ))
-    })?;
-    // Protocol data are 25 Hz frames whose H3.6M root deltas each span two 50 Hz source frames.
-    let step = if root == RootEncoding::Deltas {
-        ROOT_STEP_25HZ
-    } else {
-        1
-    };
-    Ok((skeleton, root, step))
-}
-
 /// `T x J x 3` positions of one `T x W` sequence (FK of exp-map frames, or raw positions).
 fn sequence_positions(
     frames: ArrayView2<'_, f64>,
@@ -672,11 +656,16 @@ fn sequence_positions(
             .to_owned()
             .into_shape_with_order((frames.nrows(), j, 3))
             .expect("width = J·3")),
-        None => {
-            let (skeleton, root, step) = expmap_skeleton(frames.ncols(), what)?;
-            expmap_positions(&skeleton, frames, root, step)
-                .map_err(|e| usage(format!("{what}: {e}")))
-        }
+        // Exp-map frames at the protocol's 25 Hz, on the skeleton their width names.
+        None => Motion::expmap_of_width(frames.to_owned(), PROTOCOL_FPS)
+            .ok_or_else(|| {
+                usage(format!(
+                    "{what}: no built-in skeleton has {}-dim exp-map frames (99 = H3.6M, 117 = CMU); give positions with --input-space raw",
+                    frames.ncols()
+                ))
+            })?
+            .map(|motion| motion.positions())
+            .map_err(|e| usage(format!("{what}: {e}"))),
     }
 }
 

@@ -19,13 +19,12 @@ use std::sync::Arc;
 
 use anyhow::{Context, Result};
 
-use ndarray::{s, Array2, Array3, Array4};
+use ndarray::{s, Array3, Array4};
 use serde_json::{json, Map, Value};
 
-use motion_core::formats::h36m_text::{downsample_protocol, read_expmap_text};
 use motion_core::model::{ActionClassifier, BatchGenerator, MotionModel, Network, Noise};
 use motion_core::protocol::{
-    load_action_windows_covered, sequence_file, zero_velocity_held_root, ACTIONS,
+    load_action_windows_covered, load_subject_sequences, zero_velocity_held_root, ACTIONS,
     LONG_TERM_HORIZON, SEED_FRAMES, TEST_SUBJECT,
 };
 use motion_core::skeleton::{H36M_FRAME_DIMS, H36M_PROTOCOL_FPS};
@@ -194,7 +193,7 @@ pub fn run(args: Args) -> Result<()> {
                 windows.len()
             ));
         }
-        let references = reference_sequences(&dataset, planned.action)?;
+        let references = load_subject_sequences(&dataset, TEST_SUBJECT, planned.action)?;
         let truth = ActionTruth::new(windows, &references, horizon)?;
         drop(references);
         let reference = plausibility::reference(&dataset, planned.action)?;
@@ -312,19 +311,6 @@ fn check_model(model: &MotionModel) -> Result<(), UsageError> {
         )));
     }
     Ok(())
-}
-
-/// The action's S5 files at 25 Hz: the NDMS database (paper 003 fills it per action from the
-/// test sequences).
-fn reference_sequences(dataset: &std::path::Path, action: &str) -> Result<Vec<Array2<f64>>> {
-    let mut out = Vec::new();
-    for sub in [1, 2] {
-        let path = sequence_file(dataset, TEST_SUBJECT, action, sub);
-        if path.is_file() {
-            out.push(downsample_protocol(read_expmap_text(&path)?.view()));
-        }
-    }
-    Ok(out)
 }
 
 /// A well-mixed 64-bit seed for the plan noise of (action, window, sample): SplitMix64 steps.
