@@ -101,6 +101,10 @@ def build_parser() -> argparse.ArgumentParser:
                         "speed and acceleration are matched (log ratio) to the truth's over the same frames")
     g.add_argument("--long-burn-in", type=int, default=200, help="finetune: most frames run without gradient")
     g.add_argument("--long-frames", type=int, default=50, help="finetune: frames with gradient after the burn-in")
+    g.add_argument("--motion-loss", default="log", choices=["log", "hinge"],
+                   help="form of the speed and acceleration terms: 'log' = squared log ratio (its gradient at a "
+                        "frozen prediction is ~1/floor and swamps the rest after clipping); 'hinge' = squared "
+                        "shortfall below 0.8x the truth plus excess over 1.5x, as fractions of the truth (bounded)")
     g.add_argument("--freeze-dae", action="store_true",
                    help="finetune: keep the pre-trained autoencoder fixed (train the LSTM and decoder only)")
     g.add_argument("--init-dae", type=Path, metavar="CKPT", help="finetune: the dae stage's checkpoint")
@@ -191,6 +195,19 @@ def closed_loop_loss(model: DAELSTM, frames: torch.Tensor, actions: torch.Tensor
 
 
 SPEED_FLOOR = 1e-3  # radians per frame added to both speeds: sequences that stand still do not dominate
+HINGE_BAND = (0.8, 1.5)  # the hinge form: no penalty while prediction / truth is inside this band
+MOTION_LOSS = ["log"]  # the form of the speed and acceleration terms (set from --motion-loss by `train`)
+
+
+def ratio_loss(pred: torch.Tensor, truth: torch.Tensor, kind: str) -> torch.Tensor:
+    """Per-sequence penalty of a predicted motion magnitude against the truth's, averaged: ``log`` is the squared
+    log ratio; ``hinge`` is the squared shortfall below ``HINGE_BAND[0]`` plus the squared excess over
+    ``HINGE_BAND[1]``, both as fractions of the truth (a gradient bounded by ~2 / truth, zero inside the band)."""
+    if kind == "log":
+        return ((pred.log() - truth.log()) ** 2).mean()
+    ratio = pred / truth
+    low, high = HINGE_BAND
+    return (torch.relu(low - ratio) ** 2 + torch.relu(ratio - high) ** 2).mean()
 ACCEL_FLOOR = 1e-4  # radians per frame² added to both accelerations, likewise
 
 
@@ -205,7 +222,7 @@ def speed_loss(model: DAELSTM, pred: torch.Tensor, truth: torch.Tensor) -> torch
     def speed(x):
         return (x[:, 1:, joints] - x[:, :-1, joints]).abs().mul(scale).mean(dim=(1, 2)) + SPEED_FLOOR
 
-    return ((speed(pred).log() - speed(truth).log()) ** 2).mean()
+    return ratio_loss(speed(pred), speed(truth), MOTION_LOSS[0])
 
 
 def accel_loss(model: DAELSTM, pred: torch.Tensor, truth: torch.Tensor) -> torch.Tensor:
@@ -218,7 +235,7 @@ def accel_loss(model: DAELSTM, pred: torch.Tensor, truth: torch.Tensor) -> torch
         x = x[..., joints]
         return (x[:, 2:] - 2 * x[:, 1:-1] + x[:, :-2]).abs().mul(scale).mean(dim=(1, 2)) + ACCEL_FLOOR
 
-    return ((accel(pred).log() - accel(truth).log()) ** 2).mean()
+    return ratio_loss(accel(pred), accel(truth), MOTION_LOSS[0])
 
 
 def long_motion_loss(model: DAELSTM, frames: torch.Tensor, actions, seed: int, burn_in: int, length: int):
@@ -297,6 +314,7 @@ def build_config(args, dims_used) -> dict:
 
 
 def train(args, argv: list[str]) -> None:
+    MOTION_LOSS[0] = getattr(args, "motion_loss", "log")
     if args.stage is None or args.run_dir is None:
         raise SystemExit("error: training needs --stage and --run-dir (or --export with --from)")
     run_dir = args.run_dir

@@ -223,3 +223,16 @@ def test_bad_arguments_are_refused(tmp_path, synthetic):
         train_dae.main(["--stage", "finetune", "--run-dir", str(tmp_path / "b"), "--speed-weight", "1"] + TINY)
     with pytest.raises(SystemExit, match="init"):
         train_dae.main(["--stage", "finetune", "--run-dir", str(tmp_path / "c")] + TINY)
+
+
+def test_hinge_motion_loss_is_zero_in_band_and_bounded_at_a_frozen_prediction():
+    truth = torch.tensor([0.02, 0.05])
+    assert train_dae.ratio_loss(truth * 1.2, truth, "hinge").item() == 0.0
+    frozen = torch.full_like(truth, train_dae.SPEED_FLOOR).requires_grad_(True)
+    train_dae.ratio_loss(frozen, truth, "hinge").backward()
+    hinge_grad = frozen.grad.abs().max().item()
+    frozen_log = torch.full_like(truth, train_dae.SPEED_FLOOR).requires_grad_(True)
+    train_dae.ratio_loss(frozen_log, truth, "log").backward()
+    # The log form's gradient at a frozen prediction is ~1/floor; the hinge's ~1/truth.
+    assert hinge_grad < 0.1 * frozen_log.grad.abs().max().item()
+    assert train_dae.ratio_loss(truth * 0.5, truth, "hinge").item() == pytest.approx(0.3**2, rel=1e-5)
