@@ -240,6 +240,8 @@ fn serial(
     y_stride: usize,
     accumulate: bool,
 ) {
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = path; // panels are an x86-64 kernel; other targets run the portable product
     let (inputs, outputs) = (w.inputs, w.outputs);
     if inputs == 0 {
         if !accumulate {
