@@ -81,7 +81,7 @@ pub fn read_any(path: &Path, input_fps: f64) -> Result<AnyMotion, AnyMotionError
 
 /// `loaded` at `target` fps: a whole ratio k keeps every k-th frame (0, k, 2k, ...; for H3.6M the
 /// protocol's downsampling, root deltas untouched); any other ratio resamples by slerp in BVH
-/// space ([`motion_core::resample::resample_bvh`]). Returns the result and how it was done.
+/// space ([`crate::resample::resample_bvh`]). Returns the result and how it was done.
 pub fn resample_any(
     loaded: AnyMotion,
     target: f64,
