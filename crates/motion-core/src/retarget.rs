@@ -401,6 +401,10 @@ pub struct Retargeter {
     rig_layouts: Vec<Layout>,
     /// For each rig joint, its entry in [`MAPPED_JOINTS`], if mapped.
     rig_slot: Vec<Option<usize>>,
+    /// For each model joint, its entry in [`MAPPED_JOINTS`], if mapped.
+    model_slot: Vec<Option<usize>>,
+    /// The rig joints from the hips up to the root (exclusive), whose offsets place the hips.
+    hips_chain: Vec<usize>,
 }
 
 impl Retargeter {
@@ -465,6 +469,17 @@ impl Retargeter {
         for (s, &u) in map.user.iter().enumerate() {
             rig_slot[u] = Some(s);
         }
+        let mut model_slot = vec![None; model.len()];
+        for (s, &m) in model_index.iter().enumerate() {
+            model_slot[m] = Some(s);
+        }
+        // The rig joints from the hips up to (not including) the root.
+        let mut hips_chain = Vec::new();
+        let mut j = map.user[0];
+        while let Some(p) = rig.joint(j).parent {
+            hips_chain.push(j);
+            j = p;
+        }
         Ok(Retargeter {
             rig_layouts: layouts(rig)?,
             model,
@@ -475,6 +490,8 @@ impl Retargeter {
             model_index,
             scale,
             rig_slot,
+            model_slot,
+            hips_chain,
         })
     }
 
@@ -506,7 +523,7 @@ impl Retargeter {
             Retargeter::model_world(&self.rig, &row, &mut wu, &mut pu);
             for (m, joint) in model.joints().iter().enumerate() {
                 let parent = joint.parent.map_or(DQuat::IDENTITY, |p| wm[p]);
-                wm[m] = match self.model_index.iter().position(|&i| i == m) {
+                wm[m] = match self.model_slot[m] {
                     Some(s) => (self.g * wu[self.map.user[s]] * g_inv * self.q[s]).normalize(),
                     None => parent,
                 };
@@ -585,14 +602,8 @@ impl Retargeter {
             // The root's position: the hips where the model's are (in rig units), through the
             // chain of offsets (and position channels) from the root down to the hips.
             let target = g_inv * pm[self.model_index[0]] * self.scale;
-            let mut chain = Vec::new();
-            let mut j = self.map.user[0];
-            while let Some(p) = rig.joint(j).parent {
-                chain.push(j);
-                j = p;
-            }
             let mut offset = DVec3::ZERO;
-            for &k in &chain {
+            for &k in &self.hips_chain {
                 let (_, local_t) = local_transform(rig, k, &row);
                 let parent = rig.joint(k).parent.expect("in the chain");
                 offset += wu[parent] * local_t;
