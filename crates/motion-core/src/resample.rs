@@ -264,6 +264,43 @@ impl PoseResampler {
         Ok(&self.out)
     }
 
+    /// [`advance`](Self::advance) by any `dt`, calling `pull` to [`push`](Self::push) each
+    /// source pose it needs: a step longer than the held poses cover (a game's hitch) is walked
+    /// through one source frame at a time, and the returned root motion's deltas span the whole
+    /// `dt`.
+    pub fn advance_pulling<E: From<ResampleError>>(
+        &mut self,
+        dt: f64,
+        mut pull: impl FnMut(&mut PoseResampler) -> Result<(), E>,
+    ) -> Result<&Pose, E> {
+        if !(dt.is_finite() && dt >= 0.0) {
+            return Err(ResampleError::BadStep(dt).into());
+        }
+        let previous = self.time.map(|_| self.out.root_motion);
+        let mut left = dt;
+        let long = dt > self.source_dt;
+        while left > self.source_dt {
+            while self.needs(self.source_dt) {
+                pull(self)?;
+            }
+            self.advance(self.source_dt)?;
+            left -= self.source_dt;
+        }
+        while self.needs(left) {
+            pull(self)?;
+        }
+        self.advance(left)?;
+        if long {
+            let out = &mut self.out;
+            out.root_motion = root_motion_between(
+                out.root_translation.as_dvec3(),
+                out.local_rotations[0].as_dquat(),
+                previous,
+            );
+        }
+        Ok(&self.out)
+    }
+
     /// The output time `dt` from now, on the clock of the oldest held pose.
     fn target(&self, dt: f64) -> f64 {
         self.time.map_or(0.0, |t| t + dt)

@@ -86,73 +86,15 @@ pub fn load_seed(
     let mut poses = None;
     let mut rig = None;
     let frames = match FileFormat::from_path(path)? {
-        FileFormat::Bvh => {
-            let mut bvh = read_bvh(path)?;
-            if let Some(frame) = first_non_finite(&bvh.frames) {
-                return Err(usage(
-                    path,
-                    format!("frame {frame} has a NaN or infinite value"),
-                ));
-            }
-            let exact = check_skeleton(&bvh, target);
-            if exact.is_ok() && joint_map.is_none() {
-                let scale =
-                    unit_scale(&bvh.skeleton, &target.skeleton()).map_err(|e| usage(path, e))?;
-                if !(UNITS_TOLERANCE.recip()..=UNITS_TOLERANCE).contains(&scale) {
-                    notices.push(format!(
-                        "note: {}: the skeleton is {scale:.4} times the model's ({}): rescaled by {:.4}, root motion included",
-                        path.display(),
-                        units_guess(scale),
-                        scale.recip()
-                    ));
-                    bvh = rescale_bvh(&bvh, scale.recip()).map_err(|e| usage(path, e))?;
-                }
-            } else {
-                // Another rig: retarget it onto the model's skeleton (H3.6M models only).
-                let exact_problem = exact.err().unwrap_or_default();
-                if target != ExpMapTarget::H36m {
-                    return Err(usage(path, exact_problem));
-                }
-                let map = match joint_map {
-                    Some(file) => {
-                        JointMap::read(&bvh.skeleton, file).map_err(|e| usage(path, e))?
-                    }
-                    None => JointMap::detect(&bvh.skeleton)
-                        .map_err(|e| usage(path, format!("{exact_problem}, and {e}")))?,
-                };
-                let retargeter = Retargeter::new(&bvh.skeleton, map).map_err(|e| usage(path, e))?;
-                notices.push(format!(
-                    "note: {}: {} rig retargeted onto the model's H3.6M skeleton ({:.4} rig units per mm{})",
-                    path.display(),
-                    retargeter.map().name,
-                    retargeter.scale(),
-                    match units_guess(retargeter.scale()) {
-                        "unknown units" => String::new(),
-                        unit => format!(", {unit}"),
-                    }
-                ));
-                let frames = if same_rate(bvh.fps(), fps) {
-                    bvh.frames.clone()
-                } else {
-                    resample_bvh(&bvh, fps).frames
-                };
-                let model_bvh = retargeter.to_model(bvh.frames.view(), bvh.frame_time);
-                rig = Some(RigSeed { retargeter, frames });
-                bvh = model_bvh;
-            }
-            if !same_rate(bvh.fps(), fps) {
-                notices.push(format!(
-                    "note: {}: {} Hz resampled to the model's {} Hz (rotations by slerp)",
-                    path.display(),
-                    round_rate(bvh.fps()),
-                    round_rate(fps)
-                ));
-                bvh = resample_bvh(&bvh, fps);
-            }
-            bvh_to_expmap(&bvh, target)
-                .map_err(|e| usage(path, e))?
-                .into_frames()
-        }
+        FileFormat::Bvh => bvh_frames(
+            read_bvh(path)?,
+            path,
+            target,
+            fps,
+            joint_map,
+            &mut notices,
+            &mut rig,
+        )?,
         format => {
             let frames = if format == FileFormat::Npy {
                 read_npy_frames(path)?
@@ -188,6 +130,100 @@ pub fn load_seed(
         notices,
         rig,
     })
+}
+
+/// [`load_seed`] for a BVH already in memory (parsed with
+/// [`crate::formats::bvh::parse_bvh`], e.g. in a browser that has no files): `label` names it in
+/// errors and notices.
+pub fn seed_from_bvh(
+    bvh: Bvh,
+    label: &Path,
+    target: ExpMapTarget,
+    fps: f64,
+    joint_map: Option<&Path>,
+) -> Result<Seed, SeedError> {
+    let mut notices = Vec::new();
+    let mut rig = None;
+    let frames = bvh_frames(bvh, label, target, fps, joint_map, &mut notices, &mut rig)?;
+    Ok(Seed {
+        frames,
+        poses: None,
+        notices,
+        rig,
+    })
+}
+
+/// The BVH case of [`load_seed`]: checked, rescaled, retargeted and resampled exp-map frames.
+fn bvh_frames(
+    mut bvh: Bvh,
+    path: &Path,
+    target: ExpMapTarget,
+    fps: f64,
+    joint_map: Option<&Path>,
+    notices: &mut Vec<String>,
+    rig: &mut Option<RigSeed>,
+) -> Result<Array2<f64>, SeedError> {
+    if let Some(frame) = first_non_finite(&bvh.frames) {
+        return Err(usage(
+            path,
+            format!("frame {frame} has a NaN or infinite value"),
+        ));
+    }
+    let exact = check_skeleton(&bvh, target);
+    if exact.is_ok() && joint_map.is_none() {
+        let scale = unit_scale(&bvh.skeleton, &target.skeleton()).map_err(|e| usage(path, e))?;
+        if !(UNITS_TOLERANCE.recip()..=UNITS_TOLERANCE).contains(&scale) {
+            notices.push(format!(
+                    "note: {}: the skeleton is {scale:.4} times the model's ({}): rescaled by {:.4}, root motion included",
+                    path.display(),
+                    units_guess(scale),
+                    scale.recip()
+                ));
+            bvh = rescale_bvh(&bvh, scale.recip()).map_err(|e| usage(path, e))?;
+        }
+    } else {
+        // Another rig: retarget it onto the model's skeleton (H3.6M models only).
+        let exact_problem = exact.err().unwrap_or_default();
+        if target != ExpMapTarget::H36m {
+            return Err(usage(path, exact_problem));
+        }
+        let map = match joint_map {
+            Some(file) => JointMap::read(&bvh.skeleton, file).map_err(|e| usage(path, e))?,
+            None => JointMap::detect(&bvh.skeleton)
+                .map_err(|e| usage(path, format!("{exact_problem}, and {e}")))?,
+        };
+        let retargeter = Retargeter::new(&bvh.skeleton, map).map_err(|e| usage(path, e))?;
+        notices.push(format!(
+                "note: {}: {} rig retargeted onto the model's H3.6M skeleton ({:.4} rig units per mm{})",
+                path.display(),
+                retargeter.map().name,
+                retargeter.scale(),
+                match units_guess(retargeter.scale()) {
+                    "unknown units" => String::new(),
+                    unit => format!(", {unit}"),
+                }
+            ));
+        let frames = if same_rate(bvh.fps(), fps) {
+            bvh.frames.clone()
+        } else {
+            resample_bvh(&bvh, fps).frames
+        };
+        let model_bvh = retargeter.to_model(bvh.frames.view(), bvh.frame_time);
+        *rig = Some(RigSeed { retargeter, frames });
+        bvh = model_bvh;
+    }
+    if !same_rate(bvh.fps(), fps) {
+        notices.push(format!(
+            "note: {}: {} Hz resampled to the model's {} Hz (rotations by slerp)",
+            path.display(),
+            round_rate(bvh.fps()),
+            round_rate(fps)
+        ));
+        bvh = resample_bvh(&bvh, fps);
+    }
+    Ok(bvh_to_expmap(&bvh, target)
+        .map_err(|e| usage(path, e))?
+        .into_frames())
 }
 
 /// Exact absolute root poses of H3.6M frames at `from` Hz kept every k-th frame for `to` Hz,

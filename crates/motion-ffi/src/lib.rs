@@ -276,16 +276,8 @@ fn start(
     frames: ArrayView2<'_, f64>,
     action: Option<&str>,
 ) -> Result<c_int, (MotionStatus, String)> {
-    let needed = g.model.config().seed_frames;
-    if frames.nrows() < needed {
-        return Err(bad(format!(
-            "{} seed frames given, the model needs at least {needed}",
-            frames.nrows()
-        )));
-    }
-    let window = frames.slice(ndarray::s![frames.nrows() - needed.., ..]);
     g.character
-        .start(window, action, Noise::Seed(g.rng_seed))
+        .start_from_clip(frames, action, Noise::Seed(g.rng_seed))
         .map_err(bad)?;
     g.started = true;
     Ok(0)

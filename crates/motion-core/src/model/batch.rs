@@ -24,8 +24,8 @@ use super::grud::GruDState;
 use super::predictor::{MotionModel, Network};
 use super::vgru::{NoiseSource, VgruState};
 use crate::derivatives::DerivativeBuffer;
+use crate::nn::parallel::pool::prelude::*;
 use ndarray::{ArrayView2, ArrayView3};
-use rayon::prelude::*;
 use std::sync::Arc;
 
 /// Fewest rows per shard: batches smaller than twice this run as one shard (measured: at batch
@@ -165,7 +165,7 @@ impl BatchGenerator {
     /// seed length and horizon.
     pub fn new(model: Arc<MotionModel>, batch: usize) -> Self {
         let batch = batch.max(1);
-        let threads = rayon::current_num_threads().max(1);
+        let threads = crate::nn::parallel::pool::current_num_threads().max(1);
         let shards = threads.min(batch / SHARD_MIN_ROWS).max(1);
         Self::with_shards(model, batch, shards)
     }
@@ -181,7 +181,7 @@ impl BatchGenerator {
         let cfg = model.config();
         let row_split_possible = shards.len() == 1
             && batch <= crate::nn::gemm::row_kernel_max_batch(model.decoder().weight())
-            && rayon::current_num_threads() > 1
+            && crate::nn::parallel::pool::current_num_threads() > 1
             && model.parameter_count() >= POOL_STEP_MIN_PARAMETERS;
         Self {
             batch,
@@ -421,7 +421,7 @@ impl BatchGenerator {
             if self.pool_step {
                 // On a pool thread the row kernels' splits are cheap joins (see `pool_step`).
                 let out = &mut self.out_full;
-                rayon::scope(|_| shard.advance(model, step, out));
+                crate::nn::parallel::pool::scope(|_| shard.advance(model, step, out));
             } else {
                 shard.advance(model, step, &mut self.out_full);
             }

@@ -99,14 +99,30 @@ impl Character {
         Ok(self.resampler.advance(0.0)?)
     }
 
+    /// [`start`](Self::start) from the last `seed_frames` frames of a longer clip (a loaded seed
+    /// file: [`crate::seed`]); a clip shorter than that is refused like a short seed.
+    pub fn start_from_clip<T: FrameScalar>(
+        &mut self,
+        clip: ArrayView2<'_, T>,
+        action: Option<&str>,
+        noise: Noise<'_>,
+    ) -> Result<&Pose, CharacterError> {
+        let needed = self.generator.model().config().seed_frames;
+        let skip = clip.nrows().saturating_sub(needed);
+        self.start(clip.slice_move(ndarray::s![skip.., ..]), action, noise)
+    }
+
     /// Moves the character's clock by `dt` seconds (any rate, variable steps) and returns its
     /// pose there, generating model frames as needed.
+    /// A long `dt` (a hitch) is walked through frame by frame; the pose's root-motion deltas
+    /// span all of it.
     pub fn advance(&mut self, dt: f64) -> Result<&Pose, CharacterError> {
-        while self.resampler.needs(dt) {
-            let frame = self.generator.step()?;
-            self.resampler.push(self.decoder.push(frame))?;
-        }
-        Ok(self.resampler.advance(dt)?)
+        let (generator, decoder) = (&mut self.generator, &mut self.decoder);
+        self.resampler.advance_pulling(dt, |resampler| {
+            let frame = generator.step()?;
+            resampler.push(decoder.push(frame))?;
+            Ok(())
+        })
     }
 
     /// Changes the action without re-seeding ([`Generator::set_action`]).
@@ -164,6 +180,18 @@ mod tests {
                 "{qa} {qb}"
             );
         }
+        // A 0.5 s hitch is walked through: the same pose as 25 steps of 0.02 s, and the root
+        // motion's deltas span the whole step.
+        let before = a.advance(0.0).unwrap().root_motion;
+        let long = a.advance(0.5).unwrap().clone();
+        for _ in 0..25 {
+            b.advance(0.02).unwrap();
+        }
+        let short = b.advance(0.0).unwrap().clone();
+        assert!((long.root_translation - short.root_translation).length() < 1e-4);
+        let moved = long.root_motion.ground_translation - before.ground_translation;
+        assert!((long.root_motion.delta_translation - moved).length() < 1e-5);
+        assert!(moved.length() > 0.01, "{moved}");
         assert!(a.set_action("eating", 0).is_ok());
         assert!(matches!(
             a.advance(-1.0),

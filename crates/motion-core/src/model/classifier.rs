@@ -31,9 +31,9 @@ use super::config::{
 use super::norm::Normalization;
 use super::weights::{WeightStore, WeightsError};
 use crate::derivatives::DerivativeBuffer;
+use crate::nn::parallel::pool::prelude::*;
 use crate::nn::{Linear, LinearConfig, LstmCell, LstmConfig, LstmScratch};
 use ndarray::{s, Array2, ArrayView3};
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -287,7 +287,9 @@ impl ActionClassifier {
             }
         }
         let classes = self.config.actions.len();
-        let chunk = n.div_ceil(rayon::current_num_threads()).clamp(1, MAX_CHUNK);
+        let chunk = n
+            .div_ceil(crate::nn::parallel::pool::current_num_threads())
+            .clamp(1, MAX_CHUNK);
         let starts: Vec<usize> = (0..n).step_by(chunk).collect();
         let chunks: Vec<Vec<f32>> = starts
             .par_iter()

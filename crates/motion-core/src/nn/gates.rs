@@ -12,7 +12,7 @@
 //!
 //! The layout is that of [`super::gru`]: per batch row, `gi` and `gh` hold the r, z and n
 //! pre-activations `[3H]` (row stride `3H`), `h` the state `[H]`.
-use rayon::prelude::*;
+use crate::nn::parallel::pool::prelude::*;
 
 /// Below this many state elements (`batch x hidden`) the update runs on the calling thread.
 const PARALLEL_MIN_ELEMENTS: usize = 1 << 15;

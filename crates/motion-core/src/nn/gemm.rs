@@ -190,7 +190,7 @@ impl MatMul {
         // Off a pool thread a join is a trip through rayon's injection queue (slow, and it
         // allocates a queue block every 63 jobs): only callers already on the pool split.
         if threads < 2
-            || rayon::current_thread_index().is_none()
+            || super::parallel::pool::current_thread_index().is_none()
             || self.outputs * self.inputs * w.dtype().size() < ROW_SPLIT_MIN_BYTES
         {
             return 1;
@@ -244,7 +244,7 @@ impl MatMul {
             // Cut at a multiple of 16 columns (whole cache lines of f32 outputs per row).
             let at = (outputs.start + outputs.len() * left / parts).next_multiple_of(16);
             let at = at.min(outputs.end);
-            rayon::join(
+            super::parallel::pool::join(
                 || split(mm, x, w, y, accumulate, outputs.start..at, left),
                 || split(mm, x, w, y, accumulate, at..outputs.end, parts - left),
             );
@@ -287,7 +287,7 @@ impl MatMul {
         if threads > 1 && work >= PARALLEL_MIN_WORK && self.batch >= 2 * PARALLEL_MIN_ROWS {
             let rows = self.batch.div_ceil(threads).max(PARALLEL_MIN_ROWS);
             let this = *self;
-            rayon::scope(|s| {
+            super::parallel::pool::scope(|s| {
                 let mut y_rest = &mut y[..];
                 let mut start = 0;
                 while start < this.batch {

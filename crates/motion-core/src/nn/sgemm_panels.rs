@@ -197,7 +197,7 @@ fn gemm_panels_with(
             .div_ceil(threads)
             .next_multiple_of(TILE_ROWS)
             .max(PARALLEL_MIN_ROWS);
-        rayon::scope(|s| {
+        super::parallel::pool::scope(|s| {
             let mut y_rest = &mut y[..];
             let mut start = 0;
             while start < batch {
@@ -739,6 +739,7 @@ mod tests {
         }
     }
 
+    #[cfg(feature = "parallel")]
     #[test]
     fn sgemm_splits_over_threads_like_one_thread() {
         let (batch, inputs, outputs) = (257, 512, 1536);

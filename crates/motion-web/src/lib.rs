@@ -1,0 +1,273 @@
+//! motion-core in a web page: the built-in model driving a character from JavaScript.
+//!
+//! Built for `wasm32-unknown-unknown` thread-free (motion-core without its `parallel` feature:
+//! no rayon, one thread, the portable kernels) and bound by `wasm-bindgen`; `web/` is the page
+//! that uses it (three.js skeleton, action selector, live at the display's frame rate).
+//!
+//! ```js
+//! import init, { WebCharacter } from "./pkg/motion_web.js";
+//! await init();
+//! const character = WebCharacter.walk("walking", 1n); // the bundled walk seed, rng seed 1
+//! character.advance(1 / 60);                        // the clock moves 1/60 s
+//! const xyz = character.positions();                // Float32Array, 3 per joint, metres
+//! character.set_action("eating");                   // from the next model frame on
+//! ```
+//!
+//! Conventions are motion-core's engine ones ([`motion_core::pose`]): metres, +y up,
+//! right-handed; joints in the model skeleton's order, [`WebCharacter::parents`] gives the
+//! bones. [`Animator`] is the same character without the JavaScript binding (tested natively).
+use std::path::Path;
+use std::sync::Arc;
+
+use glam::{Quat, Vec3};
+use motion_core::formats::bvh::parse_bvh;
+use motion_core::formats::expmap_bvh::ExpMapTarget;
+use motion_core::model::batch::Noise;
+use motion_core::model::builtin::default_model;
+use motion_core::model::{Character, MotionModel};
+use motion_core::seed::seed_from_bvh;
+use motion_core::Skeleton;
+use wasm_bindgen::prelude::*;
+
+/// The walk seed shipped with the crate (`examples/walk_seed.bvh`, made by
+/// `examples/make_seed.rs`), built into the module so the page needs no file.
+pub const WALK_SEED_BVH: &str = include_str!("../../../examples/walk_seed.bvh");
+
+thread_local! {
+    /// The built-in model, parsed once per thread (a page has one) and shared by its characters.
+    static MODEL: Result<Arc<MotionModel>, String> = match default_model() {
+        Some(Ok(model)) => Ok(Arc::new(model)),
+        Some(Err(e)) => Err(e.to_string()),
+        None => Err("this build has no built-in weights (weights/ was empty at build time)".into()),
+    };
+}
+
+/// The built-in model (shared).
+pub fn builtin_model() -> Result<Arc<MotionModel>, String> {
+    MODEL.with(Clone::clone)
+}
+
+/// One character: a [`Character`] on the built-in model and its joint positions, with every
+/// buffer allocated once.
+#[derive(Debug)]
+pub struct Animator {
+    character: Character,
+    skeleton: Arc<Skeleton>,
+    action: String,
+    positions: Vec<Vec3>,
+    world: Vec<Quat>,
+    flat: Vec<f32>,
+    poses: u64,
+}
+
+impl Animator {
+    /// A character seeded from the BVH text `bvh` (`label` names it in errors; any rig and
+    /// rate [`motion_core::seed`] accepts), doing `action`, with noise from `rng_seed`.
+    pub fn from_bvh(bvh: &str, label: &str, action: &str, rng_seed: u64) -> Result<Self, String> {
+        let model = builtin_model()?;
+        let fps = model.config().fps;
+        let label = Path::new(label);
+        let parsed = parse_bvh(bvh, label).map_err(|e| e.to_string())?;
+        let seed = seed_from_bvh(parsed, label, ExpMapTarget::H36m, fps, None)
+            .map_err(|e| e.to_string())?;
+        let mut character = Character::new(model).map_err(|e| e.to_string())?;
+        character
+            .start_from_clip(seed.frames.view(), Some(action), Noise::Seed(rng_seed))
+            .map_err(|e| e.to_string())?;
+        let skeleton = Arc::clone(character.skeleton());
+        let joints = skeleton.len();
+        let mut animator = Animator {
+            character,
+            skeleton,
+            action: action.to_owned(),
+            positions: vec![Vec3::ZERO; joints],
+            world: vec![Quat::IDENTITY; joints],
+            flat: vec![0.0; 3 * joints],
+            poses: 0,
+        };
+        animator.advance(0.0)?;
+        animator.poses = 0;
+        Ok(animator)
+    }
+
+    /// The actions the built-in model knows.
+    pub fn actions() -> Result<Vec<String>, String> {
+        Ok(builtin_model()?.config().actions.clone())
+    }
+
+    /// Moves the clock `dt` seconds (any rate) and computes the joint positions there.
+    pub fn advance(&mut self, dt: f64) -> Result<(), String> {
+        let pose = self.character.advance(dt).map_err(|e| e.to_string())?;
+        pose.world_positions_into(&self.skeleton, &mut self.positions, &mut self.world);
+        for (dst, p) in self.flat.chunks_exact_mut(3).zip(&self.positions) {
+            dst.copy_from_slice(&p.to_array());
+        }
+        self.poses += 1;
+        Ok(())
+    }
+
+    /// Joint world positions of the last pose, `x, y, z` per joint, metres.
+    pub fn positions(&self) -> &[f32] {
+        &self.flat
+    }
+
+    /// Poses computed by [`advance`](Self::advance) since the start.
+    pub fn poses(&self) -> u64 {
+        self.poses
+    }
+
+    /// Each joint's parent index, -1 for the root.
+    pub fn parents(&self) -> Vec<i32> {
+        self.skeleton
+            .joints()
+            .iter()
+            .map(|j| j.parent.map_or(-1, |p| p as i32))
+            .collect()
+    }
+
+    /// The current action.
+    pub fn action(&self) -> &str {
+        &self.action
+    }
+
+    /// Switches the action from the next model frame on.
+    pub fn set_action(&mut self, action: &str) -> Result<(), String> {
+        self.character
+            .set_action(action, 0)
+            .map_err(|e| e.to_string())?;
+        self.action = action.to_owned();
+        Ok(())
+    }
+
+    /// Runs `n` model steps directly (no pose, no resampling): what a benchmark times.
+    pub fn step_model(&mut self, n: u32) -> Result<(), String> {
+        for _ in 0..n {
+            self.character
+                .generator_mut()
+                .step()
+                .map_err(|e| e.to_string())?;
+        }
+        Ok(())
+    }
+}
+
+/// A character for JavaScript ([`Animator`] behind `wasm-bindgen`); errors are thrown as
+/// `Error`s with motion-core's message.
+#[wasm_bindgen]
+pub struct WebCharacter {
+    inner: Animator,
+}
+
+fn js(e: String) -> JsError {
+    JsError::new(&e)
+}
+
+#[wasm_bindgen]
+impl WebCharacter {
+    /// A character seeded from the bundled walk seed.
+    pub fn walk(action: &str, rng_seed: u64) -> Result<WebCharacter, JsError> {
+        Self::from_bvh(WALK_SEED_BVH, "walk_seed.bvh", action, rng_seed)
+    }
+
+    /// A character seeded from BVH text (a file the user picked: the model's skeleton or a
+    /// CMU, Mixamo or Unreal rig, any units and rate).
+    pub fn from_bvh(
+        bvh: &str,
+        label: &str,
+        action: &str,
+        rng_seed: u64,
+    ) -> Result<WebCharacter, JsError> {
+        Ok(WebCharacter {
+            inner: Animator::from_bvh(bvh, label, action, rng_seed).map_err(js)?,
+        })
+    }
+
+    /// The actions of the built-in model.
+    pub fn actions() -> Result<Vec<String>, JsError> {
+        Animator::actions().map_err(js)
+    }
+
+    /// Moves the character's clock by `dt` seconds and poses it there.
+    pub fn advance(&mut self, dt: f64) -> Result<(), JsError> {
+        self.inner.advance(dt).map_err(js)
+    }
+
+    /// Joint world positions (a copy): `x, y, z` per joint, metres, +y up.
+    pub fn positions(&self) -> Vec<f32> {
+        self.inner.positions().to_vec()
+    }
+
+    /// Each joint's parent (-1 for the root).
+    pub fn parents(&self) -> Vec<i32> {
+        self.inner.parents()
+    }
+
+    /// Poses computed since the start.
+    pub fn poses(&self) -> f64 {
+        self.inner.poses() as f64
+    }
+
+    /// The current action.
+    pub fn action(&self) -> String {
+        self.inner.action().to_owned()
+    }
+
+    /// Switches the action.
+    pub fn set_action(&mut self, action: &str) -> Result<(), JsError> {
+        self.inner.set_action(action).map_err(js)
+    }
+
+    /// Runs `n` model steps (for timing one step in the page).
+    pub fn step_model(&mut self, n: u32) -> Result<(), JsError> {
+        self.inner.step_model(n).map_err(js)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn walks_from_the_bundled_seed_and_switches_action() {
+        let mut a = Animator::from_bvh(WALK_SEED_BVH, "walk_seed.bvh", "walking", 1).unwrap();
+        let joints = a.parents().len();
+        assert_eq!(a.positions().len(), 3 * joints);
+        assert_eq!(a.parents()[0], -1);
+        let start = Vec3::from_slice(&a.positions()[..3]);
+        for i in 0..240 {
+            if i == 120 {
+                a.set_action("sitting").unwrap();
+            }
+            a.advance(1.0 / 60.0).unwrap();
+            assert!(a.positions().iter().all(|v| v.is_finite()));
+        }
+        assert_eq!(a.poses(), 240);
+        assert_eq!(a.action(), "sitting");
+        // Four seconds of walking then sitting moved the root.
+        let end = Vec3::from_slice(&a.positions()[..3]);
+        assert!((end - start).length() > 0.1, "{start} -> {end}");
+        // Bones keep their lengths (forward kinematics of rotations only).
+        let p = |j: usize| Vec3::from_slice(&a.positions()[3 * j..3 * j + 3]);
+        let q = Animator::from_bvh(WALK_SEED_BVH, "walk_seed.bvh", "walking", 1).unwrap();
+        let p0 = |j: usize| Vec3::from_slice(&q.positions()[3 * j..3 * j + 3]);
+        for (j, &parent) in a.parents().iter().enumerate().skip(1) {
+            let parent = parent as usize;
+            let (now, then) = ((p(j) - p(parent)).length(), (p0(j) - p0(parent)).length());
+            assert!((now - then).abs() < 1e-4, "bone {j}: {now} vs {then}");
+        }
+    }
+
+    #[test]
+    fn bad_input_is_an_error_not_a_panic() {
+        let e = Animator::from_bvh("HIERARCHY\nROOT", "bad.bvh", "walking", 1).unwrap_err();
+        assert!(e.contains("bad.bvh"), "{e}");
+        let e = Animator::from_bvh(WALK_SEED_BVH, "walk_seed.bvh", "flying", 1).unwrap_err();
+        assert!(e.contains("flying"), "{e}");
+        let mut a = Animator::from_bvh(WALK_SEED_BVH, "walk_seed.bvh", "walking", 1).unwrap();
+        assert!(a.set_action("flying").is_err());
+        assert!(a.advance(-1.0).is_err());
+        assert!(Animator::actions()
+            .unwrap()
+            .contains(&"walking".to_string()));
+    }
+}

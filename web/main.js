@@ -1,0 +1,182 @@
+// The built-in motion model (motion-web, Rust compiled to WebAssembly) driving one character live
+// at the display's frame rate, drawn with three.js. State for tests: window.motionStatus.
+import * as THREE from "three";
+import init, { WebCharacter } from "./pkg/motion_web.js";
+
+const status = { ready: false, poses: 0, finite: true, action: null, error: null };
+window.motionStatus = status;
+const $ = (id) => document.getElementById(id);
+
+function fail(e) {
+  status.error = String(e && e.message ? e.message : e);
+  $("error").textContent = status.error;
+}
+
+// --- scene: ground grid, lights, a skeleton of instanced bones and joints -----------------------
+const renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+renderer.setPixelRatio(window.devicePixelRatio);
+renderer.setSize(window.innerWidth, window.innerHeight);
+document.body.appendChild(renderer.domElement);
+const scene = new THREE.Scene();
+scene.background = new THREE.Color(0x1d2127);
+scene.add(new THREE.HemisphereLight(0xffffff, 0x303030, 2.0));
+const sun = new THREE.DirectionalLight(0xffffff, 2.0);
+sun.position.set(3, 6, 4);
+scene.add(sun);
+const ground = new THREE.Mesh(
+  new THREE.PlaneGeometry(200, 200).rotateX(-Math.PI / 2),
+  new THREE.MeshStandardMaterial({ color: 0x2b313a, roughness: 1 }),
+);
+scene.add(ground);
+const grid = new THREE.GridHelper(200, 200, 0x6c7684, 0x48515d);
+grid.position.y = 0.001;
+scene.add(grid);
+const camera = new THREE.PerspectiveCamera(45, window.innerWidth / window.innerHeight, 0.05, 200);
+window.addEventListener("resize", () => {
+  camera.aspect = window.innerWidth / window.innerHeight;
+  camera.updateProjectionMatrix();
+  renderer.setSize(window.innerWidth, window.innerHeight);
+});
+
+let character = null;
+let parents = [];
+let bones = null; // InstancedMesh: one cylinder per (joint, parent)
+let joints = null; // InstancedMesh: one sphere per joint
+const seedSource = { bvh: null, name: null };
+let lift = 0; // the model's root starts at the origin: raise the figure so its lowest joint is on the grid
+
+function buildSkeleton(count) {
+  if (bones) scene.remove(bones, joints);
+  bones = new THREE.InstancedMesh(
+    new THREE.CylinderGeometry(1, 1, 1, 8),
+    new THREE.MeshStandardMaterial({ color: 0xffb347, roughness: 0.6 }),
+    count,
+  );
+  joints = new THREE.InstancedMesh(
+    new THREE.SphereGeometry(0.028, 12, 8),
+    new THREE.MeshStandardMaterial({ color: 0x7fc8ff, roughness: 0.4 }),
+    count,
+  );
+  scene.add(bones, joints);
+}
+
+const up = new THREE.Vector3(0, 1, 0);
+const a = new THREE.Vector3(), b = new THREE.Vector3(), d = new THREE.Vector3();
+const q = new THREE.Quaternion(), s = new THREE.Vector3(), m = new THREE.Matrix4();
+const zero = new THREE.Matrix4().makeScale(0, 0, 0);
+
+function draw(xyz) {
+  for (let j = 0; j < parents.length; j++) {
+    a.fromArray(xyz, 3 * j);
+    a.y += lift;
+    m.compose(a, q.identity(), s.set(1, 1, 1));
+    joints.setMatrixAt(j, m);
+    const p = parents[j];
+    if (p < 0) { bones.setMatrixAt(j, zero); continue; }
+    b.fromArray(xyz, 3 * p);
+    b.y += lift;
+    d.subVectors(a, b);
+    const len = d.length();
+    if (len < 1e-6) { bones.setMatrixAt(j, zero); continue; }
+    q.setFromUnitVectors(up, d.divideScalar(len));
+    m.compose(b.add(a).multiplyScalar(0.5), q, s.set(0.018, len, 0.018));
+    bones.setMatrixAt(j, m);
+  }
+  bones.instanceMatrix.needsUpdate = true;
+  joints.instanceMatrix.needsUpdate = true;
+  // Follow the character from the side, looking at its hips.
+  const root = a.fromArray(xyz, 0);
+  camera.position.set(root.x + 3.2, 1.7, root.z + 3.2);
+  camera.lookAt(root.x, root.y + lift, root.z);
+}
+
+function start() {
+  const action = $("action").value;
+  // ?seed=N in the address makes a run repeatable.
+  const fixed = new URLSearchParams(location.search).get("seed");
+  const seed = BigInt(fixed ?? Math.floor(Math.random() * 2 ** 32));
+  try {
+    character?.free();
+    character = seedSource.bvh
+      ? WebCharacter.from_bvh(seedSource.bvh, seedSource.name, action, seed)
+      : WebCharacter.walk(action, seed);
+    parents = Array.from(character.parents());
+    const first = character.positions();
+    lift = -Math.min(...first.filter((_, i) => i % 3 === 1)) + 0.02;
+    buildSkeleton(parents.length);
+    status.action = action;
+    $("error").textContent = "";
+  } catch (e) {
+    fail(e);
+  }
+}
+
+// --- the loop: one pose per displayed frame, at the display's rate ------------------------------
+let last = null;
+let fps = 0;
+let stepMs = 0;
+function frame(now) {
+  requestAnimationFrame(frame);
+  if (!character) return;
+  const dt = last === null ? 0 : Math.min((now - last) / 1000, 0.1); // a hidden tab resumes calmly
+  last = now;
+  if (dt > 0) fps = 0.95 * fps + 0.05 / dt;
+  try {
+    const t0 = performance.now();
+    character.advance(dt);
+    stepMs = 0.95 * stepMs + 0.05 * (performance.now() - t0);
+    const xyz = character.positions();
+    if (!xyz.every(Number.isFinite)) status.finite = false;
+    draw(xyz);
+    status.poses += 1;
+  } catch (e) {
+    fail(e);
+    character = null;
+  }
+  renderer.render(scene, camera);
+  $("stats").textContent =
+    `${status.action} · ${status.poses} poses · ${fps.toFixed(0)} fps · advance ${stepMs.toFixed(2)} ms`;
+}
+
+// Time `n` model steps of a fresh character (µs per step), for the tests and the README numbers.
+window.motionDebug = () => ({ camera: camera.position.toArray(), lift, root: Array.from(character.positions().slice(0, 3)) });
+window.motionBench = (n) => {
+  const c = WebCharacter.walk("walking", 7n);
+  c.step_model(10); // warm up
+  const t0 = performance.now();
+  c.step_model(n);
+  const us = ((performance.now() - t0) * 1000) / n;
+  c.free();
+  return us;
+};
+
+try {
+  await init();
+  for (const name of WebCharacter.actions()) {
+    const option = document.createElement("option");
+    option.value = option.textContent = name;
+    $("action").appendChild(option);
+  }
+  $("action").value = "walking";
+  $("action").addEventListener("change", () => {
+    try {
+      character?.set_action($("action").value);
+      status.action = $("action").value;
+    } catch (e) {
+      fail(e);
+    }
+  });
+  $("restart").addEventListener("click", start);
+  $("bvh").addEventListener("change", async (event) => {
+    const file = event.target.files[0];
+    if (!file) return;
+    seedSource.bvh = await file.text();
+    seedSource.name = file.name;
+    start();
+  });
+  start();
+  status.ready = true;
+  requestAnimationFrame(frame);
+} catch (e) {
+  fail(e);
+}

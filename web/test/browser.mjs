@@ -1,0 +1,83 @@
+// The page in a real headless Chromium (Debian's /usr/bin/chromium, or $CHROMIUM): it must load
+// the wasm module and three.js, generate 200 finite poses live, switch action, and draw something.
+// Prints the per-step cost of the model in the browser. Usage: node test/browser.mjs [screenshot.png]
+import { createServer } from "node:http";
+import { readFile, writeFile } from "node:fs/promises";
+import { extname, join, normalize, resolve } from "node:path";
+import { fileURLToPath } from "node:url";
+import { chromium } from "playwright-core";
+import { PNG } from "pngjs";
+
+const root = resolve(fileURLToPath(import.meta.url), "../..");
+const shot = process.argv[2] ?? join(root, "..", "target", "web-screenshot.png");
+const types = { ".html": "text/html", ".js": "text/javascript", ".mjs": "text/javascript", ".wasm": "application/wasm", ".json": "application/json" };
+
+function check(ok, what) {
+  if (!ok) {
+    console.error(`FAILED: ${what}`);
+    process.exitCode = 1;
+    throw new Error(what);
+  }
+  console.log(`ok: ${what}`);
+}
+
+const server = createServer(async (req, res) => {
+  const path = normalize(decodeURIComponent(new URL(req.url, "http://x").pathname)).replace(/^(\.\.[/\\])+/, "");
+  const file = join(root, path.endsWith("/") ? `${path}index.html` : path);
+  try {
+    const body = await readFile(file);
+    res.writeHead(200, { "content-type": types[extname(file)] ?? "application/octet-stream" });
+    res.end(body);
+  } catch {
+    res.writeHead(404);
+    res.end();
+  }
+});
+await new Promise((r) => server.listen(0, "127.0.0.1", r));
+const url = `http://127.0.0.1:${server.address().port}/index.html?seed=1`;
+
+const browser = await chromium.launch({
+  executablePath: process.env.CHROMIUM ?? "/usr/bin/chromium",
+  args: [
+    "--no-sandbox", "--disable-gpu", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
+    "--disable-quic", "--no-first-run", "--disable-background-networking", "--disable-component-update", "--disable-sync",
+  ],
+});
+try {
+  const page = await browser.newPage({ viewport: { width: 960, height: 600 } });
+  const errors = [];
+  page.on("pageerror", (e) => errors.push(String(e)));
+  page.on("console", (m) => m.type() === "error" && errors.push(m.text()));
+  await page.goto(url);
+  await page.waitForFunction(() => window.motionStatus?.error || window.motionStatus?.poses >= 200, null, { timeout: 90_000 });
+  let status = await page.evaluate(() => window.motionStatus);
+  check(!status.error, `page runs without error (${status.error ?? "none"})`);
+  check(status.poses >= 200, `${status.poses} poses generated live`);
+  check(status.finite, "every joint position finite");
+
+  await page.selectOption("#action", "sitting");
+  const before = status.poses;
+  await page.waitForFunction((n) => window.motionStatus.error || window.motionStatus.poses >= n, before + 50, { timeout: 60_000 });
+  status = await page.evaluate(() => window.motionStatus);
+  check(!status.error && status.action === "sitting" && status.finite, `action switched to ${status.action}, ${status.poses - before} more finite poses`);
+
+  const us = await page.evaluate(() => window.motionBench(500));
+  check(Number.isFinite(us) && us > 0, `one model step in the browser: ${us.toFixed(1)} µs (500 steps, wasm32, one thread)`);
+
+  const png = await page.screenshot({ path: shot });
+  const img = PNG.sync.read(png);
+  const [r0, g0, b0] = img.data; // the top-left corner: background
+  let differing = 0, bone = 0;
+  for (let i = 0; i < img.data.length; i += 4) {
+    const [r, g, b] = [img.data[i], img.data[i + 1], img.data[i + 2]];
+    if (Math.abs(r - r0) + Math.abs(g - g0) + Math.abs(b - b0) > 30) differing++;
+    if (r > 150 && g > 80 && g < 220 && b < 120 && r > b + 80) bone++; // the orange bones, lit
+  }
+  const pixels = img.width * img.height;
+  check(differing > pixels * 0.01, `screenshot ${shot} not blank: ${(100 * differing / pixels).toFixed(1)}% of pixels differ from the background`);
+  check(bone > 200, `the skeleton is drawn: ${bone} bone-coloured pixels`);
+  check(errors.length === 0, `no console errors${errors.length ? `: ${errors.join(" | ")}` : ""}`);
+} finally {
+  await browser.close();
+  server.close();
+}
