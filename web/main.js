@@ -43,7 +43,7 @@ let parents = [];
 let bones = null; // InstancedMesh: one cylinder per (joint, parent)
 let joints = null; // InstancedMesh: one sphere per joint
 const seedSource = { bvh: null, name: null };
-let lift = 0; // the model's root starts at the origin: raise the figure so its lowest joint is on the grid
+let lift = 0; // the model's root starts at the origin: raise the figure so its first pose stands on the floor
 
 function buildSkeleton(count) {
   if (bones) scene.remove(bones, joints);
@@ -101,8 +101,7 @@ function start() {
       ? WebCharacter.from_bvh(seedSource.bvh, seedSource.name, action, seed)
       : WebCharacter.walk(action, seed);
     parents = Array.from(character.parents());
-    const first = character.positions();
-    lift = -Math.min(...first.filter((_, i) => i % 3 === 1)) + 0.02;
+    lift = character.floor_offset() + 0.02;
     buildSkeleton(parents.length);
     status.action = action;
     $("error").textContent = "";

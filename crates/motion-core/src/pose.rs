@@ -97,6 +97,16 @@ impl Pose {
         self.local_rotations[0]
     }
 
+    /// The height (metres) to raise this pose by so that its lowest joint touches the floor
+    /// (`y = 0`). The root is integrated from the origin, so a character's hips start at floor
+    /// level; engines add this once, at the start, to stand it on the ground.
+    pub fn floor_offset(&self, skeleton: &Skeleton) -> f32 {
+        let n = self.local_rotations.len();
+        let (mut out, mut world) = (vec![Vec3::ZERO; n], vec![Quat::IDENTITY; n]);
+        self.world_positions_into(skeleton, &mut out, &mut world);
+        -out.iter().map(|p| p.y).fold(f32::INFINITY, f32::min)
+    }
+
     /// World joint positions (metres) by forward kinematics of this pose's rotations on
     /// `skeleton` (offsets in millimetres, as the skeletons store them), into `out` (one per
     /// joint). What an engine computes from the pose; f32 throughout.
@@ -242,7 +252,7 @@ pub fn yaw_of(q: DQuat) -> DQuat {
 
 /// The root motion of a root at `translation` (metres) with world `rotation`, deltas against the
 /// `previous` frame's (zero without one).
-pub(crate) fn root_motion_between(
+pub fn root_motion_between(
     translation: DVec3,
     rotation: DQuat,
     previous: Option<RootMotion>,

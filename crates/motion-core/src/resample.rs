@@ -264,6 +264,11 @@ impl PoseResampler {
         Ok(&self.out)
     }
 
+    /// The last pose [`advance`](Self::advance) returned (the rest pose before the first).
+    pub fn current(&self) -> &Pose {
+        &self.out
+    }
+
     /// [`advance`](Self::advance) by any `dt`, calling `pull` to [`push`](Self::push) each
     /// source pose it needs: a step longer than the held poses cover (a game's hitch) is walked
     /// through one source frame at a time, and the returned root motion's deltas span the whole

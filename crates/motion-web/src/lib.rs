@@ -58,6 +58,7 @@ pub struct Animator {
     world: Vec<Quat>,
     flat: Vec<f32>,
     poses: u64,
+    floor: f32,
 }
 
 impl Animator {
@@ -84,7 +85,10 @@ impl Animator {
             world: vec![Quat::IDENTITY; joints],
             flat: vec![0.0; 3 * joints],
             poses: 0,
+            floor: 0.0,
         };
+        let first = animator.character.advance(0.0).map_err(|e| e.to_string())?;
+        animator.floor = first.floor_offset(&animator.skeleton);
         animator.advance(0.0)?;
         animator.poses = 0;
         Ok(animator)
@@ -123,6 +127,11 @@ impl Animator {
             .iter()
             .map(|j| j.parent.map_or(-1, |p| p as i32))
             .collect()
+    }
+
+    /// How far to raise the first pose (metres) so its lowest joint is on the floor.
+    pub fn floor_offset(&self) -> f32 {
+        self.floor
     }
 
     /// The current action.
@@ -205,6 +214,11 @@ impl WebCharacter {
     /// Poses computed since the start.
     pub fn poses(&self) -> f64 {
         self.inner.poses() as f64
+    }
+
+    /// How far to raise the character (metres) so that its first pose stands on the floor.
+    pub fn floor_offset(&self) -> f32 {
+        self.inner.floor_offset()
     }
 
     /// The current action.

@@ -1,0 +1,135 @@
+//! A crowd: N characters on the built-in model (default 16), walking and switching actions every
+//! few seconds, skeletons drawn with gizmos; the camera circles them.
+//!
+//! `cargo run --release -p motion-bevy --example crowd --features render -- 32`
+use bevy::prelude::*;
+use bevy::transform::TransformSystems;
+use motion_bevy::{MotionCharacter, MotionFailed, MotionPlugin, MotionRig};
+
+/// The actions the crowd cycles through.
+const ACTIONS: [&str; 6] = [
+    "walking",
+    "eating",
+    "smoking",
+    "discussion",
+    "greeting",
+    "walking",
+];
+
+#[derive(Resource)]
+struct Switch(Timer);
+
+#[derive(Component)]
+struct Member(usize);
+
+fn main() {
+    let n: usize = std::env::args()
+        .nth(1)
+        .and_then(|a| a.parse().ok())
+        .unwrap_or(16);
+    App::new()
+        .add_plugins((DefaultPlugins, MotionPlugin))
+        .insert_resource(Switch(Timer::from_seconds(4.0, TimerMode::Repeating)))
+        .add_systems(
+            Startup,
+            move |commands: Commands,
+                  meshes: ResMut<Assets<Mesh>>,
+                  materials: ResMut<Assets<StandardMaterial>>| {
+                setup(n, commands, meshes, materials)
+            },
+        )
+        .add_systems(Update, (switch_actions, orbit_camera, report_failures))
+        .add_systems(
+            PostUpdate,
+            draw_skeletons.after(TransformSystems::Propagate),
+        )
+        .run();
+}
+
+fn setup(
+    n: usize,
+    mut commands: Commands,
+    mut meshes: ResMut<Assets<Mesh>>,
+    mut materials: ResMut<Assets<StandardMaterial>>,
+) {
+    commands.spawn((
+        Mesh3d(meshes.add(Plane3d::default().mesh().size(80.0, 80.0))),
+        MeshMaterial3d(materials.add(Color::srgb(0.25, 0.27, 0.3))),
+    ));
+    commands.spawn((
+        DirectionalLight {
+            illuminance: 8000.0,
+            ..default()
+        },
+        Transform::from_xyz(4.0, 10.0, 6.0).looking_at(Vec3::ZERO, Vec3::Y),
+    ));
+    commands.spawn((Camera3d::default(), Transform::from_xyz(0.0, 6.0, 14.0)));
+    let side = (n as f32).sqrt().ceil() as usize;
+    for i in 0..n {
+        let (row, col) = (i / side, i % side);
+        let at = Vec3::new(
+            (col as f32 - side as f32 / 2.0) * 2.0,
+            0.0, // the plugin stands the first pose on the entity's origin
+            (row as f32 - side as f32 / 2.0) * 2.0,
+        );
+        let heading = Quat::from_rotation_y(i as f32 * 0.7);
+        commands.spawn((
+            MotionCharacter::new(ACTIONS[i % ACTIONS.len()], i as u64),
+            Transform::from_translation(at).with_rotation(heading),
+            Member(i),
+        ));
+    }
+}
+
+/// Every few seconds each character moves on to the next action of the list.
+fn switch_actions(
+    time: Res<Time>,
+    mut timer: ResMut<Switch>,
+    mut characters: Query<(&mut MotionCharacter, &Member)>,
+    mut round: Local<usize>,
+) {
+    if !timer.0.tick(time.delta()).just_finished() {
+        return;
+    }
+    *round += 1;
+    for (mut character, member) in &mut characters {
+        character.action = ACTIONS[(member.0 + *round) % ACTIONS.len()].into();
+    }
+}
+
+fn orbit_camera(time: Res<Time>, mut camera: Query<&mut Transform, With<Camera3d>>) {
+    let angle = time.elapsed_secs() * 0.1;
+    for mut t in &mut camera {
+        *t = Transform::from_xyz(14.0 * angle.sin(), 6.0, 14.0 * angle.cos())
+            .looking_at(Vec3::new(0.0, 0.8, 0.0), Vec3::Y);
+    }
+}
+
+fn report_failures(failed: Query<(Entity, &MotionFailed), Added<MotionFailed>>) {
+    for (entity, failure) in &failed {
+        eprintln!("character {entity}: {}", failure.0);
+    }
+}
+
+/// Bones as gizmo lines between each joint's and its parent's global position.
+fn draw_skeletons(
+    mut gizmos: Gizmos,
+    rigs: Query<&MotionRig>,
+    joints: Query<(&GlobalTransform, &ChildOf)>,
+) {
+    for rig in &rigs {
+        for &joint in &rig.joints()[1..] {
+            let Ok((at, parent)) = joints.get(joint) else {
+                continue;
+            };
+            let Ok((from, _)) = joints.get(parent.parent()) else {
+                continue;
+            };
+            gizmos.line(
+                from.translation(),
+                at.translation(),
+                Color::srgb(1.0, 0.7, 0.3),
+            );
+        }
+    }
+}
