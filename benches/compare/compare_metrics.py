@@ -22,7 +22,12 @@ information.
 Run from the repository root (release binary built first):
 
     cargo build --release -p motion-cli
-    training/.venv/bin/python benches/compare/compare_metrics.py [--reps 5] [--loop-sequences 200]
+    crates/motion-py/build.sh          # the Python bindings, for the in-process ``python-motion`` rows
+    crates/motion-py/.venv/bin/python benches/compare/compare_metrics.py [--reps 5] [--loop-sequences 200]
+
+``python-motion``: the same Rust ``Npss::score`` called in-process through the Python bindings
+(``motion.npss`` on the numpy arrays, no copy, GIL released) — what a researcher's evaluation loop
+pays, against the vectorized numpy code on the same arrays in the same run.
 """
 
 from __future__ import annotations
@@ -37,6 +42,11 @@ import tempfile
 import time
 
 import numpy as np
+
+try:  # the Python bindings (crates/motion-py), when this interpreter has them
+    import motion
+except ImportError:
+    motion = None
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 
@@ -159,6 +169,14 @@ def main() -> int:
             if args.threads != 1:
                 for metric, (value, sec) in ours(args.cli, gt_path, pred_path, args.reps, 1).items():
                     record(f"ours-1t {metric}", value, sec)
+            if motion is not None:
+                # The same Rust function in-process through the Python bindings (arrays viewed in
+                # place, GIL released, rayon's default pool).
+                record("python-motion npss", *timed(lambda: motion.npss(gt, pred), args.reps))
+                record(
+                    "python-motion npss-reference",
+                    *timed(lambda: motion.npss(gt, pred, variant="reference"), args.reps),
+                )
             record("numpy-vectorized npss", *timed(lambda: npss_vectorized(gt, pred), args.reps))
             record("numpy-vectorized npss-reference", *timed(lambda: npss_vectorized(gt, pred, True), args.reps))
         k = min(args.loop_sequences, n)
@@ -182,6 +200,10 @@ def main() -> int:
     for metric in ("npss", "npss-reference"):
         ref = val[f"numpy-vectorized {metric}"]
         worst = max(worst, abs(val[f"ours {metric}"] - ref) / abs(ref))
+        if motion is not None:
+            worst = max(worst, abs(val[f"python-motion {metric}"] - ref) / abs(ref))
+    if motion is None:
+        print("(no `motion` module in this interpreter: run with crates/motion-py/.venv/bin/python for the in-process path)")
     print(f"max relative difference ours vs numpy: {worst:.1e}")
     if args.json:
         with open(args.json, "w") as f:

@@ -82,53 +82,53 @@ pub fn load_seed(
     input_fps: f64,
     joint_map: Option<&Path>,
 ) -> Result<Seed, SeedError> {
+    match FileFormat::from_path(path)? {
+        FileFormat::Bvh => seed_from_bvh(read_bvh(path)?, path, target, fps, joint_map),
+        FileFormat::Npy => seed_from_expmap(read_npy_frames(path)?, path, target, input_fps, fps),
+        FileFormat::ExpMapText => {
+            seed_from_expmap(read_expmap_text(path)?, path, target, input_fps, fps)
+        }
+    }
+}
+
+/// [`load_seed`] for exp-map frames already in memory (`frames x (3 + 3k)`, at `input_fps`):
+/// width and values checked, brought to the model's `fps`; `label` names them in errors.
+pub fn seed_from_expmap(
+    frames: Array2<f64>,
+    label: &Path,
+    target: ExpMapTarget,
+    input_fps: f64,
+    fps: f64,
+) -> Result<Seed, SeedError> {
+    let path = label;
     let mut notices = Vec::new();
     let mut poses = None;
-    let mut rig = None;
-    let frames = match FileFormat::from_path(path)? {
-        FileFormat::Bvh => bvh_frames(
-            read_bvh(path)?,
+    let width = target.skeleton().expmap_width();
+    if frames.ncols() != width {
+        return Err(usage(
             path,
-            target,
-            fps,
-            joint_map,
-            &mut notices,
-            &mut rig,
-        )?,
-        format => {
-            let frames = if format == FileFormat::Npy {
-                read_npy_frames(path)?
-            } else {
-                read_expmap_text(path)?
-            };
-            let width = target.skeleton().expmap_width();
-            if frames.ncols() != width {
-                return Err(usage(
-                    path,
-                    format!(
-                        "{} values per frame, but the model's {} skeleton has {width}",
-                        frames.ncols(),
-                        target.name()
-                    ),
-                ));
-            }
-            if let Some(frame) = first_non_finite(&frames) {
-                return Err(usage(
-                    path,
-                    format!("frame {frame} has a NaN or infinite value"),
-                ));
-            }
-            if target == ExpMapTarget::H36m {
-                poses = downsampled_poses(&frames, input_fps, fps);
-            }
-            resample_expmap(frames, target, input_fps, fps, path, &mut notices)?
-        }
-    };
+            format!(
+                "{} values per frame, but the model's {} skeleton has {width}",
+                frames.ncols(),
+                target.name()
+            ),
+        ));
+    }
+    if let Some(frame) = first_non_finite(&frames) {
+        return Err(usage(
+            path,
+            format!("frame {frame} has a NaN or infinite value"),
+        ));
+    }
+    if target == ExpMapTarget::H36m {
+        poses = downsampled_poses(&frames, input_fps, fps);
+    }
+    let frames = resample_expmap(frames, target, input_fps, fps, path, &mut notices)?;
     Ok(Seed {
         frames,
         poses,
         notices,
-        rig,
+        rig: None,
     })
 }
 

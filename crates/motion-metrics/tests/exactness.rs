@@ -275,4 +275,19 @@ fn database_scores_match_brute_force_scores() {
     for r in &reports[1..] {
         assert_eq!(r, &reports[0]);
     }
+    // A database rebuilt from another's words (shared between processes) scores the same.
+    let built = NdmsDatabase::from_sequences(config.clone(), &views, METHODS[0]).unwrap();
+    for m in METHODS {
+        let shared = NdmsDatabase::from_words(config.clone(), built.words().to_vec(), m).unwrap();
+        assert_eq!(shared.len(), built.len());
+        let report = shared.score_forecasts(&forecast_views, None).unwrap();
+        assert_eq!(report, reports[0]);
+    }
+    assert!(NdmsDatabase::from_words(config.clone(), vec![0.0; 5], METHODS[0]).is_err());
+    assert!(NdmsDatabase::from_words(
+        config,
+        vec![f64::NAN; built.config().word_len()],
+        METHODS[0]
+    )
+    .is_err());
 }

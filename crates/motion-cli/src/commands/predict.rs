@@ -6,7 +6,9 @@ use std::sync::Arc;
 
 use motion_core::formats::expmap_bvh::ExpMapTarget;
 use motion_core::formats::FileFormat;
-use motion_core::model::{ActionClassifier, BatchGenerator, ModelConfig, MotionModel, Noise};
+use motion_core::model::{
+    generate_samples, ActionClassifier, GenerateError, ModelConfig, MotionModel,
+};
 use motion_core::skeleton::H36M_SOURCE_FPS;
 use ndarray::{s, Array2, Array3};
 use rayon::prelude::*;
@@ -449,28 +451,22 @@ fn predict_one(
 
 /// `job.samples` predictions of `job.frames` frames each: `[samples, frames, frame_dims]`.
 fn generate(job: &Job, action: Option<&str>, seed: &Array2<f64>) -> anyhow::Result<Array3<f64>> {
-    let config = job.model.config();
-    let n = job.samples;
-    let mut generator = BatchGenerator::new(Arc::clone(&job.model), n);
-    let seeds = seed
-        .broadcast((n, seed.nrows(), seed.ncols()))
-        .expect("broadcast");
-    let actions: Vec<&str> = action.into_iter().collect();
-    let noise: Vec<Noise<'_>> = (0..n as u64)
-        .map(|i| Noise::Seed(job.rng_seed.wrapping_add(i)))
-        .collect();
-    generator
-        .start(seeds, &actions, &noise)
-        .map_err(|e| UsageError(format!("seed: {e}")))?;
-    let mut out = Array3::zeros((n, job.frames, config.frame_dims));
-    for t in 0..job.frames {
-        let frames = generator.step()?;
-        for (i, row) in frames.outer_iter().enumerate() {
-            out.slice_mut(s![i, t, ..])
-                .zip_mut_with(&row, |o, &v| *o = f64::from(v));
-        }
-    }
-    Ok(out)
+    generate_samples(
+        &job.model,
+        seed.view(),
+        action,
+        job.frames,
+        job.samples,
+        job.rng_seed,
+    )
+    .map_err(|e| match e {
+        e @ (GenerateError::TooFewSeedFrames { .. }
+        | GenerateError::WrongWidth { .. }
+        | GenerateError::NonFiniteSeed { .. }
+        | GenerateError::UnknownAction { .. }
+        | GenerateError::MissingAction { .. }) => UsageError(format!("seed: {e}")).into(),
+        e => anyhow::Error::from(e),
+    })
 }
 
 /// The seed files of a directory (BVH, exp-map text, `.npy`), sorted by name.

@@ -37,6 +37,7 @@ pub mod grud;
 pub mod norm;
 pub mod predictor;
 pub mod random;
+pub mod samples;
 pub mod vgru;
 pub mod weights;
 
@@ -47,4 +48,5 @@ pub use config::{Architecture, ModelConfig, Provenance};
 pub use generate_error::GenerateError;
 pub use generator::Generator;
 pub use predictor::{MotionModel, Network};
+pub use samples::generate_samples;
 pub use weights::{WeightStore, WeightsError};

@@ -187,6 +187,35 @@ impl NdmsDatabase {
         Ok(Self { config, index })
     }
 
+    /// A database of already normalized words (row-major, [`NdmsConfig::word_len`] numbers each,
+    /// as [`words`](Self::words) gives them): the index is rebuilt, the words are not
+    /// recomputed. For sharing one database between processes.
+    pub fn from_words(
+        config: NdmsConfig,
+        words: Vec<f64>,
+        method: NnMethod,
+    ) -> Result<Self, MetricError> {
+        let len = config.word_len();
+        if words.is_empty() || len == 0 || !words.len().is_multiple_of(len) {
+            return Err(MetricError::ShapeMismatch {
+                what: "NDMS database words".into(),
+                found: vec![words.len()],
+                expected: vec![len],
+            });
+        }
+        check_finite(
+            "NDMS database words",
+            &ndarray::ArrayView1::from(&words[..]),
+        )?;
+        let index = NearestIndex::build_frames(method, words, len, config.kappa);
+        Ok(Self { config, index })
+    }
+
+    /// Every normalized word, row-major ([`NdmsConfig::word_len`] numbers each).
+    pub fn words(&self) -> &[f64] {
+        self.index.words()
+    }
+
     /// The configuration.
     pub fn config(&self) -> &NdmsConfig {
         &self.config

@@ -1,0 +1,51 @@
+"""motion: exact, fast human-motion metrics and real-time motion generators (Rust, via PyO3).
+
+Score a prediction (exp-map frames, ``N x T x 99`` at 25 Hz)::
+
+    import motion
+    print(motion.npss(gt, pred, input_space="expmap"))      # paper 000's NPSS
+    print(motion.euler_error(gt, pred)[[1, 3, 7, 9, 13, 24]])  # the protocol's ms horizons
+    db = motion.NdmsDatabase([motion.expmap_to_positions(f) for f in reference_clips])
+    print(db.score(motion.expmap_to_positions(pred[0]))["mean"])
+
+Generate one::
+
+    model = motion.Model.default()
+    walks = model.predict("examples/walk_seed.bvh", action="walking", frames=250, samples=4)
+
+Arrays are float64 numpy arrays (others are converted once); a float64 array is read in place
+whatever its strides. Computation runs without the GIL, split over cores
+(``motion.set_threads(n)`` before the first call to change how many). Bad input raises
+``ValueError`` with the same one-line message as ``motion-cli``; unreadable files ``OSError``.
+"""
+
+from ._motion import (  # noqa: F401
+    Generator,
+    Model,
+    NdmsDatabase,
+    __version__,
+    apd,
+    euler_error,
+    expmap_to_positions,
+    npss,
+    npss_windows,
+    read_bvh,
+    read_expmap,
+    set_threads,
+    write_bvh,
+)
+
+__all__ = [
+    "Generator",
+    "Model",
+    "NdmsDatabase",
+    "apd",
+    "euler_error",
+    "expmap_to_positions",
+    "npss",
+    "npss_windows",
+    "read_bvh",
+    "read_expmap",
+    "set_threads",
+    "write_bvh",
+]

@@ -1,0 +1,114 @@
+"""Type stubs of the compiled module (see the ``motion`` package docstring)."""
+
+from os import PathLike
+from typing import Any, Literal, Optional, Sequence, Union, overload
+
+import numpy as np
+import numpy.typing as npt
+
+ArrayLike = npt.ArrayLike
+F64 = npt.NDArray[np.float64]
+Path = Union[str, PathLike]
+
+__version__: str
+
+def npss(
+    gt: ArrayLike,
+    pred: ArrayLike,
+    variant: Literal["paper", "reference"] = "paper",
+    input_space: Literal["raw", "expmap"] = "raw",
+) -> float:
+    """NPSS of ``pred`` against ``gt`` (both ``N x T x D``).
+
+    >>> motion.npss(gt, gt)
+    0.0
+    """
+
+def npss_windows(
+    gt: ArrayLike,
+    pred: ArrayLike,
+    variant: Literal["paper", "reference"] = "paper",
+    input_space: Literal["raw", "expmap"] = "raw",
+) -> dict[str, float]:
+    """NPSS per window of the protocol (25 Hz frames), ``{label: value}``."""
+
+def euler_error(gt: ArrayLike, pred: ArrayLike) -> F64:
+    """The H3.6M protocol's Euler-angle error per frame of exp-map ``N x T x D`` inputs."""
+
+@overload
+def apd(samples: ArrayLike) -> float: ...
+@overload
+def apd(samples: ArrayLike, per_sequence: Literal[True]) -> tuple[float, F64]: ...
+def apd(samples: ArrayLike, per_sequence: bool = False) -> Any:
+    """APD of ``S x F`` samples, or the mean over ``N x S x ...`` forecasts."""
+
+class NdmsDatabase:
+    """Motion words of reference positions (``T x 32 x 3``, H3.6M, y up) with an exact index."""
+
+    word_len: int
+    def __init__(
+        self,
+        positions: Union[ArrayLike, Sequence[ArrayLike]],
+        word_len: int = 8,
+        method: Literal["pose-bound", "pca-kd-tree", "brute-force"] = "pose-bound",
+    ) -> None: ...
+    def __len__(self) -> int: ...
+    def score(
+        self,
+        forecasts: Union[ArrayLike, Sequence[ArrayLike]],
+        seeds: Optional[Union[ArrayLike, Sequence[ArrayLike]]] = None,
+    ) -> dict[str, Any]:
+        """``{"mean", "per_word", "bins", "first_word_end"}`` of the forecasts' NDMS."""
+
+def read_bvh(path: Path) -> dict[str, Any]:
+    """``{"channels", "fps", "joints", "parents", "offsets", "expmap"}`` of a BVH file."""
+
+def write_bvh(path: Path, frames: ArrayLike, fps: float = 25.0) -> None:
+    """Writes exp-map frames (``T x 99`` or ``T x 117``) as BVH."""
+
+def read_expmap(path: Path) -> F64:
+    """Exp-map frames of ``.txt``, ``.txt.gz`` or ``.npy``."""
+
+def expmap_to_positions(frames: ArrayLike, fps: float = 25.0) -> F64:
+    """World joint positions, ``T x J x 3`` millimetres, of exp-map frames at ``fps``."""
+
+def set_threads(threads: int) -> None:
+    """Threads for the metrics and generators (once, before the first computation)."""
+
+def data_address(array: ArrayLike) -> int:
+    """Address of the data the bindings read (``array.ctypes.data`` when read in place)."""
+
+class Model:
+    """A motion model.
+
+    >>> model = motion.Model.default()
+    >>> model.predict("examples/walk_seed.bvh", action="walking", frames=100).shape
+    (1, 100, 99)
+    """
+
+    actions: list[str]
+    fps: float
+    seed_frames: int
+    frame_dims: int
+    @staticmethod
+    def load(path: Path) -> "Model": ...
+    @staticmethod
+    def default() -> "Model": ...
+    def info(self) -> dict[str, Any]: ...
+    def predict(
+        self,
+        seed: Union[Path, ArrayLike],
+        action: Optional[str] = None,
+        frames: int = 100,
+        samples: int = 1,
+        rng_seed: int = 0,
+        input_fps: Optional[float] = None,
+    ) -> F64: ...
+    def generator(self, rng_seed: int = 0) -> "Generator": ...
+
+class Generator:
+    """Frame-by-frame generation: ``start(seed, action)`` then ``step()``."""
+
+    def start(self, seed: ArrayLike, action: Optional[str] = None) -> None: ...
+    def step(self) -> F64: ...
+    def set_action(self, action: str, crossfade: int = 0) -> None: ...
