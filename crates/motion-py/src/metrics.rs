@@ -207,6 +207,17 @@ fn position_sequences(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<Array3
     }
 }
 
+/// Paper 003's H3.6M setting with κ = `word_len`.
+fn ndms_config(word_len: usize) -> PyResult<NdmsConfig> {
+    if word_len < 2 {
+        return Err(value(format!("word_len {word_len}: at least 2 frames")));
+    }
+    Ok(NdmsConfig {
+        kappa: word_len,
+        ..NdmsConfig::h36m()
+    })
+}
+
 #[pymethods]
 impl NdmsDatabase {
     /// `positions`: reference motions, a list of `T x J x 3` arrays (or one `N x T x J x 3`)
@@ -222,13 +233,7 @@ impl NdmsDatabase {
         let sequences = position_sequences(positions, "positions")?;
         let method_name = method;
         let method = nn_method(method)?;
-        if word_len < 2 {
-            return Err(value(format!("word_len {word_len}: at least 2 frames")));
-        }
-        let config = NdmsConfig {
-            kappa: word_len,
-            ..NdmsConfig::h36m()
-        };
+        let config = ndms_config(word_len)?;
         let database = py
             .detach(|| {
                 let views: Vec<_> = sequences.iter().map(|s| s.view()).collect();
@@ -254,10 +259,7 @@ impl NdmsDatabase {
         let array = f64_array(words, "words")?;
         let words = dims::<Ix2>(array.as_array(), "words", "W x word_dims")?;
         let flat: Vec<f64> = words.iter().copied().collect();
-        let config = NdmsConfig {
-            kappa: word_len.max(2),
-            ..NdmsConfig::h36m()
-        };
+        let config = ndms_config(word_len)?;
         if words.ncols() != config.word_len() {
             return Err(value(format!(
                 "words: {} numbers per word, a κ = {word_len} word on this skeleton has {}",
