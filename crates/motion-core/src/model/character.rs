@@ -100,7 +100,8 @@ impl Character {
     }
 
     /// [`start`](Self::start) from the last `seed_frames` frames of a longer clip (a loaded seed
-    /// file: [`crate::seed`]); a clip shorter than that is refused like a short seed.
+    /// file: [`crate::seed`]); a clip shorter than `seed_frames` is refused
+    /// ([`GenerateError::TooFewSeedFrames`]).
     pub fn start_from_clip<T: FrameScalar>(
         &mut self,
         clip: ArrayView2<'_, T>,
@@ -108,7 +109,14 @@ impl Character {
         noise: Noise<'_>,
     ) -> Result<&Pose, CharacterError> {
         let needed = self.generator.model().config().seed_frames;
-        let skip = clip.nrows().saturating_sub(needed);
+        if clip.nrows() < needed {
+            return Err(GenerateError::TooFewSeedFrames {
+                needed,
+                got: clip.nrows(),
+            }
+            .into());
+        }
+        let skip = clip.nrows() - needed;
         self.start(clip.slice_move(ndarray::s![skip.., ..]), action, noise)
     }
 
