@@ -39,4 +39,59 @@ synth 5 3 > "$txt/five_columns.txt"
 # A BVH on the H3.6M skeleton, written by our converter.
 cargo run --quiet --manifest-path "$repo/Cargo.toml" -p motion-cli -- \
   convert "$txt/h36m_4_frames.txt" "$bvh/h36m_4_frames.bvh"
-ls -l "$bvh" "$txt"
+
+# .npy: the exp-map texts converted by our writer (float64, C order), and a float32 one.
+npy="$here/seeds/npy_parse"
+mkdir -p "$npy"
+for name in h36m_4_frames cmu_2_frames; do
+  cargo run --quiet --manifest-path "$repo/Cargo.toml" -p motion-cli -- \
+    convert "$txt/$name.txt" "$npy/$name.npy"
+done
+cargo run --quiet --manifest-path "$repo/Cargo.toml" -p motion-cli -- \
+  convert "$txt/h36m_4_frames.txt" "$npy/h36m_4_frames_positions.npy" --positions
+
+# Weights: the parity fixtures (tiny random-weight models of every architecture, made by
+# training/export_fixtures.py) as whole files, and for the structure-aware target their config
+# JSON after a selector byte (0 vgru-d, 1 gru-d, 2 dae-lstm, 3 vgru-d f16: weights_config.rs).
+weights="$here/seeds/weights_load"
+config="$here/seeds/weights_config"
+mkdir -p "$weights" "$config"
+i=0
+for name in vgru_d gru_d dae_lstm vgru_d_f16; do
+  cp "$repo/tests/fixtures/parity/$name.safetensors" "$weights/"
+  python3 - "$repo/tests/fixtures/parity/$name.safetensors" "$config/$name.bin" "$i" <<'PY'
+import json, struct, sys
+with open(sys.argv[1], "rb") as f:
+    n = struct.unpack("<Q", f.read(8))[0]
+    header = json.loads(f.read(n))
+with open(sys.argv[2], "wb") as out:
+    out.write(bytes([int(sys.argv[3])]) + header["__metadata__"]["config"].encode())
+PY
+  i=$((i + 1))
+done
+
+# BVH seeds for the retargeting loader: the H3.6M one and the CMU-style rig walk of
+# examples/make_rig_seed.rs, cut to 4 frames.
+retarget="$here/seeds/bvh_retarget"
+mkdir -p "$retarget"
+cp "$bvh/h36m_4_frames.bvh" "$retarget/"
+cargo run --quiet --manifest-path "$repo/Cargo.toml" --example make_rig_seed >/dev/null
+awk 'BEGIN { frames = -1 }
+     /^Frames:/ { sub(/[0-9]+/, "4") }
+     { print }
+     /^Frame Time:/ { frames = 0; next }
+     frames >= 0 && NF > 0 { if (++frames >= 4) exit }' \
+  "$repo/examples/cmu_rig_walk.bvh" > "$retarget/cmu_rig_4_frames.bvh"
+
+# Joint maps: a full map for the CMU-style demo rig and a partial one.
+maps="$here/seeds/joint_map"
+mkdir -p "$maps"
+cat > "$maps/cmu.json" <<'JSON'
+{"Hips": "Hips", "LeftUpLeg": "LeftUpLeg", "LeftLeg": "LeftLeg", "LeftFoot": "LeftFoot", "LeftToeBase": "LeftToeBase",
+ "RightUpLeg": "RightUpLeg", "RightLeg": "RightLeg", "RightFoot": "RightFoot", "RightToeBase": "RightToeBase",
+ "Spine": "Spine", "Spine1": "Spine1", "Neck": "Neck", "Head": "Head",
+ "LeftShoulder": "LeftShoulder", "LeftArm": "LeftArm", "LeftForeArm": "LeftForeArm", "LeftHand": "LeftHand",
+ "RightShoulder": "RightShoulder", "RightArm": "RightArm", "RightForeArm": "RightForeArm", "RightHand": "RightHand"}
+JSON
+echo '{"Hips": "Hips", "Head": "Head"}' > "$maps/partial.json"
+ls -l "$bvh" "$txt" "$npy" "$weights" "$config" "$retarget" "$maps"

@@ -37,6 +37,11 @@ pub enum SeedError {
     },
 }
 
+/// The slowest BVH seed rate accepted (H3.6M root deltas need at least 1 fps).
+pub const MIN_SEED_FPS: f64 = 1.0;
+/// The fastest BVH seed rate accepted.
+pub const MAX_SEED_FPS: f64 = 10_000.0;
+
 /// Two frame rates closer than this (relative) are the same: BVH frame times are rounded in files.
 const SAME_RATE: f64 = 1e-3;
 
@@ -163,6 +168,23 @@ fn bvh_frames(
     notices: &mut Vec<String>,
     rig: &mut Option<RigSeed>,
 ) -> Result<Array2<f64>, SeedError> {
+    // Checked before anything is resampled: a Frame Time in milliseconds (20 for 50 Hz) would
+    // otherwise be stretched to thousands of times its frames.
+    let rate = bvh.fps();
+    if !(MIN_SEED_FPS..=MAX_SEED_FPS).contains(&rate) {
+        return Err(usage(
+            path,
+            format!(
+                "Frame Time {} s is {rate:.4} fps, outside {MIN_SEED_FPS} ..= {MAX_SEED_FPS} fps{}",
+                bvh.frame_time,
+                if bvh.frame_time >= 1.0 {
+                    " (is it in milliseconds? BVH frame times are seconds)"
+                } else {
+                    ""
+                }
+            ),
+        ));
+    }
     if let Some(frame) = first_non_finite(&bvh.frames) {
         return Err(usage(
             path,
@@ -522,6 +544,17 @@ mod tests {
             err.to_string().contains("flat.bvh") && err.to_string().contains("unit"),
             "{err}"
         );
+        // Frame times in milliseconds (or any rate outside 1 ..= 10,000 fps) are refused before
+        // anything is resampled.
+        for frame_time in [20.0, 100_000.0, 1e-9] {
+            let mut bvh = walking_bvh();
+            bvh.frame_time = frame_time;
+            let err = seed_from_bvh(bvh, Path::new("slow.bvh"), ExpMapTarget::H36m, 25.0, None)
+                .unwrap_err()
+                .to_string();
+            assert!(err.contains("slow.bvh") && err.contains("fps"), "{err}");
+            assert_eq!(err.contains("milliseconds"), frame_time >= 1.0, "{err}");
+        }
         let short = dir.join("short.npy");
         crate::formats::npy::write_npy(&short, &Array2::<f64>::zeros((4, 98))).unwrap();
         let err = load_seed(&short, ExpMapTarget::H36m, 25.0, 50.0, None).unwrap_err();

@@ -29,9 +29,18 @@ pub fn read_npy_dyn(path: impl AsRef<Path>) -> Result<ArrayD<f64>, FormatError> 
         path: path.to_path_buf(),
         source,
     })?;
-    let mut cursor = Cursor::new(&bytes[..]);
-    let header = Header::from_reader(&mut cursor)
-        .map_err(|e| invalid(path, format!("not a valid .npy header: {e}")))?;
+    parse_npy_dyn(&bytes, path)
+}
+
+/// [`read_npy_dyn`] of a `.npy` file's bytes already in memory; `path` names it in errors.
+pub fn parse_npy_dyn(bytes: &[u8], path: &Path) -> Result<ArrayD<f64>, FormatError> {
+    let mut cursor = Cursor::new(bytes);
+    let header = Header::from_reader(&mut cursor).map_err(|e| {
+        invalid(
+            path,
+            format!("not a valid .npy header: {}", one_line(&e.to_string())),
+        )
+    })?;
     let descr = header.type_descriptor.to_string();
     let elem = match descr.trim_matches(|c| c == '\'' || c == '"') {
         "<f8" | "=f8" | "f8" | "float64" => 8,
@@ -39,10 +48,26 @@ pub fn read_npy_dyn(path: impl AsRef<Path>) -> Result<ArrayD<f64>, FormatError> 
         other => {
             return Err(invalid(
                 path,
-                format!("expected float64 or float32 little-endian data, found dtype {other}"),
+                format!(
+                    "expected float64 or float32 little-endian data, found dtype {}",
+                    one_line(other)
+                ),
             ))
         }
     };
+    // ndarray's own limit: the product of the non-zero axes must fit in isize, even when
+    // another axis is 0 (a (0, 2^62, 4) header holds no data but no array can have its shape).
+    let nonzero = header
+        .shape
+        .iter()
+        .filter(|&&d| d != 0)
+        .try_fold(elem, |acc: usize, &d| acc.checked_mul(d));
+    if nonzero.is_none_or(|n| n > isize::MAX as usize) {
+        return Err(invalid(
+            path,
+            format!("header shape {:?} is too large for any array", header.shape),
+        ));
+    }
     let data_len = bytes.len() - cursor.position() as usize;
     let needed = header
         .shape
@@ -58,13 +83,26 @@ pub fn read_npy_dyn(path: impl AsRef<Path>) -> Result<ArrayD<f64>, FormatError> 
             ),
         ));
     }
-    let parse_err = |e: ndarray_npy::ReadNpyError| invalid(path, format!("bad .npy data: {e}"));
+    let parse_err = |e: ndarray_npy::ReadNpyError| {
+        invalid(path, format!("bad .npy data: {}", one_line(&e.to_string())))
+    };
     if elem == 8 {
-        ArrayD::<f64>::read_npy(&bytes[..]).map_err(parse_err)
+        ArrayD::<f64>::read_npy(bytes).map_err(parse_err)
     } else {
-        Ok(ArrayD::<f32>::read_npy(&bytes[..])
+        Ok(ArrayD::<f32>::read_npy(bytes)
             .map_err(parse_err)?
             .mapv(f64::from))
+    }
+}
+
+/// A library's multi-line message as one line, at most 200 characters.
+fn one_line(message: &str) -> String {
+    let flat: String = message.split_whitespace().collect::<Vec<_>>().join(" ");
+    if flat.chars().count() > 200 {
+        let cut: String = flat.chars().take(200).collect();
+        format!("{cut}...")
+    } else {
+        flat
     }
 }
 
@@ -157,6 +195,50 @@ mod tests {
         assert_eq!(read_npy_frames(dir.0.join("f.npy")).unwrap(), f.t());
     }
 
+    /// A `.npy` file's bytes with `header` (a Python dict literal) and `data`.
+    fn npy_bytes(header: &str, data: &[u8]) -> Vec<u8> {
+        let mut dict = header.to_string();
+        while !(10 + dict.len() + 1).is_multiple_of(64) {
+            dict.push(' ');
+        }
+        dict.push('\n');
+        let mut out = b"\x93NUMPY\x01\x00".to_vec();
+        out.extend_from_slice(&(dict.len() as u16).to_le_bytes());
+        out.extend_from_slice(dict.as_bytes());
+        out.extend_from_slice(data);
+        out
+    }
+
+    #[test]
+    fn impossible_shapes_are_errors_not_panics() {
+        let path = Path::new("big.npy");
+        for shape in [
+            "(0, 4611686018427387904, 4)",
+            "(4611686018427387904, 0)",
+            "(0, 18446744073709551615)",
+        ] {
+            let bytes = npy_bytes(
+                &format!("{{'descr': '<f8', 'fortran_order': False, 'shape': {shape}, }}"),
+                &[],
+            );
+            let e = parse_npy_dyn(&bytes, path).unwrap_err().to_string();
+            assert!(e.contains("too large"), "{shape}: {e}");
+        }
+        // Zero-sized arrays of sane shapes still read.
+        let bytes = npy_bytes(
+            "{'descr': '<f8', 'fortran_order': False, 'shape': (0, 99), }",
+            &[],
+        );
+        assert_eq!(parse_npy_dyn(&bytes, path).unwrap().shape(), &[0, 99]);
+        // A header that does not parse gives one short line.
+        let bytes = npy_bytes(
+            "{'descr': '<f8', 'fortran_order': False, 'shape': (2, ",
+            &[0; 16],
+        );
+        let e = parse_npy_dyn(&bytes, path).unwrap_err().to_string();
+        assert!(!e.contains('\n') && e.len() < 300, "{e}");
+    }
+
     #[test]
     fn float32_files_are_widened() {
         let dir = Scratch::new("npy32");
@@ -206,20 +288,15 @@ mod tests {
     #[test]
     fn huge_declared_shapes_do_not_allocate() {
         let dir = Scratch::new("npyhuge");
-        let header =
-            "{'descr': '<f8', 'fortran_order': False, 'shape': (4000000000, 4000000000), }";
-        let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
-        let mut h = header.to_string();
-        while !(10 + h.len() + 1).is_multiple_of(64) {
-            h.push(' ');
-        }
-        h.push('\n');
-        bytes.extend_from_slice(&(h.len() as u16).to_le_bytes());
-        bytes.extend_from_slice(h.as_bytes());
-        bytes.extend_from_slice(&[0u8; 16]);
         let path = dir.0.join("huge.npy");
-        std::fs::write(&path, bytes).unwrap();
-        let e = read_npy_dyn(&path).unwrap_err();
-        assert!(e.to_string().contains("needs"), "{e}");
+        for (shape, says) in [
+            ("(4000000000, 4000000000)", "too large"),
+            ("(400000, 400000)", "needs"),
+        ] {
+            let header = format!("{{'descr': '<f8', 'fortran_order': False, 'shape': {shape}, }}");
+            std::fs::write(&path, npy_bytes(&header, &[0u8; 16])).unwrap();
+            let e = read_npy_dyn(&path).unwrap_err();
+            assert!(e.to_string().contains(says), "{e}");
+        }
     }
 }

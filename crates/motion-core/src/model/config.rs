@@ -87,6 +87,26 @@ pub struct ModelConfig {
     pub horizon: usize,
 }
 
+/// Upper bounds of a model file's sizes ([`ModelConfig::validate`]): far above any model of the
+/// papers, low enough that every buffer they size is allocatable and no product of them wraps.
+pub mod limits {
+    /// Values per frame.
+    pub const FRAME_DIMS: usize = 1 << 16;
+    /// Units of a recurrent or autoencoder layer.
+    pub const UNITS: usize = 1 << 16;
+    /// Stacked layers.
+    pub const LAYERS: usize = 64;
+    /// Seed frames and plan horizon (frames).
+    pub const FRAMES: usize = 100_000;
+    /// Action labels.
+    pub const ACTIONS: usize = 10_000;
+    /// Frames per second: 1 ..= this.
+    pub const FPS: f64 = 1000.0;
+    /// Values in a plan's frames, `(seed_frames + horizon) * frame_dims` (a generator keeps
+    /// that many per character).
+    pub const PLAN_VALUES: usize = 1 << 26;
+}
+
 impl ModelConfig {
     /// Parses and validates the `config` metadata value of `path`.
     pub fn from_json(json: &str, path: &Path) -> Result<Self, WeightsError> {
@@ -102,13 +122,38 @@ impl ModelConfig {
 
     /// Checks the fields against each other; returns what is wrong.
     pub fn validate(&self) -> Result<(), String> {
+        let at_most = |what: &str, value: usize, limit: usize| {
+            if value > limit {
+                Err(format!("{what} {value} is over the limit of {limit}"))
+            } else {
+                Ok(())
+            }
+        };
+        at_most("frame_dims", self.frame_dims, limits::FRAME_DIMS)?;
+        at_most("hidden", self.hidden, limits::UNITS)?;
+        at_most("plan_hidden", self.plan_hidden.unwrap_or(0), limits::UNITS)?;
+        at_most("dae_hidden", self.dae_hidden.unwrap_or(0), limits::UNITS)?;
+        at_most("layers", self.layers, limits::LAYERS)?;
+        at_most("dae_layers", self.dae_layers.unwrap_or(0), limits::LAYERS)?;
+        at_most("seed_frames", self.seed_frames, limits::FRAMES)?;
+        at_most("horizon", self.horizon, limits::FRAMES)?;
+        at_most("actions", self.actions.len(), limits::ACTIONS)?;
+        at_most(
+            "(seed_frames + horizon) * frame_dims",
+            (self.seed_frames + self.horizon) * self.frame_dims,
+            limits::PLAN_VALUES,
+        )?;
         validate_dims_used(&self.dims_used, self.frame_dims)?;
         if self.hidden == 0 {
             return Err("hidden is 0".into());
         }
         validate_derivatives(self.derivative_order, &self.derivative_padding)?;
-        if !(self.fps.is_finite() && self.fps > 0.0) {
-            return Err(format!("fps {} is not a positive number", self.fps));
+        if !(self.fps.is_finite() && (1.0..=limits::FPS).contains(&self.fps)) {
+            return Err(format!(
+                "fps {} is outside 1 ..= {} frames per second",
+                self.fps,
+                limits::FPS
+            ));
         }
         match self.architecture {
             Architecture::GruD if self.layers == 0 => return Err("gru-d with 0 layers".into()),
@@ -272,4 +317,57 @@ pub fn validate_derivatives(order: usize, padding: &str) -> Result<(), String> {
         ));
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn vgru() -> ModelConfig {
+        ModelConfig {
+            architecture: Architecture::VgruD,
+            frame_dims: 99,
+            dims_used: (6..99).collect(),
+            hidden: 8,
+            layers: 1,
+            plan_hidden: Some(4),
+            dae_hidden: None,
+            dae_layers: None,
+            gru_convention: serde_json::from_str("\"pytorch\"").unwrap(),
+            normalization: "standard".into(),
+            residual: true,
+            derivative_order: 3,
+            derivative_padding: DERIVATIVE_PADDING.into(),
+            fps: 25.0,
+            skeleton: "h36m-32".into(),
+            actions: vec!["walking".into()],
+            seed_frames: 50,
+            horizon: 100,
+        }
+    }
+
+    #[test]
+    fn sizes_beyond_the_limits_are_refused_by_validate() {
+        assert_eq!(vgru().validate(), Ok(()));
+        let cases: [(&str, fn(&mut ModelConfig)); 9] = [
+            ("(seed_frames + horizon)", |c| {
+                c.horizon = 90_000;
+                c.frame_dims = 60_000;
+            }),
+            ("horizon", |c| c.horizon = 1 << 62),
+            ("seed_frames", |c| c.seed_frames = usize::MAX),
+            ("fps", |c| c.fps = 1e9),
+            ("fps", |c| c.fps = 0.5),
+            ("hidden", |c| c.hidden = usize::MAX / 2),
+            ("plan_hidden", |c| c.plan_hidden = Some(1 << 40)),
+            ("frame_dims", |c| c.frame_dims = 1 << 62),
+            ("layers", |c| c.layers = 1000),
+        ];
+        for (field, break_it) in cases {
+            let mut c = vgru();
+            break_it(&mut c);
+            let e = c.validate().unwrap_err();
+            assert!(e.starts_with(field), "{field}: {e}");
+        }
+    }
 }
