@@ -191,6 +191,13 @@ def main(argv=None) -> int:
         if args.generate:
             generate_corpus(args.pred, args.db, args.generate, args.samples, args.frames, 0)
             args.gt, args.pred = args.pred / "gt", args.pred / "pred"
+        startup = 0.0
+        if not args.local:
+            import ray
+
+            begin = time.perf_counter()
+            ray.init(address=args.address, include_dashboard=False, log_to_driver=False)
+            startup = time.perf_counter() - begin
         start = time.perf_counter()
         db = motion.NdmsDatabase(reference_positions(args.db))
         items = corpus_items(args.pred, args.gt)
@@ -200,7 +207,7 @@ def main(argv=None) -> int:
         print(f"ray_score: {e}", file=sys.stderr)
         return 2
     args.out.write_text(json.dumps(report, indent=1, sort_keys=True) + "\n")
-    mode = "one process" if args.local else "Ray"
+    mode = "one process" if args.local else f"Ray, after {startup:.1f} s connecting"
     print(f"{len(items)} files scored in {elapsed:.2f} s ({len(items) / elapsed:.1f} files/s, {mode}): {args.out}")
     return 0
 

@@ -34,6 +34,7 @@ pub fn read_npy_dyn(path: impl AsRef<Path>) -> Result<ArrayD<f64>, FormatError> 
 
 /// [`read_npy_dyn`] of a `.npy` file's bytes already in memory; `path` names it in errors.
 pub fn parse_npy_dyn(bytes: &[u8], path: &Path) -> Result<ArrayD<f64>, FormatError> {
+    check_header_length(bytes, path)?;
     let mut cursor = Cursor::new(bytes);
     let header = Header::from_reader(&mut cursor).map_err(|e| {
         invalid(
@@ -93,6 +94,33 @@ pub fn parse_npy_dyn(bytes: &[u8], path: &Path) -> Result<ArrayD<f64>, FormatErr
             .map_err(parse_err)?
             .mapv(f64::from))
     }
+}
+
+/// The header length a `.npy` file declares must fit in the file: the header parser allocates
+/// it before reading (a 4-byte length of 2.5 GB in a 20-byte file would abort the process).
+fn check_header_length(bytes: &[u8], path: &Path) -> Result<(), FormatError> {
+    const MAGIC: &[u8] = b"\x93NUMPY";
+    if bytes.len() < MAGIC.len() + 2 || &bytes[..MAGIC.len()] != MAGIC {
+        return Ok(()); // the header parser names what is wrong
+    }
+    let (length, start) = match bytes[MAGIC.len()] {
+        1 if bytes.len() >= 10 => (u64::from(u16::from_le_bytes([bytes[8], bytes[9]])), 10),
+        2 | 3 if bytes.len() >= 12 => (
+            u64::from(u32::from_le_bytes([
+                bytes[8], bytes[9], bytes[10], bytes[11],
+            ])),
+            12,
+        ),
+        _ => return Ok(()),
+    };
+    let available = (bytes.len() - start) as u64;
+    if length > available {
+        return Err(invalid(
+            path,
+            format!("not a valid .npy header: it declares {length} bytes, the file has {available} after the preamble"),
+        ));
+    }
+    Ok(())
 }
 
 /// A library's multi-line message as one line, at most 200 characters.
@@ -230,6 +258,12 @@ mod tests {
             &[],
         );
         assert_eq!(parse_npy_dyn(&bytes, path).unwrap().shape(), &[0, 99]);
+        // A declared header length beyond the file is refused before anything is allocated
+        // (found by fuzzing: version 2, length 0x93000000, in a 20-byte file).
+        let mut lying = b"\x93NUMPY\x02\x00\x00\x00\x00\x93".to_vec();
+        lying.extend_from_slice(b"NUMPY\x02\x00\x00");
+        let e = parse_npy_dyn(&lying, path).unwrap_err().to_string();
+        assert!(e.contains("declares 2466250752 bytes"), "{e}");
         // A header that does not parse gives one short line.
         let bytes = npy_bytes(
             "{'descr': '<f8', 'fortran_order': False, 'shape': (2, ",
