@@ -24,8 +24,9 @@ use anyhow::Context;
 
 use serde_json::Value;
 
-use crate::commands::render::raster::{write_atomically, Anchor, Canvas, Rgb};
+use crate::commands::render::raster::{Anchor, Canvas, Rgb};
 use crate::commands::UsageError;
+use motion_core::formats::atomic::write_bytes_atomically;
 
 /// One line of a chart.
 #[derive(Debug, Clone, PartialEq)]
@@ -75,8 +76,7 @@ pub fn write_charts(path: &Path, charts: &[Chart], columns: usize) -> anyhow::Re
         PlotFormat::Svg => charts_svg(charts, columns).into_bytes(),
         PlotFormat::Png => charts_png(charts, columns)?,
     };
-    write_atomically(path, &bytes)
-        .map_err(|e| UsageError(format!("{}: cannot write: {e}", path.display())).into())
+    Ok(write_bytes_atomically(path, &bytes)?)
 }
 
 /// The image formats a plot can be written in.

@@ -3,10 +3,29 @@
 //! Every variant names the file; parse errors also name the 1-based line and what was expected.
 use std::path::PathBuf;
 
+/// Why an output could not be written: the source of [`FormatError::Write`], a type of its own so
+/// that callers find a failed write in an error's `source()` chain even behind wrappers that
+/// forward their source (and tell it from a failed read: exit 1, not 2).
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct WriteFailure(#[source] pub std::io::Error);
+
 /// An error reading or writing a motion file (H3.6M text, BVH, `.npy`).
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum FormatError {
-    /// The file could not be opened, read or written.
+    /// An output could not be written (disk full, permission denied, missing directory): a
+    /// failure of the environment rather than of the input, unless the directory is missing.
+    /// Nothing is left behind ([`crate::formats::atomic`]).
+    #[error("{}: cannot write: {source}", path.display())]
+    Write {
+        /// The output file.
+        path: PathBuf,
+        /// The underlying I/O error.
+        #[source]
+        source: WriteFailure,
+    },
+    /// The file could not be opened or read.
     #[error("{}: {source}", path.display())]
     Io {
         /// The file.

@@ -16,7 +16,8 @@ pub fn metric(what: &str, err: motion_metrics::MetricError) -> PyErr {
 /// A file error: `OSError` when reading or writing failed, `ValueError` when the content is bad.
 pub fn format(err: motion_core::error::FormatError) -> PyErr {
     match err {
-        motion_core::error::FormatError::Io { .. } => PyOSError::new_err(err.to_string()),
+        motion_core::error::FormatError::Io { .. }
+        | motion_core::error::FormatError::Write { .. } => PyOSError::new_err(err.to_string()),
         other => value(other),
     }
 }

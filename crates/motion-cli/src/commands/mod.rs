@@ -37,8 +37,45 @@ pub fn error_chain(err: &anyhow::Error) -> String {
 }
 
 /// Bad input (typed library errors about files, shapes and values, or [`UsageError`]) exits
-/// with 2; anything else with 1.
+/// with 2; a failure of the environment (an output that cannot be written for any reason but a
+/// missing directory, a full disk, an interrupted call, memory) and anything unexpected with 1.
 pub fn exit_code(err: &anyhow::Error) -> u8 {
+    use std::io::ErrorKind;
+    // A failure of the machine rather than of what the user gave: exit 1.
+    let environment = |kind: ErrorKind| {
+        matches!(
+            kind,
+            ErrorKind::StorageFull
+                | ErrorKind::QuotaExceeded
+                | ErrorKind::FileTooLarge
+                | ErrorKind::ReadOnlyFilesystem
+                | ErrorKind::Interrupted
+                | ErrorKind::OutOfMemory
+                | ErrorKind::TimedOut
+                | ErrorKind::ResourceBusy
+        )
+    };
+    for cause in err.chain() {
+        if let Some(write) = cause.downcast_ref::<motion_core::error::WriteFailure>() {
+            // An output that cannot be written is the environment's failure (disk full,
+            // permission denied), unless the path itself is wrong: a missing directory, a
+            // directory where the file should go, a file where a directory should be.
+            let wrong_path = matches!(
+                write.0.kind(),
+                ErrorKind::NotFound
+                    | ErrorKind::IsADirectory
+                    | ErrorKind::NotADirectory
+                    | ErrorKind::InvalidFilename
+                    | ErrorKind::InvalidInput
+            );
+            return if wrong_path { 2 } else { 1 };
+        }
+        if let Some(io) = cause.downcast_ref::<std::io::Error>() {
+            if environment(io.kind()) {
+                return 1;
+            }
+        }
+    }
     let is_input = err.chain().any(|c| {
         c.is::<UsageError>()
             || c.is::<motion_core::FormatError>()

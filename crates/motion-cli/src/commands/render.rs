@@ -15,8 +15,8 @@ use motion_core::skeleton::H36M_SOURCE_FPS;
 use serde_json::json;
 
 use super::UsageError;
+use motion_core::formats::atomic::write_bytes_atomically;
 use paint::Picture;
-use raster::write_atomically;
 use scene::{floor_grid, floor_height, load_track, rotate_track, timeline, Camera, Upright};
 
 /// The long help after the options.
@@ -209,8 +209,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             sheet::contact_sheet(&picture, &times, args.cells, args.columns).encode_png()?
         }
     };
-    write_atomically(&args.out, &bytes)
-        .map_err(|e| UsageError(format!("{}: cannot write: {e}", args.out.display())))?;
+    write_bytes_atomically(&args.out, &bytes)?;
     if args.reporting.json {
         let report = json!({
             "input": args.input,

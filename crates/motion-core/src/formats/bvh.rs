@@ -109,5 +109,5 @@ pub fn to_bvh_string(bvh: &Bvh) -> std::io::Result<String> {
 /// Writes `bvh` to `path`, through a temporary file in the same directory renamed into place, so
 /// a failure never leaves a half-written file.
 pub fn write_bvh(path: impl AsRef<Path>, bvh: &Bvh) -> Result<(), FormatError> {
-    super::h36m_text::write_atomically(path.as_ref(), |w| write_to(&mut *w, bvh))
+    super::atomic::write_atomically(path.as_ref(), |w| write_to(&mut *w, bvh))
 }

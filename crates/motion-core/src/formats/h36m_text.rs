@@ -2,12 +2,13 @@
 //! (99 for H3.6M, 117 for CMU), plain (`.txt`) or gzip (`.txt.gz`); plus the protocol's 25 Hz
 //! downsampling.
 use std::fs::File;
-use std::io::{BufRead, BufReader, BufWriter, Read, Write};
-use std::path::{Path, PathBuf};
+use std::io::{BufRead, BufReader, Read, Write};
+use std::path::Path;
 
 use ndarray::{Array2, ArrayView2, Axis};
 
 use crate::error::FormatError;
+use crate::formats::atomic::write_atomically;
 
 /// True if the path ends in `.gz` (case-insensitive).
 fn is_gzip(path: &Path) -> bool {
@@ -146,35 +147,6 @@ pub fn format_expmap_text(mut w: impl Write, frames: ArrayView2<f64>) -> std::io
     Ok(())
 }
 
-/// Writes through `body` into a temporary file next to `path`, then renames it onto `path`.
-/// The temporary file is removed if anything fails.
-pub(crate) fn write_atomically(
-    path: &Path,
-    body: impl FnOnce(&mut BufWriter<File>) -> std::io::Result<()>,
-) -> Result<(), FormatError> {
-    let tmp = temp_path(path);
-    let result = (|| {
-        let file = File::create(&tmp)?;
-        let mut w = BufWriter::new(file);
-        body(&mut w)?;
-        let file = w.into_inner().map_err(|e| e.into_error())?;
-        file.sync_all()?;
-        std::fs::rename(&tmp, path)
-    })();
-    result.map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        io_error(path, e)
-    })
-}
-
-fn temp_path(path: &Path) -> PathBuf {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    path.with_file_name(format!(".{name}.tmp{}", std::process::id()))
-}
-
 /// The protocol's downsampling of 50 Hz frames to 25 Hz: keeps frames 0, 2, 4, ...
 pub fn downsample_protocol(frames: ArrayView2<f64>) -> Array2<f64> {
     frames.slice(ndarray::s![..;2, ..]).to_owned()
@@ -184,6 +156,7 @@ pub fn downsample_protocol(frames: ArrayView2<f64>) -> Array2<f64> {
 pub(crate) mod tests {
     use super::*;
     use ndarray::Array2;
+    use std::path::PathBuf;
 
     /// A scratch directory removed on drop.
     pub(crate) struct Scratch(pub PathBuf);

@@ -4,6 +4,7 @@ use std::path::Path;
 use crate::error::FormatError;
 
 pub mod any;
+pub mod atomic;
 pub mod bvh;
 pub mod expmap_bvh;
 pub mod h36m_text;

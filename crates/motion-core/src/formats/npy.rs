@@ -9,7 +9,7 @@ use ndarray_npy::npy::header::Header;
 use ndarray_npy::{ReadNpyExt, WriteNpyExt};
 
 use crate::error::FormatError;
-use crate::formats::h36m_text::write_atomically;
+use crate::formats::atomic::write_atomically;
 
 fn invalid(path: &Path, problem: String) -> FormatError {
     FormatError::Invalid {

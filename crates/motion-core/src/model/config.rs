@@ -349,7 +349,8 @@ mod tests {
     #[test]
     fn sizes_beyond_the_limits_are_refused_by_validate() {
         assert_eq!(vgru().validate(), Ok(()));
-        let cases: [(&str, fn(&mut ModelConfig)); 9] = [
+        type Break = fn(&mut ModelConfig);
+        let cases: [(&str, Break); 9] = [
             ("(seed_frames + horizon)", |c| {
                 c.horizon = 90_000;
                 c.frame_dims = 60_000;

@@ -1,8 +1,6 @@
 //! A small RGB canvas: anti-aliased thick lines (coverage from the distance to the segment),
-//! rectangles, bitmap text; PNG encoding; atomic file writes. Enough for skeletons and charts
+//! rectangles, bitmap text; PNG encoding. Enough for skeletons and charts
 //! without a graphics dependency.
-use std::io::Write;
-use std::path::Path;
 
 use super::font::{glyph, text_width, ADVANCE, GLYPH_HEIGHT};
 
@@ -203,26 +201,6 @@ impl Canvas {
         }
         Ok(bytes)
     }
-}
-
-/// Writes `bytes` to `path` through a temporary file in the same directory and a rename, so a
-/// failure never leaves a half-written file (the temporary file is removed).
-pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let tmp = path.with_file_name(format!(".{name}.tmp{}", std::process::id()));
-    let result = (|| {
-        let mut file = std::fs::File::create(&tmp)?;
-        file.write_all(bytes)?;
-        file.sync_all()?;
-        std::fs::rename(&tmp, path)
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
 }
 
 #[cfg(test)]
