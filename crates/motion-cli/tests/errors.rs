@@ -507,3 +507,74 @@ fn output_directory_missing_or_not_writable() {
         &["nowhere", "existing directory"],
     );
 }
+
+#[test]
+fn an_output_that_is_an_input_is_refused() {
+    let dir = scratch("same-file");
+    let m = fixture_model();
+    let seed = dir.join("walk.bvh");
+    std::fs::copy(walk_seed(), &seed).unwrap();
+    let original = std::fs::read(&seed).unwrap();
+    bad_input(
+        &dir,
+        &[
+            &"predict",
+            &"--model",
+            &m,
+            &"--seed",
+            &"walk.bvh",
+            &"--out",
+            &"./walk.bvh",
+        ],
+        &["walk.bvh", "also an input"],
+    );
+    bad_input(
+        &dir,
+        &[
+            &"predict",
+            &"--model",
+            &m,
+            &"--seed",
+            &"walk.bvh",
+            &"--out",
+            &"p.bvh",
+            &"--truth",
+            &"p.bvh",
+        ],
+        &["p.bvh", "also an input"],
+    );
+    assert_eq!(
+        std::fs::read(&seed).unwrap(),
+        original,
+        "the seed was overwritten"
+    );
+}
+
+#[test]
+fn predictions_too_large_for_memory_are_refused_up_front() {
+    let dir = scratch("too-large");
+    let m = fixture_model();
+    for (samples, frames) in [
+        ("1000000000", "100"),
+        ("1", "18446744073709551615"),
+        ("10000", "10000"),
+    ] {
+        bad_input(
+            &dir,
+            &[
+                &"predict",
+                &"--model",
+                &m,
+                &"--seed",
+                &walk_seed(),
+                &"--out",
+                &"p.npy",
+                &"--samples",
+                &samples,
+                &"--frames",
+                &frames,
+            ],
+            &["over the limit"],
+        );
+    }
+}

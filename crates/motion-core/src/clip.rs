@@ -68,6 +68,37 @@ pub fn check_output(out: &Path) -> Result<FileFormat, ClipError> {
     Ok(format)
 }
 
+/// Refuses an output that is one of the command's `inputs` (the same file, whatever the path
+/// spelling): writing it would destroy what is being read.
+pub fn check_not_an_input(out: &Path, inputs: &[&Path]) -> Result<(), ClipError> {
+    let resolve = |p: &Path| -> Option<PathBuf> {
+        if let Ok(full) = p.canonicalize() {
+            return Some(full);
+        }
+        // An output that does not exist yet: its directory resolved, its name appended.
+        let dir = match p.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d,
+            _ => Path::new("."),
+        };
+        Some(dir.canonicalize().ok()?.join(p.file_name()?))
+    };
+    let Some(target) = resolve(out) else {
+        return Ok(());
+    };
+    for input in inputs {
+        if resolve(input).as_deref() == Some(target.as_path()) {
+            return Err(ClipError::Output {
+                path: out.to_path_buf(),
+                problem: format!(
+                    "is also an input ({}): writing it would destroy it; choose another output",
+                    input.display()
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
 /// `out` with `_{index}` before its extension (`pred.bvh` -> `pred_0.bvh`, `a.txt.gz` ->
 /// `a_0.txt.gz`).
 pub fn numbered(out: &Path, index: usize) -> PathBuf {

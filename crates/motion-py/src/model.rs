@@ -4,6 +4,7 @@ use std::sync::Arc;
 
 use motion_core::formats::expmap_bvh::ExpMapTarget;
 use motion_core::model::builtin::default_model;
+use motion_core::model::samples::check_sample_size;
 use motion_core::model::{generate_samples, Generator as CoreGenerator, MotionModel, Noise};
 use motion_core::seed::{load_seed, model_window, seed_from_expmap};
 use ndarray::{Array2, Ix2};
@@ -140,6 +141,7 @@ impl Model {
         if samples == 0 {
             return Err(value("samples must be at least 1"));
         }
+        check_sample_size(samples, frames, self.model.config().frame_dims).map_err(value)?;
         let all = seed_frames(py, self, seed, input_fps)?;
         let needed = self.model.config().seed_frames.max(1);
         let total = all.nrows();

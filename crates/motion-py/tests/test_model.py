@@ -66,6 +66,7 @@ def test_info_and_load(tmp_path):
         (dict(seed=np.zeros((10, 99))), ValueError, "at least 50"),
         (dict(seed="/no/such/seed.bvh"), OSError, "seed.bvh"),
         (dict(samples=0), ValueError, "samples"),
+        (dict(samples=10**9), ValueError, "over the limit"),
         (dict(input_fps=-1.0), ValueError, "input_fps"),
     ],
 )

@@ -6,6 +6,7 @@ use std::sync::Arc;
 
 use motion_core::formats::expmap_bvh::ExpMapTarget;
 use motion_core::formats::FileFormat;
+use motion_core::model::samples::check_sample_size;
 use motion_core::model::{
     generate_samples, ActionClassifier, GenerateError, ModelConfig, MotionModel,
 };
@@ -16,7 +17,7 @@ use serde_json::{json, Value};
 
 use super::UsageError;
 use crate::model_source::{describe, load_model};
-use motion_core::clip::{check_output, write_clips, Clips};
+use motion_core::clip::{check_not_an_input, check_output, write_clips, Clips};
 use motion_core::seed::{clip_window, load_seed, model_window};
 
 /// The long help after the options: formats, conventions, examples.
@@ -182,8 +183,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             return Err(UsageError(format!("{}: no such file", args.seed.display())).into());
         }
         check_output(&args.out)?;
+        check_not_an_input(&args.out, &[&args.seed])?;
         if let Some(truth) = &args.truth {
             check_output(truth)?;
+            check_not_an_input(truth, &[&args.seed, &args.out])?;
         }
     } else if args.truth.is_some() {
         return Err(UsageError("--truth takes one seed file, not a directory".into()).into());
@@ -195,6 +198,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .into());
     }
     let model = load_model(args.model.as_deref())?;
+    check_sample_size(args.samples, args.frames, model.config().frame_dims).map_err(|e| {
+        UsageError(format!(
+            "--samples {} --frames {}: {e}",
+            args.samples, args.frames
+        ))
+    })?;
     let action = choose_action(model.config(), args.action.as_deref())?;
     let infer = if args.action.is_none() && model.config().actions.len() > 1 {
         inference_classifier(&model, args.classifier.as_deref())?

@@ -3,6 +3,19 @@
 /// Bad input to [`Generator`](super::Generator) or [`BatchGenerator`](super::BatchGenerator).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum GenerateError {
+    /// The predictions asked for would not fit in memory (see
+    /// [`crate::model::samples::MAX_SAMPLE_VALUES`]).
+    #[error("{samples} samples x {frames} frames x {frame_dims} values is over the limit of {limit} values (1 GiB): ask for fewer, in several runs")]
+    TooLarge {
+        /// Samples asked for.
+        samples: usize,
+        /// Frames per sample.
+        frames: usize,
+        /// Values per frame.
+        frame_dims: usize,
+        /// The limit.
+        limit: usize,
+    },
     /// Fewer seed frames than the model needs.
     #[error("{got} seed frames given, the model needs at least {needed}")]
     TooFewSeedFrames {

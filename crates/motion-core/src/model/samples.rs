@@ -8,6 +8,31 @@ use super::batch::{BatchGenerator, Noise};
 use super::generate_error::GenerateError;
 use super::predictor::MotionModel;
 
+/// The most values `samples x frames x frame_dims` one [`generate_samples`] call returns (1 GiB
+/// of f64): more is refused up front ([`GenerateError::TooLarge`]); generate in several calls.
+pub const MAX_SAMPLE_VALUES: usize = 1 << 27;
+
+/// Checks that `samples` predictions of `frames` frames of `frame_dims` values fit
+/// [`MAX_SAMPLE_VALUES`] (with no overflow on the way).
+pub fn check_sample_size(
+    samples: usize,
+    frames: usize,
+    frame_dims: usize,
+) -> Result<(), GenerateError> {
+    let values = samples
+        .checked_mul(frames)
+        .and_then(|v| v.checked_mul(frame_dims));
+    match values {
+        Some(v) if v <= MAX_SAMPLE_VALUES => Ok(()),
+        _ => Err(GenerateError::TooLarge {
+            samples,
+            frames,
+            frame_dims,
+            limit: MAX_SAMPLE_VALUES,
+        }),
+    }
+}
+
 /// `samples` closed-loop predictions of `frames` frames each after `seed` (`S x frame_dims`
 /// at the model's rate, `S >= 1`; the model reads all of it), conditioned on `action`:
 /// `[samples, frames, frame_dims]` in f64. Sample `i` draws its plan noise from
@@ -22,6 +47,7 @@ pub fn generate_samples(
     rng_seed: u64,
 ) -> Result<Array3<f64>, GenerateError> {
     let n = samples.max(1);
+    check_sample_size(n, frames, model.config().frame_dims)?;
     let mut generator = BatchGenerator::new(Arc::clone(model), n);
     let seeds = seed
         .broadcast((n, seed.nrows(), seed.ncols()))
