@@ -578,3 +578,59 @@ fn predictions_too_large_for_memory_are_refused_up_front() {
         );
     }
 }
+
+#[test]
+fn score_pairs_folders_by_file_name() {
+    let dir = scratch("pairing");
+    for (folder, names) in [("gt", ["a.npy", "b.npy"]), ("pred", ["a.npy", "c.npy"])] {
+        std::fs::create_dir_all(dir.join(folder)).unwrap();
+        for name in names {
+            let array = ndarray::Array3::<f64>::zeros((1, 10, 6));
+            motion_core::formats::npy::write_npy(dir.join(folder).join(name), &array).unwrap();
+        }
+    }
+    bad_input(
+        &dir,
+        &[
+            &"score",
+            &"--gt",
+            &"gt",
+            &"--pred",
+            &"pred",
+            &"--metric",
+            &"npss",
+        ],
+        &["no file named", "c.npy", "paired by file name"],
+    );
+}
+
+#[test]
+fn a_huge_name_in_a_file_gives_a_short_error_line() {
+    let dir = scratch("huge-name");
+    let name = "J".repeat(5_000_000);
+    let text = std::fs::read_to_string(walk_seed()).unwrap().replacen(
+        "ROOT Hips",
+        &format!("ROOT {name}"),
+        1,
+    );
+    std::fs::write(dir.join("big.bvh"), text).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_motion-cli"))
+        .current_dir(&dir)
+        .args(["predict", "--model"])
+        .arg(fixture_model())
+        .args(["--seed", "big.bvh", "--out", "p.bvh"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(
+        out.status.code(),
+        Some(2),
+        "{}",
+        &stderr[..stderr.len().min(300)]
+    );
+    assert!(
+        stderr.len() < 1200 && stderr.contains("big.bvh"),
+        "{} bytes",
+        stderr.len()
+    );
+}

@@ -23,7 +23,8 @@ impl std::fmt::Display for UsageError {
 
 impl std::error::Error for UsageError {}
 
-/// The error and its causes on one line, each cause once.
+/// The error and its causes on one line, each cause once, shortened to [`MAX_ERROR_CHARS`]
+/// characters (a 10 MB joint name stays a readable line) and with line breaks flattened.
 pub fn error_chain(err: &anyhow::Error) -> String {
     let mut parts: Vec<String> = Vec::new();
     for cause in err.chain() {
@@ -33,7 +34,28 @@ pub fn error_chain(err: &anyhow::Error) -> String {
             parts.push(text);
         }
     }
-    parts.join(": ")
+    shorten(
+        &parts.join(": ").replace(['\n', '\r'], " "),
+        MAX_ERROR_CHARS,
+    )
+}
+
+/// The longest error line printed, in characters.
+pub const MAX_ERROR_CHARS: usize = 1000;
+
+/// `text` cut to `max` characters: its start and end kept, the middle replaced by a count.
+fn shorten(text: &str, max: usize) -> String {
+    let count = text.chars().count();
+    if count <= max {
+        return text.to_string();
+    }
+    let keep = max / 2;
+    let head: String = text.chars().take(keep).collect();
+    let tail: String = text.chars().skip(count - keep / 2).collect();
+    format!(
+        "{head} [... {} characters ...] {tail}",
+        count - keep - keep / 2
+    )
 }
 
 /// Bad input (typed library errors about files, shapes and values, or [`UsageError`]) exits

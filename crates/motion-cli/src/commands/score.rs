@@ -221,6 +221,8 @@ pub fn run(args: Args) -> Result<()> {
         .as_deref()
         .map(super::plausibility::known_action)
         .transpose()?;
+    check_same_names(&args.pred, &args.gt, "--gt")?;
+    check_same_names(&args.pred, &args.seed, "--seed")?;
     let pred_raw = load_group(&args.pred, "--pred")?;
     let space = args.input_space.unwrap_or_else(|| default_space(&pred_raw));
     let pred = classify_group(pred_raw, space, "--pred")?;
@@ -448,6 +450,41 @@ fn expand(paths: &[PathBuf]) -> Result<Vec<PathBuf>> {
         }
     }
     Ok(files)
+}
+
+/// Folders given to `--pred` and to `flag` are paired file by file: their file names must be the
+/// same (sorted order would otherwise pair `a.npy` with `b.npy` silently).
+fn check_same_names(pred: &[PathBuf], other: &[PathBuf], flag: &str) -> Result<()> {
+    let ([pred_dir], [other_dir]) = (pred, other) else {
+        return Ok(());
+    };
+    if !(pred_dir.is_dir() && other_dir.is_dir()) {
+        return Ok(());
+    }
+    let names = |dir: &PathBuf| -> Result<Vec<std::ffi::OsString>> {
+        Ok(expand(std::slice::from_ref(dir))?
+            .into_iter()
+            .filter_map(|p| p.file_name().map(|n| n.to_os_string()))
+            .collect())
+    };
+    let (a, b) = (names(pred_dir)?, names(other_dir)?);
+    if let Some(name) = a.iter().find(|n| !b.contains(n)) {
+        return Err(usage(format!(
+            "{flag} {}: no file named {} to pair with --pred {}'s (folders are paired by file name)",
+            other_dir.display(),
+            name.to_string_lossy(),
+            pred_dir.display()
+        )));
+    }
+    if let Some(name) = b.iter().find(|n| !a.contains(n)) {
+        return Err(usage(format!(
+            "--pred {}: no file named {} to pair with {flag} {}'s (folders are paired by file name)",
+            pred_dir.display(),
+            name.to_string_lossy(),
+            other_dir.display()
+        )));
+    }
+    Ok(())
 }
 
 /// The arrays of every file of a flag, as read.
