@@ -92,6 +92,7 @@ pub mod root;
 pub mod rotation;
 pub mod seed;
 pub mod skeleton;
+pub mod weights;
 
 pub use error::{FormatError, MotionError, SkeletonError};
 pub use motion::{Motion, MotionLayout, RootEncoding};

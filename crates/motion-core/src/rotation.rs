@@ -375,6 +375,101 @@ pub fn dmat3_to_euler(order: EulerOrder, m: &DMat3) -> [f64; 3] {
     canonical_proper(order, [a, b, c])
 }
 
+/// The exp-map `r` with `expmap2rotmat(r)^times == m`, solving the float32-epsilon formula
+/// exactly, so that integrating and differentiating root deltas round-trips to ~1e-12 at every
+/// angle scale (also for angles near or below ε, where the formula is far from Rodrigues').
+///
+/// `expmap2rotmat(r)` keeps the axis of `r` exactly (only the angle is deformed by ε), so the
+/// axis comes from the exact logarithm of `m` and the angle from a secant solve of the scalar
+/// equation `angle(expmap2rotmat(θ · axis)^times) = angle(m)`. For `times > 1` the rotation of
+/// one step must stay below `π / times` (root deltas are a few degrees at most).
+pub fn rotmat_to_expmap_pow(m: &Mat3, times: usize) -> [f64; 3] {
+    let times = times.max(1);
+    let target = log_rotation(m);
+    let psi_t = (target[0] * target[0] + target[1] * target[1] + target[2] * target[2]).sqrt();
+    if psi_t == 0.0 {
+        return [0.0; 3];
+    }
+    let axis = [target[0] / psi_t, target[1] / psi_t, target[2] / psi_t];
+    let at = |theta: f64| [axis[0] * theta, axis[1] * theta, axis[2] * theta];
+    // Signed angle of expmap2rotmat(θ·axis)^times about `axis`, minus the target angle.
+    let residual = |theta: f64| {
+        let e = expmap2rotmat(at(theta));
+        let mut p = e;
+        for _ in 1..times {
+            p = mat3_mul(&p, &e);
+        }
+        let got = log_rotation(&p);
+        got[0] * axis[0] + got[1] * axis[1] + got[2] * axis[2] - psi_t
+    };
+    let mut x0 = psi_t / times as f64;
+    let mut f0 = residual(x0);
+    if f0 == 0.0 {
+        return at(x0);
+    }
+    // First step assumes the Rodrigues slope `times`; then secant steps.
+    let mut x1 = x0 - f0 / times as f64;
+    let mut f1 = residual(x1);
+    let mut best = if f1.abs() < f0.abs() { x1 } else { x0 };
+    let mut best_f = f1.abs().min(f0.abs());
+    for _ in 0..60 {
+        if f1 == 0.0 || f1 == f0 {
+            break;
+        }
+        let x2 = x1 - f1 * (x1 - x0) / (f1 - f0);
+        if !x2.is_finite() || x2 == x1 {
+            break;
+        }
+        x0 = x1;
+        f0 = f1;
+        x1 = x2;
+        f1 = residual(x1);
+        if f1.abs() < best_f {
+            best = x1;
+            best_f = f1.abs();
+        }
+    }
+    at(best)
+}
+
+/// Logarithm of a (near-)rotation matrix in the convention of [`expmap2rotmat`] without its ε:
+/// the `r` with exact Rodrigues `I + sin θ K + (1 - cos θ) K² = m`, angle in `[0, π]`.
+fn log_rotation(m: &Mat3) -> [f64; 3] {
+    // expmap2rotmat read as a column-vector matrix is the rotation about r: use glam's robust
+    // matrix -> quaternion conversion on the element-wise copy (no transpose).
+    let q = glam::DQuat::from_mat3(&mat3_to_dmat3(m)).normalize();
+    quat_to_axis_angle(q)
+}
+
+/// Inverse of a 3x3 matrix (adjugate / determinant); `None` if singular.
+pub fn mat3_inverse(m: &Mat3) -> Option<Mat3> {
+    let c00 = m[1][1] * m[2][2] - m[1][2] * m[2][1];
+    let c01 = m[1][2] * m[2][0] - m[1][0] * m[2][2];
+    let c02 = m[1][0] * m[2][1] - m[1][1] * m[2][0];
+    let det = m[0][0] * c00 + m[0][1] * c01 + m[0][2] * c02;
+    if det.abs() < 1e-300 || !det.is_finite() {
+        return None;
+    }
+    let inv_det = 1.0 / det;
+    Some([
+        [
+            c00 * inv_det,
+            (m[0][2] * m[2][1] - m[0][1] * m[2][2]) * inv_det,
+            (m[0][1] * m[1][2] - m[0][2] * m[1][1]) * inv_det,
+        ],
+        [
+            c01 * inv_det,
+            (m[0][0] * m[2][2] - m[0][2] * m[2][0]) * inv_det,
+            (m[0][2] * m[1][0] - m[0][0] * m[1][2]) * inv_det,
+        ],
+        [
+            c02 * inv_det,
+            (m[0][1] * m[2][0] - m[0][0] * m[2][1]) * inv_det,
+            (m[0][0] * m[1][1] - m[0][1] * m[1][0]) * inv_det,
+        ],
+    ])
+}
+
 #[cfg(test)]
 #[allow(clippy::needless_range_loop)]
 mod tests {

@@ -20,7 +20,7 @@
 //! ideal exp-map, so the angle error vanishes; the shrink cannot be expressed by a rotation and
 //! remains: BVH FK equals exp-map FK to ~1e-4 mm (1.5e-4 mm max on S5 walking_1, well inside the
 //! 1e-3 mm to which h36m.md says the data's bone lengths hold). The way back solves the same
-//! formula ([`crate::root::rotmat_to_expmap_pow`]), so exp-map -> BVH -> exp-map returns the same
+//! formula ([`crate::rotation::rotmat_to_expmap_pow`]), so exp-map -> BVH -> exp-map returns the same
 //! numbers to ~1e-8 (exp-maps with angle > π come back as the equivalent one with angle < π) and
 //! BVH -> exp-map -> BVH the same channels to ~1e-7. Root deltas are taken against the
 //! re-integrated trajectory ("closed loop"), so integrating them again does not drift over long
@@ -35,7 +35,8 @@ use glam::DQuat;
 use ndarray::Array2;
 
 use crate::motion::{Motion, MotionLayout, RootEncoding};
-use crate::root::{delta_between, integrate_root, rotmat_to_expmap_pow, RootIntegrator, RootPose};
+use crate::root::{delta_between, integrate_root, RootIntegrator, RootPose};
+use crate::rotation::rotmat_to_expmap_pow;
 use crate::rotation::{
     axis_quat, euler_to_quat, expmap2rotmat, quat_to_euler, quat_to_row_mat3, row_mat3_to_quat,
     EulerOrder,

@@ -39,7 +39,8 @@ pub mod predictor;
 pub mod random;
 pub mod samples;
 pub mod vgru;
-pub mod weights;
+/// The weights store lives below both `nn` and `model` ([`crate::weights`]); this path is kept.
+pub use crate::weights;
 
 pub use batch::{BatchGenerator, FrameScalar, Noise};
 pub use character::{Character, CharacterError};

@@ -6,7 +6,7 @@
 use super::gemm::MatMul;
 use super::gru::{GruCell, GruConfig, GruScratch};
 use super::packed::PackedMatrix;
-use crate::model::weights::{WeightStore, WeightsError};
+use crate::weights::{WeightStore, WeightsError};
 
 /// Sizes and convention of a [`BodyGruCell`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

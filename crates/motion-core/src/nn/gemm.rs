@@ -574,7 +574,7 @@ fn gemv_kernel<E: Copy, const FMA: bool>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::weights::HalfDtype;
+    use crate::weights::HalfDtype;
 
     /// Deterministic values in [-1, 1) from a fixed-seed xorshift generator.
     fn data(n: usize, seed: u64) -> Vec<f32> {

@@ -10,7 +10,7 @@
 use super::gates;
 use super::gemm::MatMul;
 use super::packed::PackedMatrix;
-use crate::model::weights::{WeightStore, WeightsError};
+use crate::weights::{WeightStore, WeightsError};
 
 /// Where the reset gate acts in the candidate (the only difference between the two conventions).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Deserialize, serde::Serialize)]

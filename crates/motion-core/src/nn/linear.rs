@@ -1,7 +1,7 @@
 //! A fully connected layer `y = W x + b` with PyTorch's `nn.Linear` layout (`weight [out, in]`).
 use super::gemm::MatMul;
 use super::packed::PackedMatrix;
-use crate::model::weights::{WeightStore, WeightsError};
+use crate::weights::{WeightStore, WeightsError};
 
 /// Sizes of a [`Linear`] layer.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

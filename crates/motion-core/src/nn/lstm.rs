@@ -4,7 +4,7 @@
 use super::gates::{sigmoid_fast, tanh_fast};
 use super::gemm::MatMul;
 use super::packed::PackedMatrix;
-use crate::model::weights::{WeightStore, WeightsError};
+use crate::weights::{WeightStore, WeightsError};
 
 /// Sizes of an [`LstmCell`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -2,7 +2,7 @@
 //! named `{prefix}.layers.{k}.weight/bias`. Built for the denoising autoencoder of paper 002.
 use super::activation::relu;
 use super::linear::{Linear, LinearConfig};
-use crate::model::weights::{WeightStore, WeightsError};
+use crate::weights::{WeightStore, WeightsError};
 
 /// Layer widths of an [`Mlp`]: `widths[0]` inputs, then each layer's output width.
 #[derive(Debug, Clone, PartialEq, Eq)]

@@ -1,7 +1,7 @@
 //! Neural-network layers (Linear, GRU cells in both conventions, body GRU, LSTM, MLP).
 //!
 //! Every layer is a `Config` plus `load(store, prefix, config)` reading PyTorch state-dict names
-//! from a [`WeightStore`](crate::model::weights::WeightStore). Weights are immutable after loading
+//! from a [`WeightStore`](crate::weights::WeightStore). Weights are immutable after loading
 //! (share them with `Arc`); recurrent state and per-step scratch buffers belong to the caller and
 //! are sized once, so a step allocates nothing. Weight matrices are [`PackedMatrix`]es kept in
 //! their stored dtype (f32, f16 or bf16); all arithmetic is f32.

@@ -15,7 +15,7 @@
 //! it, which the portable row kernel reads too). The second form doubles the weight memory (11 MB
 //! more for a paper-size f32 model), the price of fast batches of every size.
 use super::sgemm_panels::{self, PanelMatrix};
-use crate::model::weights::{HalfDtype, WeightStore, WeightsError};
+use crate::weights::{HalfDtype, WeightStore, WeightsError};
 
 /// The element type of a [`PackedMatrix`]'s rows.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
