@@ -18,7 +18,7 @@ use glam::{DMat3, DVec3};
 use ndarray::{Array3, ArrayView2};
 
 use crate::error::MotionError;
-use crate::motion::RootEncoding;
+use crate::root::RootEncoding;
 use crate::root::{RootIntegrator, RootPose};
 use crate::rotation::{expmap2rotmat, mat3_mul, vec_mul_mat3, Mat3, MAT3_IDENTITY};
 use crate::skeleton::{Channel, Skeleton};

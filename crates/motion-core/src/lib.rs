@@ -76,6 +76,7 @@
 //! ```
 #![warn(missing_docs)]
 
+pub mod any_format;
 pub mod clip;
 pub mod derivatives;
 pub mod error;

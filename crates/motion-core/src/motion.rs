@@ -7,14 +7,7 @@ use crate::error::MotionError;
 use crate::kinematics;
 use crate::skeleton::{Skeleton, H36M_SOURCE_FPS};
 
-/// How the root's dims 0..5 of an exp-map frame are stored.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum RootEncoding {
-    /// Per-source-frame deltas in the previous root frame (H3.6M); integrate them for positions.
-    Deltas,
-    /// Absolute root translation (dims 0..2) and exp-map rotation (dims 3..5) (CMU).
-    Absolute,
-}
+pub use crate::root::RootEncoding;
 
 /// How the channels of a frame are laid out.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

@@ -26,6 +26,15 @@
 use ndarray::{Array2, ArrayView2};
 
 use crate::rotation::{expmap2rotmat, mat3_mul, vec_mul_mat3, Mat3, MAT3_IDENTITY};
+/// How the root's dims 0..5 of an exp-map frame are stored.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum RootEncoding {
+    /// Per-source-frame deltas in the previous root frame (H3.6M); integrate them for positions.
+    Deltas,
+    /// Absolute root translation (dims 0..2) and exp-map rotation (dims 3..5) (CMU).
+    Absolute,
+}
+
 /// Rotation helpers that lived here once; they belong to [`crate::rotation`].
 pub use crate::rotation::{mat3_inverse, rotmat_to_expmap_pow};
 

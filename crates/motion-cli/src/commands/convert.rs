@@ -2,7 +2,7 @@
 //! or from any of them to world joint positions.
 use std::path::PathBuf;
 
-use motion_core::formats::any::{
+use motion_core::any_format::{
     format_name, positions, read_any, resample_any, write_channels, Described,
 };
 use motion_core::formats::npy::write_npy;

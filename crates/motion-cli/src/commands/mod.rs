@@ -105,7 +105,7 @@ pub fn exit_code(err: &anyhow::Error) -> u8 {
             || c.is::<motion_core::nn::SimdError>()
             || c.is::<motion_core::seed::SeedError>()
             || c.is::<motion_core::clip::ClipError>()
-            || c.is::<motion_core::formats::any::AnyMotionError>()
+            || c.is::<motion_core::any_format::AnyMotionError>()
             || c.is::<std::io::Error>()
     });
     if is_input {

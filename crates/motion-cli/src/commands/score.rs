@@ -16,7 +16,7 @@ use ndarray::{
 use serde_json::{json, Map, Value};
 
 use crate::plot::{bin_points, per_frame_points, window_points, Chart, Series};
-use motion_core::formats::any::read_array;
+use motion_core::any_format::read_array;
 use motion_core::formats::bvh::read_bvh;
 use motion_core::formats::FileFormat;
 use motion_core::motion::Motion;

@@ -3,7 +3,6 @@ use std::path::Path;
 
 use crate::error::FormatError;
 
-pub mod any;
 pub mod atomic;
 pub mod bvh;
 pub mod expmap_bvh;

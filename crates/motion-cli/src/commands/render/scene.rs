@@ -3,7 +3,7 @@
 //! slightly from above; y up).
 use std::path::Path;
 
-use motion_core::formats::any::read_positions;
+use motion_core::any_format::read_positions;
 use motion_core::skeleton::Skeleton;
 use ndarray::Array3;
 
@@ -64,7 +64,7 @@ impl Track {
     }
 }
 
-/// Loads a motion file as a track ([`motion_core::formats::any::read_positions`]: BVH, exp-map
+/// Loads a motion file as a track ([`motion_core::any_format::read_positions`]: BVH, exp-map
 /// text or `.npy` frames, a `samples x frames x dims` `.npy` (sample `sample` drawn) or positions
 /// `frames x joints x 3`).
 pub fn load_track(path: &Path, input_fps: f64, sample: usize) -> anyhow::Result<Track> {

@@ -6,12 +6,12 @@ use std::path::{Path, PathBuf};
 
 use ndarray::{s, Array2, Array3, ArrayD, Ix2, Ix3};
 
-use super::bvh::{read_bvh, write_bvh, Bvh};
-use super::expmap_bvh::{bvh_to_expmap, expmap_to_bvh, offset_difference, ExpMapTarget};
-use super::h36m_text::{downsample_protocol, read_expmap_text, write_expmap_text};
-use super::npy::{read_npy_dyn, read_npy_frames, write_npy};
-use super::FileFormat;
 use crate::error::{FormatError, MotionError};
+use crate::formats::bvh::{read_bvh, write_bvh, Bvh};
+use crate::formats::expmap_bvh::{bvh_to_expmap, expmap_to_bvh, offset_difference, ExpMapTarget};
+use crate::formats::h36m_text::{downsample_protocol, read_expmap_text, write_expmap_text};
+use crate::formats::npy::{read_npy_dyn, read_npy_frames, write_npy};
+use crate::formats::FileFormat;
 use crate::kinematics::channel_positions;
 use crate::motion::{expmap_layout_for_width, Motion, MotionLayout, RootEncoding};
 use crate::resample::resample_bvh;
@@ -167,7 +167,7 @@ pub fn write_channels(
                 AnyMotion::ExpMap(motion) => motion.into_frames(),
                 AnyMotion::Unknown { frames, .. } => frames,
                 AnyMotion::Bvh(bvh) => {
-                    let bad = |e: super::expmap_bvh::ConvertError| invalid(input, e);
+                    let bad = |e: crate::formats::expmap_bvh::ConvertError| invalid(input, e);
                     let target = ExpMapTarget::detect(&bvh).map_err(bad)?;
                     let difference = offset_difference(&bvh, target);
                     if difference > 1e-6 {
