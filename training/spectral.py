@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import torch
 
-from .evaluate import EXPMAP_EPS
+from .metrics_np import EXPMAP_EPS
 
 _TINY = 1e-12
 

@@ -42,7 +42,7 @@ import numpy as np
 import torch
 
 from . import data as h36m
-from . import evaluate
+from . import metrics_np
 from .features import DerivativeHistory
 from .models import build_model, make_config, parameter_count
 from .spectral import spectral_loss
@@ -293,7 +293,7 @@ class Validator:
 
     def baseline(self) -> dict:
         """Zero-velocity scores of the same windows."""
-        return self.score(evaluate.zero_velocity(self.seed_full, self.gt_full.shape[1]))
+        return self.score(metrics_np.zero_velocity(self.seed_full, self.gt_full.shape[1]))
 
     def __call__(self, model) -> dict:
         return self.score(self.predict(model))
@@ -325,8 +325,8 @@ class Validator:
         per_action = {}
         for a in self.actions:
             idx = [i for i, wa in enumerate(self.window_actions) if wa == a]
-            per_action[a] = evaluate.score_windows(self.gt_full[idx], pred_full[idx])
-        summary = evaluate.summarize(per_action)
+            per_action[a] = metrics_np.score_windows(self.gt_full[idx], pred_full[idx])
+        summary = metrics_np.summarize(per_action)
         summary["per_action"] = {
             a: {
                 "npss_ref": v["npss_ref"],

@@ -5,7 +5,7 @@
 //! into shards, one per thread: [`crate::model::BatchGenerator`]), splitting again inside each
 //! shard only adds fork-join round trips, so the shard runs its layers inside [`serial`].
 //!
-//! Without the crate's `parallel` feature (a thread-free build, e.g. for a browser), [`pool`] is
+//! Without the crate's `parallel` feature (a thread-free build, e.g. for a browser), `pool` is
 //! a serial stand-in for the few rayon calls the crate makes: one thread, every "parallel"
 //! iterator a plain one, every join and spawn run in place.
 
