@@ -14,7 +14,7 @@ from .models import MotionModel, build_model
 
 FORMAT = "motion-weights"
 FORMAT_VERSION = "1"
-NORM_TENSORS = ("norm.mean", "norm.std")
+NORM_TENSORS = ("norm.mean", "norm.std", "labels.centroids", "labels.merge")
 
 
 def weights_tensors(

@@ -1,4 +1,4 @@
-"""Motion models: VGRU-d (VTLN-RNN), GRU-d and DAE-LSTM.
+"""Motion models: VGRU-d (VTLN-RNN), GRU-d, DAE-LSTM and the intention-based model.
 
 Gopalakrishnan, Mali, Kifer, Giles, Ororbia. A Neural Temporal Model for Human Motion Prediction
 (CVPR 2019), sections 3.2 (VTLN-RNN: plan GRU running backwards in time + body GRU, eqs. 1-4),
@@ -6,6 +6,8 @@ Gopalakrishnan, Mali, Kifer, Giles, Ororbia. A Neural Temporal Model for Human M
 Ghosh, Song, Aksan, Hilliges. Learning Human Motion Models for Long-term Predictions (3DV 2017),
 section 3 (DAE-LSTM: three stacked LSTM layers whose every predicted pose is filtered by a dropout
 autoencoder before it is fed back).
+Tanke, Zaveri, Gall. Intention-based Long-Term Human Motion Anticipation (3DV 2021), section 3 (intention
+labels, intention forecaster, pose generator conditioned on noise and on intentions forecast ahead).
 
 State-dict names are the tensor names of the weights schema (weights/README.md), which the Rust
 engine reads. Models work on normalized used dims ``[B, T, O]``; ``predict`` wraps that with
@@ -29,7 +31,7 @@ from .layers import BIAS_INIT, MLP, BodyGRUCell, GRUCell, LSTMCell, orthogonal_b
 # The one-hot order of multi-action models: the action list of the data pipeline.
 H36M_ACTIONS = list(ACTIONS)
 
-ARCHITECTURES = ("vgru-d", "gru-d", "dae-lstm")
+ARCHITECTURES = ("vgru-d", "gru-d", "dae-lstm", "intention")
 
 
 def make_config(architecture: str, dims_used: list[int], **overrides) -> dict:
@@ -41,7 +43,7 @@ def make_config(architecture: str, dims_used: list[int], **overrides) -> dict:
         "frame_dims": 99,
         "dims_used": [int(d) for d in dims_used],
         "hidden": 512,
-        "layers": {"vgru-d": 1, "gru-d": 2, "dae-lstm": 3}[architecture],
+        "layers": {"vgru-d": 1, "gru-d": 2, "dae-lstm": 3, "intention": 3}[architecture],
         "gru_convention": "paper" if architecture == "vgru-d" else "pytorch",
         "residual": False,
         "derivative_order": 3,
@@ -58,6 +60,11 @@ def make_config(architecture: str, dims_used: list[int], **overrides) -> dict:
         # Paper 002: plain poses (no derivatives), min-max scaling, direct (not residual) output,
         # a 3 x 3000 ReLU autoencoder; sizes are overridable (weights/README.md says what ships).
         config.update(derivative_order=0, residual=False, normalization="min-max", dae_hidden=3000, dae_layers=3)
+    if architecture == "intention":
+        # Paper 003: unconditioned (the intentions replace the action), plain poses, residual output;
+        # 8 intentions, look-ahead gamma = 10; the other sizes are this project's (weights/README.md).
+        config.update(derivative_order=0, residual=True, hidden=256, noise_dims=32, label_hidden=128,
+                      intentions=8, clusters=32, lookahead=10, intention_features=32)
     unknown = set(overrides) - set(config) - {"plan_hidden"}
     if unknown:
         raise ValueError(f"unknown config fields {sorted(unknown)}")
@@ -409,6 +416,158 @@ class DAELSTM(MotionModel):
         return pose * keep_joint.to(pose.device).index_select(-1, index.to(pose.device))
 
 
+class IntentionLabels(nn.Module):
+    """The intention labelling of paper 003, 3.3 (``training/intention_labels.py``): buffers ``centroids
+    [clusters, O]`` (normalized used dims) and ``merge [clusters]`` (the intention of each cluster, as floats)."""
+
+    def __init__(self, clusters: int, dims: int):
+        super().__init__()
+        self.register_buffer("centroids", torch.zeros(clusters, dims))
+        self.register_buffer("merge", torch.zeros(clusters))
+
+    def forward(self, frames: torch.Tensor) -> torch.Tensor:
+        """Intention of each normalized frame ``[..., O]`` (long): the nearest centroid's entry of the merge
+        table (squared distance, lowest index on ties)."""
+        d = ((frames.unsqueeze(-2) - self.centroids) ** 2).sum(-1)
+        return self.merge.long()[d.argmin(-1)]
+
+
+class IntentionModel(MotionModel):
+    """The intention-based stochastic model of paper 003, section 3 (weights/README.md, "intention").
+
+    - ``labels``: the seed's frames labelled with intentions (3.3, ``IntentionLabels``).
+    - Intention forecaster (3.1, eq. 3): ``label_encoder`` (GRU, ``label_hidden`` units) over the seed, each
+      frame's input its normalized pose and the one-hot of its label; ``label_decoder`` (GRU, same units, starting
+      from the encoder's state) auto-regressive over intention probabilities: its first input is the one-hot of
+      the last seed label, then its own previous output ``softmax(label_out(h))``.
+    - Pose generator (3.2, eq. 6): ``pose_encoder`` (GRU, ``hidden - noise_dims`` units) over the seed gives
+      ``h_p``; every layer of the ``rnn.{k}`` decoder (``layers`` GRUs of ``hidden`` units) starts from
+      ``h_p ⊕ z``, ``z ~ N(0, I)`` of ``noise_dims``; the step producing frame ``τ`` reads
+      ``x̂_{τ-1} ⊕ z ⊕ f(ĉ_{τ-1 .. τ+γ-2})`` where ``f`` = ``intent_conv`` (a temporal convolution of kernel
+      ``γ = lookahead`` over the intention probabilities, ``intention_features`` channels; frames up to the
+      last seed frame are their labels' one-hots, later ones the forecast) and ``x̂_{S-1}`` is the last seed
+      frame; ``decoder`` maps the top layer to the change of the pose (residual).
+    All GRUs use the PyTorch convention. The discriminators are training-only (``training/train_intention.py``).
+    Frame indices: seed frames ``0 .. S-1``, predictions ``S ..``."""
+
+    def __init__(self, config: dict, dropout: float = 0.0):
+        super().__init__(config, 0.0)
+        if config["architecture"] != "intention":
+            raise ValueError(f"IntentionModel needs architecture 'intention', got {config['architecture']!r}")
+        if self.derivative_order != 0 or not self.residual:
+            raise ValueError("the intention model reads plain poses (derivative_order 0) and is residual")
+        self.noise_dims = int(config["noise_dims"])
+        self.intentions = int(config["intentions"])
+        self.lookahead = int(config["lookahead"])
+        self.intention_features = int(config["intention_features"])
+        self.label_hidden = int(config["label_hidden"])
+        self.num_layers = int(config["layers"])
+        if not 0 < self.noise_dims < self.hidden_size or self.lookahead < 1 or self.num_layers < 1:
+            raise ValueError("intention model needs 0 < noise_dims < hidden, lookahead >= 1, layers >= 1")
+        o, c = self.output_size, self.intentions
+        self.labels = IntentionLabels(int(config["clusters"]), o)
+        self.label_encoder = GRUCell(o + c, self.label_hidden)
+        self.label_decoder = GRUCell(c, self.label_hidden)
+        self.label_out = nn.Linear(self.label_hidden, c)
+        self.pose_encoder = GRUCell(o, self.hidden_size - self.noise_dims)
+        self.intent_conv = nn.Conv1d(c, self.intention_features, self.lookahead)
+        sizes = [o + self.noise_dims + self.intention_features] + [self.hidden_size] * self.num_layers
+        self.rnn = nn.ModuleList(GRUCell(a, self.hidden_size) for a in sizes[:-1])
+        nn.init.zeros_(self.decoder.weight)  # residual: start by holding the pose
+        nn.init.zeros_(self.decoder.bias)
+
+    def action_indices(self, action, batch, device):
+        return None  # unconditioned: the intentions take the action's place
+
+    @staticmethod
+    def _encode(cell: GRUCell, inputs: torch.Tensor) -> torch.Tensor:
+        gi = cell.input_gates(inputs).unbind(1)
+        h = torch.zeros(inputs.shape[0], cell.hidden_size, dtype=inputs.dtype, device=inputs.device)
+        for g in gi:
+            h = cell.step(g, h)
+        return h
+
+    def forecast_intentions(self, seed: torch.Tensor, steps: int, labels: torch.Tensor | None = None):
+        """Seed ``[B, S, O]`` -> (seed labels ``[B, S]``, forecast logits ``[B, steps, C]`` of frames
+        ``S .. S+steps-1``, their probabilities). ``labels`` overrides the seed's own labelling."""
+        labels = self.labels(seed) if labels is None else labels
+        onehot = F.one_hot(labels, self.intentions).to(seed.dtype)
+        h = self._encode(self.label_encoder, torch.cat([seed, onehot], dim=-1))
+        x = onehot[:, -1]
+        logits, probs = [], []
+        for _ in range(steps):
+            h = self.label_decoder(x, h)
+            lg = self.label_out(h)
+            x = torch.softmax(lg, dim=-1)
+            logits.append(lg)
+            probs.append(x)
+        if steps == 0:
+            empty = seed.new_zeros(seed.shape[0], 0, self.intentions)
+            return labels, empty, empty
+        return labels, torch.stack(logits, 1), torch.stack(probs, 1)
+
+    def sample_noise(self, batch: int, like: torch.Tensor, generator: torch.Generator | None = None) -> torch.Tensor:
+        return torch.randn(batch, self.noise_dims, generator=generator, dtype=like.dtype).to(like.device)
+
+    def generate(self, seed: torch.Tensor, horizon: int, z: torch.Tensor, seed_labels: torch.Tensor,
+                 future_probs: torch.Tensor) -> torch.Tensor:
+        """Poses of frames ``S .. S+horizon-1`` ``[B, horizon, O]`` from the seed, the noise ``z [B, N]``, the
+        seed's labels and intention probabilities of frames ``S .. S+horizon+γ-3`` (``[B, >= horizon+γ-2, C]``)."""
+        feats = self.intention_features_of(seed_labels, future_probs, horizon, seed)
+        outputs, _ = self.rollout(seed[:, -1], self.initial_state(seed, z), z, feats)
+        return outputs
+
+    def intention_features_of(self, seed_labels: torch.Tensor, future_probs: torch.Tensor, horizon: int,
+                              like: torch.Tensor) -> torch.Tensor:
+        """``f`` of eq. 6 for the steps producing frames ``S .. S+horizon-1``: ``[B, horizon, Fe]``."""
+        onehot = F.one_hot(seed_labels[:, -1:], self.intentions).to(like.dtype)  # frame S-1
+        window = torch.cat([onehot, future_probs[:, : max(0, horizon + self.lookahead - 2)]], dim=1)
+        return self.intent_conv(window.transpose(1, 2)).transpose(1, 2)
+
+    def initial_state(self, seed: torch.Tensor, z: torch.Tensor) -> list[torch.Tensor]:
+        """Every decoder layer's first state: ``h_p ⊕ z``."""
+        h0 = torch.cat([self._encode(self.pose_encoder, seed), z], dim=-1)
+        return [h0 for _ in self.rnn]
+
+    def rollout(self, x: torch.Tensor, hs: list[torch.Tensor], z: torch.Tensor, feats: torch.Tensor):
+        """Pose steps from the last frame ``x [B, O]`` and decoder states ``hs``, one per row of ``feats
+        [B, T, Fe]``: (frames ``[B, T, O]``, final states)."""
+        hs = list(hs)
+        outputs = []
+        for j in range(feats.shape[1]):
+            inp = torch.cat([x, z, feats[:, j]], dim=-1)
+            for k, cell in enumerate(self.rnn):
+                hs[k] = cell(inp, hs[k])
+                inp = hs[k]
+            x = x + self.decoder(inp)
+            outputs.append(x)
+        return torch.stack(outputs, 1), hs
+
+    def closed_loop(self, seed: torch.Tensor, horizon: int, action=None, eps=None, return_seed_outputs: bool = False):
+        """Frames ``S .. S+horizon-1`` for ``seed [B, S, O]``; ``eps`` is ``z`` (``[N]`` or ``[B, N]``; sampled
+        from torch's generator when None). No teacher-forced seed outputs exist (``return_seed_outputs``
+        gives None for them)."""
+        batch = seed.shape[0]
+        if seed.shape[1] < 1 or horizon < 1:
+            raise ValueError(f"need at least 1 seed frame and horizon >= 1, got {seed.shape[1]}, {horizon}")
+        z = self.sample_noise(batch, seed) if eps is None else torch.as_tensor(eps, dtype=seed.dtype).expand(batch, -1)
+        labels, _, probs = self.forecast_intentions(seed, max(0, horizon + self.lookahead - 2))
+        out = self.generate(seed, horizon, z, labels, probs)
+        return (None, out) if return_seed_outputs else out
+
+    @torch.no_grad()
+    def predict(self, seed_full: torch.Tensor, action=None, horizon: int = 100, eps=None, with_seed_outputs=False):
+        """Full frames in, full frames out, as ``MotionModel.predict`` (no seed outputs)."""
+        if with_seed_outputs:
+            raise ValueError("the intention model has no teacher-forced seed outputs")
+        unbatched = seed_full.dim() == 2
+        if unbatched:
+            seed_full = seed_full.unsqueeze(0)
+        seed = self.norm.normalize(seed_full.to(self.decoder.weight.dtype))
+        out = self.norm.unnormalize(self.closed_loop(seed, horizon, eps=eps))
+        return out[0] if unbatched else out
+
+
 def build_model(config: dict, dropout: float = 0.3) -> MotionModel:
     """The model class named by ``config['architecture']``."""
     architecture = config.get("architecture")
@@ -418,6 +577,8 @@ def build_model(config: dict, dropout: float = 0.3) -> MotionModel:
         return GRUD(config, dropout)
     if architecture == "dae-lstm":
         return DAELSTM(config, 0.0)
+    if architecture == "intention":
+        return IntentionModel(config)
     raise ValueError(f"unknown architecture {architecture!r}; expected one of {ARCHITECTURES}")
 
 

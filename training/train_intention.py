@@ -1,0 +1,492 @@
+"""Train and export the intention-based stochastic model of paper 003 (Tanke, Zaveri, Gall, 3DV 2021, section 3).
+
+    python -m training.train_intention --run-dir training/runs/intention --iterations 6000
+    python -m training.train_intention --run-dir training/runs/intention --resume --iterations 9000
+    python -m training.train_intention --export weights/intention.safetensors --from training/runs/intention/best.pt
+
+What is trained (``models.IntentionModel`` holds the exported parts):
+
+- **Labels** (3.3, ``intention_labels``): k-means (``--clusters``) on the normalized training poses, cycles merged
+  into ``--intentions`` labels; fitted once at the start of a run, stored in the model's ``labels.*`` buffers.
+- **Intention forecaster** (3.1): cross-entropy of the forecast over the ``--future`` frames after the seed
+  (eq. 4) plus the adversarial label loss (eq. 5, weight ``--label-adv-weight``) against ``D_label``, an MLP with
+  one hidden layer over windows of ``--label-window`` frames of intention probabilities (real: the labels'
+  one-hots).
+- **Pose generator** (3.2): the reconstruction loss of eq. 8 (per-joint L2 distance in normalized units, weight
+  λ(τ) falling linearly from 1 at the last seed frame to 0 ``--rec-frames`` frames later) plus the adversarial pose
+  loss of eq. 7 (weight ``--adv-weight``) against ``D_pose``, an MLP with two hidden layers over windows of
+  ``--pose-window`` generated frames (flattened poses and their frame-to-frame changes; real: training windows).
+  The generator reads the forecaster's probabilities without back-propagating into it (its losses are its own).
+  Non-saturating GAN losses; Adam with β = (0.5, 0.9) for all four nets.
+- **Long horizon** (this project's addition, ``--long-weight``, 0 = the paper): after the ``--future`` frames the
+  generator runs on without gradient for a random 0..``--long-burn-in`` frames, then ``--long-frames`` frames with
+  gradient whose windows also go to ``D_pose`` (truncated back-propagation: what the 12 s measures ask for,
+  far past any affordable full horizon; positions there are not compared, any plausible motion is right).
+
+Sizes default to ``make_config("intention")``: pose decoder 3 × 256 GRU (224 encoder units ⊕ 32 noise dims),
+forecaster 128 units, 32 clusters → 8 intentions, γ = 10, 32 intention features (CPU budget; the paper gives no
+sizes).
+
+**Checkpoint choice (fixed before any score was seen).** Every ``--val-every`` iterations the model runs 12 s
+(300 frames) from each S5 validation window's seed with one fixed ``z`` per window (seeded); per action, the speed
+ratio at 8-12 s (predicted frames 200-300 against the window's truth, as ``train_dae.long_speed_ratios``). A
+checkpoint is eligible when every action's ratio is >= 0.5 *and* <= 2; ``best.pt`` is the eligible one with the
+lowest validation NPSS (reference variant, 4 s, same z); while none is eligible, the one whose worst ratio (the
+ratio farthest from [0.5, 2] in log terms) is best.
+
+Checkpoints (``last.pt``: the four nets, optimizers and RNG states, iteration) are written atomically every
+``--checkpoint-every`` iterations; ``--resume`` continues a run; ``--device cuda`` runs unchanged on a GPU.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import math
+import shlex
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import torch
+from torch import nn
+from torch.nn import functional as F
+
+from . import data as h36m
+from . import intention_labels
+from .export import save_weights
+from .layers import MLP
+from .models import IntentionModel, joint_groups, make_config, parameter_count
+from .train import RESUME_OVERRIDABLE, Logger, Validator, atomic_save, explicit_args
+
+CHECKPOINT = "last.pt"
+BEST = "best.pt"
+CHECKPOINT_KEYS = ("config", "args", "model", "d_pose", "d_label", "opt_g", "opt_f", "opt_dp", "opt_dl",
+                   "iteration", "numpy_rng", "torch_rng")
+LONG_HORIZON = 300  # 12 s at 25 Hz
+LONG_WINDOW = (200, 300)  # predicted frames 8-12 s
+RATIO_BAND = (0.5, 2.0)
+VAL_NOISE_SEED = 20261202
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="python -m training.train_intention",
+        description="Train and export the intention-based stochastic model of paper 003.",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        epilog=__doc__,
+    )
+    p.add_argument("--run-dir", type=Path, help="where last.pt, best.pt, train.log and metrics.jsonl go")
+    g = p.add_argument_group("model")
+    g.add_argument("--hidden", type=int, default=256, help="pose decoder GRU units (encoder units + noise dims)")
+    g.add_argument("--layers", type=int, default=3, help="pose decoder GRU layers (paper: 3)")
+    g.add_argument("--noise-dims", type=int, default=32, help="size of z")
+    g.add_argument("--label-hidden", type=int, default=128, help="forecaster GRU units")
+    g.add_argument("--clusters", type=int, default=intention_labels.DEFAULT_CLUSTERS, help="k-means clusters")
+    g.add_argument("--intentions", type=int, default=intention_labels.DEFAULT_INTENTIONS, help="labels (paper: 8)")
+    g.add_argument("--lookahead", type=int, default=10, help="γ, frames of intention forecast read ahead (paper: 10)")
+    g.add_argument("--intention-features", type=int, default=32, help="channels of the temporal convolution f")
+    g = p.add_argument_group("optimisation")
+    g.add_argument("--iterations", type=int, default=6000)
+    g.add_argument("--batch", type=int, default=32)
+    g.add_argument("--future", type=int, default=100, help="frames generated after the 50 seed frames (4 s)")
+    g.add_argument("--lr", type=float, default=5e-4, help="Adam learning rate of generator and forecaster")
+    g.add_argument("--lr-d", type=float, default=2e-4, help="Adam learning rate of the discriminators")
+    g.add_argument("--rec-frames", type=int, default=15, help="τ_rec of eq. 8 (paper: 15)")
+    g.add_argument("--adv-weight", type=float, default=0.3, help="weight of the adversarial pose loss")
+    g.add_argument("--label-adv-weight", type=float, default=0.1, help="weight of the adversarial label loss")
+    g.add_argument("--pose-window", type=int, default=10, help="frames per D_pose window")
+    g.add_argument("--label-window", type=int, default=20, help="frames per D_label window")
+    g.add_argument("--d-hidden", type=int, default=256, help="D_pose hidden units (D_label: a quarter)")
+    g.add_argument("--long-weight", type=float, default=1.0, help="weight of the long-horizon adversarial term")
+    g.add_argument("--long-burn-in", type=int, default=200, help="most frames run without gradient")
+    g.add_argument("--long-frames", type=int, default=40, help="frames with gradient after the burn-in")
+    g.add_argument("--clip", type=float, default=5.0, help="gradient-norm clipping")
+    g.add_argument("--seed", type=int, default=1)
+    g = p.add_argument_group("run")
+    g.add_argument("--device", default="cpu", help="cpu or cuda")
+    g.add_argument("--threads", type=int, default=1)
+    g.add_argument("--log-every", type=int, default=25)
+    g.add_argument("--val-every", type=int, default=250)
+    g.add_argument("--val-per-action", type=int, default=4)
+    g.add_argument("--checkpoint-every", type=int, default=100)
+    g.add_argument("--resume", action="store_true", help="continue the run in --run-dir from last.pt")
+    g.add_argument("--data-dir", type=Path, default=None)
+    g = p.add_argument_group("export")
+    g.add_argument("--export", type=Path, metavar="OUT", help="write a weights file from --from and exit")
+    g.add_argument("--from", dest="from_", type=Path, metavar="CKPT")
+    g.add_argument("--dtype", default="float32", choices=["float32", "float16"])
+    return p
+
+
+# ---------------------------------------------------------------- pieces
+
+
+def load_checkpoint(path: Path) -> dict:
+    """An intention-model checkpoint; ValueError naming the file when it is not one."""
+    try:
+        state = torch.load(path, map_location="cpu", weights_only=False)
+    except Exception as e:  # noqa: BLE001 - any unpickling failure means "not a checkpoint"
+        raise ValueError(f"{path}: not an intention-model checkpoint ({e})") from e
+    if not isinstance(state, dict) or any(k not in state for k in CHECKPOINT_KEYS):
+        raise ValueError(f"{path}: not an intention-model checkpoint (expected keys {CHECKPOINT_KEYS})")
+    return state
+
+
+class PoseDiscriminator(nn.Module):
+    """D_pose: two hidden layers (ReLU) over a window of frames ``[..., W, O]`` and its frame-to-frame changes."""
+
+    def __init__(self, window: int, dims: int, hidden: int):
+        super().__init__()
+        self.window = window
+        self.net = MLP([window * dims + (window - 1) * dims, hidden, hidden, 1])
+
+    def forward(self, windows: torch.Tensor) -> torch.Tensor:
+        change = (windows[..., 1:, :] - windows[..., :-1, :]) * 5.0  # changes are ~0.2 of a pose's spread
+        return self.net(torch.cat([windows.flatten(-2), change.flatten(-2)], dim=-1)).squeeze(-1)
+
+
+class LabelDiscriminator(nn.Module):
+    """D_label: one hidden layer (ReLU) over a window of intention probabilities ``[..., W, C]``."""
+
+    def __init__(self, window: int, intentions: int, hidden: int):
+        super().__init__()
+        self.net = MLP([window * intentions, hidden, 1])
+
+    def forward(self, windows: torch.Tensor) -> torch.Tensor:
+        return self.net(windows.flatten(-2)).squeeze(-1)
+
+
+def windows_of(x: torch.Tensor, length: int, stride: int) -> torch.Tensor:
+    """All windows ``[B * n, length, D]`` of ``x [B, T, D]`` every ``stride`` frames."""
+    w = x.unfold(1, length, stride)  # [B, n, D, length]
+    return w.permute(0, 1, 3, 2).reshape(-1, length, x.shape[-1])
+
+
+def rec_weights(frames: int, rec_frames: int, device) -> torch.Tensor:
+    """λ(τ) of eq. 8 for predicted frames 1..``frames`` after the seed: 1 at the seed, 0 from ``rec_frames`` on."""
+    tau = torch.arange(1, frames + 1, dtype=torch.float32, device=device)
+    return (1.0 - tau / rec_frames).clamp(min=0.0)
+
+
+def rec_loss(pred: torch.Tensor, truth: torch.Tensor, groups: list[list[int]], weights: torch.Tensor) -> torch.Tensor:
+    """Eq. 8: mean over frames and joints of λ(τ) ‖x - x̂‖₂ per joint (normalized units)."""
+    diff = pred - truth
+    per_joint = torch.stack([diff[..., g].norm(dim=-1) for g in groups], dim=-1)  # [B, T, J]
+    return (per_joint * weights[None, :, None]).mean()
+
+
+def gan_d_loss(real: torch.Tensor, fake: torch.Tensor) -> torch.Tensor:
+    return F.binary_cross_entropy_with_logits(real, torch.ones_like(real)) + \
+        F.binary_cross_entropy_with_logits(fake, torch.zeros_like(fake))
+
+
+def gan_g_loss(fake: torch.Tensor) -> torch.Tensor:
+    return F.binary_cross_entropy_with_logits(fake, torch.ones_like(fake))
+
+
+class LabelledSet:
+    """Training sequences (normalized, 25 Hz) with their intention labels; windows sampled as
+    ``TrainingSet.sample_batch`` does (action uniform, then a sequence, then a start)."""
+
+    def __init__(self, dataset: h36m.TrainingSet, centroids: np.ndarray, merge: np.ndarray):
+        self.seqs = [[s for _, s in lst] for lst in dataset.by_action]
+        self.labels = [[intention_labels.label(s, centroids, merge) for s in lst] for lst in self.seqs]
+
+    def sample(self, rng: np.random.Generator, batch: int, window: int):
+        present = [i for i, seqs in enumerate(self.seqs) if any(s.shape[0] > h36m.MIN_START + window for s in seqs)]
+        frames = np.empty((batch, window, self.seqs[present[0]][0].shape[1]), dtype=np.float32)
+        labels = np.empty((batch, window), dtype=np.int64)
+        for b in range(batch):
+            ai = present[int(rng.integers(len(present)))]
+            options = [k for k, s in enumerate(self.seqs[ai]) if s.shape[0] > h36m.MIN_START + window]
+            k = options[int(rng.integers(len(options)))]
+            start = int(rng.integers(h36m.MIN_START, self.seqs[ai][k].shape[0] - window))
+            frames[b] = self.seqs[ai][k][start : start + window]
+            labels[b] = self.labels[ai][k][start : start + window]
+        return frames, labels
+
+
+# ---------------------------------------------------------------- validation
+
+
+@torch.no_grad()
+def validate(model: IntentionModel, validator: Validator) -> dict:
+    """Scores of the fixed validation windows (module doc): NPSS etc. over 4 s and speed ratios at 8-12 s, one
+    seeded z per window."""
+    was = model.training
+    model.eval()
+    try:
+        n = validator.seed_norm.shape[0]
+        z = torch.randn(n, model.noise_dims, generator=torch.Generator().manual_seed(VAL_NOISE_SEED))
+        pred = model.closed_loop(validator.seed_norm, LONG_HORIZON, eps=z).double().numpy()
+    finally:
+        model.train(was)
+    full = validator.stats.unnormalize(pred)
+    horizon = validator.gt_full.shape[1]
+    val = validator.score(full[:, :horizon])
+    ratios = {}
+    lo, hi = LONG_WINDOW
+    for a in validator.actions:
+        idx = [i for i, wa in enumerate(validator.window_actions) if wa == a]
+        p = np.abs(np.diff(full[idx, lo - 1 : hi, 6:], axis=1)).mean()
+        g = np.abs(np.diff(validator.gt_full[idx][:, :, 6:], axis=1)).mean()
+        ratios[a] = float(p / g) if g > 0 else float("nan")
+    val["long_speed"] = ratios
+    return val
+
+
+def worst_ratio_gap(ratios: dict) -> float:
+    """How far the worst action's ratio is outside ``RATIO_BAND`` (log terms; 0 inside)."""
+    low, high = RATIO_BAND
+    gaps = [max(0.0, math.log(low / r) if r > 0 else math.inf, math.log(r / high) if r > 0 else 0.0)
+            for r in ratios.values()]
+    return max(gaps)
+
+
+def choice_key(val: dict) -> tuple:
+    """Sort key of the checkpoint choice (smaller is better; module doc)."""
+    gap = worst_ratio_gap(val["long_speed"])
+    return (0, val["npss_ref"]) if gap == 0 else (1, gap)
+
+
+# ---------------------------------------------------------------- training
+
+
+def build_config(args, dims_used) -> dict:
+    return make_config(
+        "intention", dims_used, hidden=args.hidden, layers=args.layers, noise_dims=args.noise_dims,
+        label_hidden=args.label_hidden, intentions=args.intentions, clusters=args.clusters,
+        lookahead=args.lookahead, intention_features=args.intention_features,
+        seed_frames=h36m.SEED_FRAMES, horizon=h36m.HORIZON,
+    )
+
+
+def train(args, argv: list[str]) -> None:
+    if args.run_dir is None:
+        raise SystemExit("error: training needs --run-dir (or --export with --from)")
+    run_dir = args.run_dir
+    run_dir.mkdir(parents=True, exist_ok=True)
+    ckpt_path = run_dir / CHECKPOINT
+    resume = None
+    if args.resume:
+        if not ckpt_path.is_file():
+            raise SystemExit(f"error: --resume but {ckpt_path} does not exist")
+        resume = load_checkpoint(ckpt_path)
+        saved = dict(resume["args"])
+        given = explicit_args(argv)
+        for k in RESUME_OVERRIDABLE + ("device",):
+            if k in given or k == "device":
+                saved[k] = getattr(args, k)
+        args = argparse.Namespace(**{**vars(args), **saved, "resume": True, "run_dir": run_dir})
+    elif ckpt_path.exists():
+        raise SystemExit(f"error: {ckpt_path} exists: --resume it or choose another --run-dir")
+    if args.future < 2 or args.pose_window > args.future or args.label_window > args.future:
+        raise SystemExit("error: --future must be >= 2 and at least --pose-window and --label-window frames")
+    torch.set_num_threads(args.threads)
+    device = torch.device(args.device)
+    log = Logger(run_dir)
+    command = resume["command"] if resume else "python -m training.train_intention " + shlex.join(argv)
+    log(("resuming: " if resume else "starting: ") + command)
+
+    dataset = h36m.load_training_set(args.data_dir, h36m.ACTIONS, log=log)
+    stats = dataset.stats
+    torch.manual_seed(args.seed)
+    if resume is not None:
+        config = resume["config"]
+        model = IntentionModel(config)
+        model.load_state_dict(resume["model"])
+    else:
+        config = build_config(args, stats.dims_used)
+        model = IntentionModel(config)
+        model.norm.set_stats(torch.from_numpy(stats.mean).float(), torch.from_numpy(stats.std).float())
+        t0 = time.time()
+        seqs = [s for lst in dataset.by_action for _, s in lst]
+        centroids, merge = intention_labels.fit_labels(seqs, args.clusters, args.intentions, seed=args.seed)
+        raw8 = intention_labels.kmeans(np.concatenate(seqs)[:: max(1, sum(map(len, seqs)) // 100_000)],
+                                       args.intentions, seed=args.seed)
+        slow = intention_labels.mean_run_length([intention_labels.label(s, centroids, merge) for s in seqs])
+        naive = intention_labels.mean_run_length([intention_labels.nearest_cluster(s, raw8) for s in seqs])
+        log(f"labels: {args.clusters} clusters -> {args.intentions} intentions in {time.time() - t0:.0f} s; mean run "
+            f"{slow:.1f} frames (plain k-means with {args.intentions} clusters: {naive:.1f}); merge {merge.tolist()}")
+        with torch.no_grad():
+            model.labels.centroids.copy_(torch.from_numpy(centroids).float())
+            model.labels.merge.copy_(torch.from_numpy(merge).float())
+    centroids = model.labels.centroids.double().numpy()
+    merge = model.labels.merge.long().numpy()
+    labelled = LabelledSet(dataset, centroids, merge)
+    d_pose = PoseDiscriminator(args.pose_window, model.output_size, args.d_hidden)
+    d_label = LabelDiscriminator(args.label_window, model.intentions, max(8, args.d_hidden // 4))
+    model.to(device).train()
+    d_pose.to(device).train()
+    d_label.to(device).train()
+    forecaster = [p for n, p in model.named_parameters() if n.startswith("label_")]
+    generator = [p for n, p in model.named_parameters() if not n.startswith("label_")]
+    betas = (0.5, 0.9)
+    opt_g = torch.optim.Adam(generator, lr=args.lr, betas=betas)
+    opt_f = torch.optim.Adam(forecaster, lr=args.lr, betas=betas)
+    opt_dp = torch.optim.Adam(d_pose.parameters(), lr=args.lr_d, betas=betas)
+    opt_dl = torch.optim.Adam(d_label.parameters(), lr=args.lr_d, betas=betas)
+    rng = np.random.default_rng(args.seed)
+    iteration, best = 0, None
+    if resume is not None:
+        d_pose.load_state_dict(resume["d_pose"])
+        d_label.load_state_dict(resume["d_label"])
+        for opt, key in ((opt_g, "opt_g"), (opt_f, "opt_f"), (opt_dp, "opt_dp"), (opt_dl, "opt_dl")):
+            opt.load_state_dict(resume[key])
+        rng.bit_generator.state = resume["numpy_rng"]
+        torch.set_rng_state(resume["torch_rng"])
+        iteration, best = resume["iteration"], resume.get("best")
+        log(f"resumed at iteration {iteration}")
+    else:
+        log(f"intention model: {parameter_count(model):,} parameters (D_pose {parameter_count(d_pose):,}, D_label "
+            f"{parameter_count(d_label):,}); config {json.dumps({k: v for k, v in config.items() if k != 'dims_used'})}")
+
+    windows = h36m.validation_windows(args.data_dir, h36m.ACTIONS, args.val_per_action, log=log)
+    validator = Validator(windows, stats, list(h36m.ACTIONS))
+
+    def snapshot() -> dict:
+        return {
+            "config": config, "model": {k: v.cpu() for k, v in model.state_dict().items()},
+            "d_pose": d_pose.state_dict(), "d_label": d_label.state_dict(),
+            "opt_g": opt_g.state_dict(), "opt_f": opt_f.state_dict(), "opt_dp": opt_dp.state_dict(),
+            "opt_dl": opt_dl.state_dict(), "iteration": iteration, "best": best,
+            "numpy_rng": rng.bit_generator.state, "torch_rng": torch.get_rng_state(),
+            "args": {k: (str(v) if isinstance(v, Path) else v) for k, v in vars(args).items()
+                     if k not in ("export", "from_", "resume")},
+            "command": command, "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+        }
+
+    seed_len, future, g = h36m.SEED_FRAMES, args.future, model.lookahead
+    groups = joint_groups(model.dims_used)
+    lam = rec_weights(future, args.rec_frames, device)
+    long_total = args.long_burn_in + args.long_frames if args.long_weight > 0 else 0
+    t_last, acc, n_acc = time.time(), {}, 0
+    while iteration < args.iterations:
+        frames_np, labels_np = labelled.sample(rng, args.batch, seed_len + future)
+        frames = torch.from_numpy(frames_np).to(device)
+        labels = torch.from_numpy(labels_np).to(device)
+        seed, truth = frames[:, :seed_len], frames[:, seed_len:]
+        burn = int(rng.integers(0, args.long_burn_in + 1)) if long_total else 0
+        steps = future + (burn + args.long_frames if long_total else 0)
+        seed_labels, logits, probs = model.forecast_intentions(seed, steps + g - 2, labels=labels[:, :seed_len])
+        # --- forecaster: eq. 4 and eq. 5
+        ce = F.cross_entropy(logits[:, :future].reshape(-1, model.intentions), labels[:, seed_len:].reshape(-1))
+        real_l = windows_of(F.one_hot(labels[:, seed_len:], model.intentions).float(), args.label_window, 5)
+        fake_l = windows_of(probs[:, :future], args.label_window, 5)
+        dl = gan_d_loss(d_label(real_l), d_label(fake_l.detach()))
+        opt_dl.zero_grad(set_to_none=True)
+        dl.backward()
+        opt_dl.step()
+        lf = ce + args.label_adv_weight * gan_g_loss(d_label(fake_l))
+        # --- pose generator: eq. 8 and eq. 7 (+ the long-horizon windows)
+        z = model.sample_noise(args.batch, seed)
+        feats = model.intention_features_of(seed_labels, probs.detach(), steps, seed)
+        state = model.initial_state(seed, z)
+        pred, state = model.rollout(seed[:, -1], state, z, feats[:, :future])
+        rec = rec_loss(pred, truth, groups, lam)
+        fake_p = windows_of(torch.cat([seed[:, -1:], pred], 1), args.pose_window, 3)
+        real_p = windows_of(torch.cat([seed[:, -1:], truth], 1), args.pose_window, 3)
+        long_fake = None
+        if long_total:
+            with torch.no_grad():
+                x = pred[:, -1]
+                hs = [h.detach() for h in state]
+                if burn:
+                    burned, hs = model.rollout(x, hs, z, feats[:, future : future + burn])
+                    x = burned[:, -1]
+            more, _ = model.rollout(x, hs, z, feats[:, future + burn :])
+            long_fake = windows_of(torch.cat([x[:, None], more], 1), args.pose_window, 3)
+        fakes = fake_p if long_fake is None else torch.cat([fake_p, long_fake])
+        dp = gan_d_loss(d_pose(real_p), d_pose(fakes.detach()))
+        opt_dp.zero_grad(set_to_none=True)
+        dp.backward()
+        opt_dp.step()
+        adv = gan_g_loss(d_pose(fake_p))
+        lg = rec + args.adv_weight * adv
+        terms = {"ce": ce.item(), "rec": rec.item(), "adv": adv.item(), "d_pose": dp.item(), "d_label": dl.item()}
+        if long_fake is not None:
+            adv_long = gan_g_loss(d_pose(long_fake))
+            lg = lg + args.long_weight * args.adv_weight * adv_long
+            terms["adv_long"] = adv_long.item()
+        loss = lf + lg
+        if not math.isfinite(loss.item()):
+            raise SystemExit(f"error: loss became {loss.item()} at iteration {iteration + 1}; see {run_dir}")
+        opt_g.zero_grad(set_to_none=True)
+        opt_f.zero_grad(set_to_none=True)
+        loss.backward()
+        torch.nn.utils.clip_grad_norm_(generator, args.clip)
+        torch.nn.utils.clip_grad_norm_(forecaster, args.clip)
+        opt_g.step()
+        opt_f.step()
+        iteration += 1
+        for k, v in terms.items():
+            acc[k] = acc.get(k, 0.0) + v
+        n_acc += 1
+        if iteration % args.log_every == 0 or iteration == args.iterations:
+            now = time.time()
+            means = {k: v / n_acc for k, v in acc.items()}
+            spi = (now - t_last) / n_acc
+            log(f"it {iteration:6d} " + " ".join(f"{k} {v:.4f}" for k, v in means.items()) + f" {spi:.2f} s/it")
+            log.record(kind="train", iteration=iteration, s_per_it=spi, **means)
+            t_last, acc, n_acc = now, {}, 0
+        if iteration % args.val_every == 0 or iteration == args.iterations:
+            model.cpu()
+            val = validate(model, validator)
+            model.to(device)
+            is_best = best is None or choice_key(val) < choice_key(best)
+            if is_best:
+                best = {k: v for k, v in val.items() if k != "per_action"} | {"iteration": iteration}
+            ratios = val["long_speed"]
+            lo = min(ratios.items(), key=lambda kv: kv[1])
+            hi = max(ratios.items(), key=lambda kv: kv[1])
+            log(f"val it {iteration:6d} npss_ref {val['npss_ref']:.4f} euler80 {val['euler_80']:.3f} "
+                f"speed(8-12s) min {lo[1]:.2f} ({lo[0]}) max {hi[1]:.2f} ({hi[0]}) "
+                f"median {np.median(list(ratios.values())):.2f}{'  [best]' if is_best else ''}")
+            log.record(kind="val", iteration=iteration, best=is_best, **val)
+            if is_best:
+                atomic_save(snapshot(), run_dir / BEST)
+        if iteration % args.checkpoint_every == 0 or iteration == args.iterations:
+            atomic_save(snapshot(), ckpt_path)
+    log(f"done: iteration {iteration}" + (f", best at {best['iteration']}" if best else ""))
+    log.close()
+
+
+def export(out: Path, ckpt: Path, dtype: str, argv: list[str]) -> None:
+    state = load_checkpoint(ckpt)
+    model = IntentionModel(state["config"])
+    model.load_state_dict(state["model"])
+    best = state.get("best") or {}
+    provenance = {
+        "data": "Human3.6M S1, S6, S7, S8, S9, S11 (25 Hz), all 15 actions",
+        "iterations": int(state["iteration"]),
+        "date": state["date"],
+        "command": state["command"],
+        "export_command": "python -m training.train_intention " + shlex.join(argv),
+        "checkpoint_choice": "train_intention module doc (S5 validation windows, 12 s speed ratios, then NPSS)",
+        "validation": {k: best[k] for k in ("npss_ref", "euler_80", "iteration") if k in best},
+    }
+    save_weights(model, out, provenance, dtype=getattr(torch, dtype))
+    print(f"wrote {out} ({parameter_count(model):,} parameters, {dtype}, iteration {state['iteration']})")
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    args = build_parser().parse_args(argv)
+    try:
+        if args.export is not None:
+            if args.from_ is None:
+                raise SystemExit("error: --export needs --from CKPT")
+            export(args.export, args.from_, args.dtype, argv)
+        else:
+            train(args, argv)
+    except ValueError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
