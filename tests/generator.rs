@@ -1,8 +1,8 @@
 //! Closed-loop generation: determinism, noise, batch/single agreement, streaming past the plan,
 //! typed errors for bad input, no heap allocation per step, parameter counts at paper size.
 use motion::core::model::{
-    Architecture, BatchGenerator, GenerateError, Generator, ModelConfig, MotionModel, Noise,
-    WeightStore,
+    generate_samples, Architecture, BatchGenerator, GenerateError, Generator, ModelConfig,
+    MotionModel, Noise, WeightStore,
 };
 use ndarray::{Array2, Array3, ArrayView2};
 use std::alloc::{GlobalAlloc, Layout, System};
@@ -151,7 +151,7 @@ fn dropped_dims_are_the_mean() {
 
 #[test]
 fn batch_rows_match_single_generators() {
-    for name in ["vgru_d", "gru_d_residual", "dae_lstm"] {
+    for name in ["vgru_d", "gru_d_residual", "dae_lstm", "intention"] {
         let m = model(name);
         let s = seed();
         let rows = 3;
@@ -226,6 +226,114 @@ fn batch_errors() {
     )
     .unwrap();
     assert_eq!(g.step().unwrap().dim(), (2, 99));
+}
+
+// ---- the intention model's noise z -------------------------------------------------------------------
+
+#[test]
+fn intention_z_per_row_seeded_or_explicit() {
+    let m = model("intention");
+    let s = seed();
+    let n = m.config().noise_dims.unwrap();
+    // Seeded z: reproducible, another seed another future.
+    let a = run(&m, s.view(), None, Noise::Seed(7), 40);
+    assert_eq!(a, run(&m, s.view(), None, Noise::Seed(7), 40));
+    assert_ne!(a, run(&m, s.view(), None, Noise::Seed(8), 40));
+    assert!(a.iter().all(|v| v.is_finite()));
+    // Batch rows, each with its own z (seeded and explicit), equal single-row runs; rows with
+    // different z differ.
+    let z = vec![0.5f32; n];
+    let noise = [
+        Noise::Seed(1),
+        Noise::Explicit(&z),
+        Noise::Seed(2),
+        Noise::Seed(1),
+    ];
+    let rows = noise.len();
+    let seeds = Array3::from_shape_fn((rows, s.nrows(), s.ncols()), |(_, t, d)| s[[t, d]]);
+    // Two shards of two rows: each shard's rows get their own noise.
+    let mut batch = BatchGenerator::with_shards(Arc::clone(&m), rows, 2);
+    assert_eq!(batch.shards(), 2);
+    batch.start(seeds.view(), &[], &noise).unwrap();
+    let mut got = Array3::<f32>::zeros((rows, 40, s.ncols()));
+    for k in 0..40 {
+        got.slice_mut(ndarray::s![.., k, ..])
+            .assign(&batch.step().unwrap());
+    }
+    for (b, &nz) in noise.iter().enumerate() {
+        let single = run(&m, s.view(), None, nz, 40);
+        let diff = (&single - &got.slice(ndarray::s![b, .., ..]))
+            .iter()
+            .fold(0.0f32, |a, v| a.max(v.abs()));
+        assert!(diff < 1e-4, "row {b}: max diff {diff}");
+    }
+    let row = |b: usize| got.slice(ndarray::s![b, .., ..]).to_owned();
+    assert_ne!(row(0), row(1));
+    assert_ne!(row(0), row(2));
+    assert_eq!(
+        row(0),
+        row(3),
+        "the same z in the same batch gives the same frames"
+    );
+    // generate_samples (CLI `predict --samples`): sample i draws z from rng_seed + i.
+    let s64 = s.mapv(f64::from);
+    let samples = generate_samples(&m, s64.view(), None, 20, 3, 41).unwrap();
+    for i in 0..3 {
+        let single = run(&m, s.view(), None, Noise::Seed(41 + i as u64), 20).mapv(f64::from);
+        let diff = (&single - &samples.slice(ndarray::s![i, .., ..]))
+            .iter()
+            .fold(0.0f64, |a, v| a.max(v.abs()));
+        assert!(diff < 1e-4, "sample {i}: max diff {diff}");
+    }
+    assert_ne!(
+        samples.slice(ndarray::s![0, .., ..]),
+        samples.slice(ndarray::s![1, .., ..])
+    );
+    // An explicit z of the wrong length, no action to change.
+    let short = vec![0.0f32; n - 1];
+    let mut g = Generator::new(Arc::clone(&m));
+    assert_eq!(
+        g.start(s.view(), None, Noise::Explicit(&short))
+            .unwrap_err(),
+        GenerateError::WrongNoiseLength {
+            expected: n,
+            got: n - 1
+        }
+    );
+    g.start(s.view(), None, Noise::Seed(0)).unwrap();
+    assert_eq!(
+        g.set_action("walking", 0),
+        Err(GenerateError::NotConditioned)
+    );
+}
+
+#[test]
+fn intention_works_with_a_single_seed_frame_and_random_paper_size_weights() {
+    // One seed frame: the last seed frame is also the first; paper sizes (gamma 10: 8 frames
+    // forecast before the first step).
+    let m = model("intention");
+    let one = seed().slice(ndarray::s![9..10, ..]).to_owned();
+    let frames = run(&m, one.view(), None, Noise::Seed(3), 5);
+    assert!(frames.iter().all(|v| v.is_finite()));
+    let paper =
+        Arc::new(MotionModel::random(&ModelConfig::paper(Architecture::Intention), 2).unwrap());
+    let seed = Array2::<f32>::zeros((50, 99));
+    let frames = run(&paper, seed.view(), None, Noise::Seed(1), 30);
+    assert!(frames.iter().all(|v| v.is_finite()));
+    // PyTorch's count for make_config("intention", ...): GRUs (label encoder 54 + 8 -> 128,
+    // label decoder 8 -> 128, pose encoder 54 -> 224, layers 54 + 32 + 32 -> 256, 256 -> 256
+    // twice), label_out 128 -> 8, intent_conv 32 x 8 x 10, decoder 256 -> 54.
+    let gru = |i: usize, h: usize| 3 * h * (i + h) + 6 * h;
+    let expected = gru(62, 128)
+        + gru(8, 128)
+        + gru(54, 224)
+        + gru(118, 256)
+        + 2 * gru(256, 256)
+        + (8 * 128 + 8)
+        + (32 * 8 * 10 + 32)
+        + (54 * 256 + 54);
+    assert_eq!(paper.parameter_count(), expected);
+    assert_eq!(paper.parameter_count(), 1_410_654); // sum(p.numel()) of IntentionModel
 }
 
 // ---- errors ----------------------------------------------------------------------------------------
@@ -315,7 +423,15 @@ fn bad_input_gives_typed_errors() {
 
 #[test]
 fn a_step_does_not_allocate() {
-    for name in ["vgru_d", "gru_d", "dae_lstm", "dae_lstm_actions"] {
+    for name in [
+        "vgru_d",
+        "gru_d",
+        "dae_lstm",
+        "dae_lstm_actions",
+        "intention",
+        "intention_lookahead1",
+        "intention_lookahead2",
+    ] {
         let m = model(name);
         let mut g = Generator::new(Arc::clone(&m));
         g.set_plan_horizon(20).unwrap();

@@ -2,7 +2,9 @@
 //! committed fixtures in `tests/fixtures/parity/` (written by `python -m training.export_fixtures`)
 //! must be reproduced within 1e-5, and loading errors must name the tensor and the file.
 use motion::core::model::weights::serialize_f32;
-use motion::core::model::{Generator, MotionModel, Noise, WeightStore, WeightsError};
+use motion::core::model::{
+    BatchGenerator, Generator, MotionModel, Network, Noise, WeightStore, WeightsError,
+};
 use motion::core::nn::{
     BodyGruCell, BodyGruConfig, GruCell, GruConfig, GruConvention, GruScratch, Linear,
     LinearConfig, LstmCell, LstmConfig, LstmScratch, Mlp, MlpConfig, MlpScratch,
@@ -261,6 +263,122 @@ fn dae_lstm() {
     check_model("dae_lstm");
 }
 
+/// Runs an intention fixture (paper 003) through the single-character Generator with the
+/// fixture's explicit `z`: the seed's labels and the closed-loop frames (the model makes no
+/// teacher-forced predictions). Returns the largest difference from PyTorch.
+fn check_intention(name: &str) -> f32 {
+    let model = Arc::new(MotionModel::load(fixture(&format!("{name}.safetensors"))).unwrap());
+    let expected = WeightStore::open(fixture(&format!("{name}.expected.safetensors"))).unwrap();
+    let (ss, seed) = get(&expected, "seed");
+    let (_, z) = get(&expected, "eps");
+    let (_, labels) = get(&expected, "seed_labels");
+    let (cs, closed) = get(&expected, "closed_loop");
+    let lookahead: usize = expected.metadata("lookahead").unwrap().parse().unwrap();
+    assert_eq!(model.config().lookahead, Some(lookahead), "{name}");
+    let width = ss[1];
+    let seed = ArrayView2::from_shape((ss[0], width), &seed).unwrap();
+
+    let Network::Intention(net) = model.network() else {
+        panic!("{name}: not an intention model")
+    };
+    let o = model.config().output_dims();
+    let mut x = vec![0.0f32; o];
+    for (t, frame) in seed.outer_iter().enumerate() {
+        model
+            .normalization()
+            .normalize(frame.as_slice().unwrap(), &mut x);
+        assert_eq!(
+            net.label(&x) as f32,
+            labels[t],
+            "{name}: label of seed frame {t}"
+        );
+    }
+
+    let mut generator = Generator::new(Arc::clone(&model));
+    generator
+        .start_with(seed, None, Noise::Explicit(&z), |t, _| {
+            panic!("{name}: a teacher-forced prediction after seed frame {t}")
+        })
+        .unwrap();
+    let mut worst = 0.0f32;
+    for k in 0..cs[0] {
+        let frame = generator.step().unwrap();
+        let e = &closed[k * width..(k + 1) * width];
+        assert_close(&format!("{name} closed_loop[{k}]"), frame, e);
+        worst = frame
+            .iter()
+            .zip(e)
+            .fold(worst, |w, (g, e)| w.max((g - e).abs()));
+    }
+    // Unconditioned: an action is ignored.
+    let mut with_action = Generator::new(Arc::clone(&model));
+    with_action
+        .start(seed, Some("walking"), Noise::Explicit(&z))
+        .unwrap();
+    let frames = with_action.generate(cs[0]).unwrap();
+    assert_close(
+        &format!("{name} with an action"),
+        frames.as_slice().unwrap(),
+        &closed,
+    );
+    eprintln!(
+        "{name}: max |Rust - PyTorch float64| over {} frames: {worst:e}",
+        cs[0]
+    );
+    worst
+}
+
+#[test]
+fn intention() {
+    check_intention("intention");
+}
+
+#[test]
+fn intention_lookahead_1_and_2() {
+    // gamma 1: the window is the previous frame alone, nothing forecast before the first step;
+    // gamma 2: the ring holds two frames, nothing forecast before the first step either.
+    check_intention("intention_lookahead1");
+    check_intention("intention_lookahead2");
+}
+
+#[test]
+fn intention_batch_rows_with_their_own_z() {
+    // Row 0 has the fixture's z, row 1 another z, row 2 the fixture's z again: rows 0 and 2
+    // reproduce PyTorch, row 1 differs.
+    let model = Arc::new(MotionModel::load(fixture("intention.safetensors")).unwrap());
+    let expected = WeightStore::open(fixture("intention.expected.safetensors")).unwrap();
+    let (ss, seed) = get(&expected, "seed");
+    let (_, z) = get(&expected, "eps");
+    let (cs, closed) = get(&expected, "closed_loop");
+    let width = ss[1];
+    let other: Vec<f32> = z.iter().map(|v| -v).collect();
+    let seed = ArrayView2::from_shape((ss[0], width), &seed).unwrap();
+    let seeds = seed.broadcast((3, ss[0], width)).unwrap();
+    let mut batch = BatchGenerator::new(model, 3);
+    batch
+        .start(
+            seeds,
+            &[],
+            &[
+                Noise::Explicit(&z),
+                Noise::Explicit(&other),
+                Noise::Explicit(&z),
+            ],
+        )
+        .unwrap();
+    let mut differs = false;
+    for k in 0..cs[0] {
+        let frames = batch.step().unwrap();
+        let e = &closed[k * width..(k + 1) * width];
+        for row in [0, 2] {
+            let got: Vec<f32> = frames.row(row).to_vec();
+            assert_close(&format!("row {row} closed_loop[{k}]"), &got, e);
+        }
+        differs |= frames.row(1) != frames.row(0);
+    }
+    assert!(differs, "another z gives another future");
+}
+
 // ---- loading errors -----------------------------------------------------------------------------
 
 /// A fixture's tensors (as f32) and metadata, for editing.
@@ -472,4 +590,132 @@ fn a_classifier_fits_predictors_with_its_frames_and_actions() {
     let mut faster = vgru.config().clone();
     faster.fps = 50.0;
     assert!(classifier.fits(&faster).unwrap_err().contains("50 Hz"));
+}
+
+// ---- intention model: bad tensors and configs ------------------------------------------------------
+
+fn edit_tensor(parts: &mut Parts, name: &str, edit: impl FnOnce(&mut Vec<usize>, &mut Vec<f32>)) {
+    let entry = parts.0.iter_mut().find(|(n, _, _)| n == name).unwrap();
+    edit(&mut entry.1, &mut entry.2);
+}
+
+#[test]
+fn intention_merge_table_outside_the_intentions_is_named() {
+    for bad in [4.0f32, -1.0, 1.5] {
+        let (_dir, path) = edited("intention.safetensors", |parts| {
+            edit_tensor(parts, "labels.merge", |_, v| v[2] = bad)
+        });
+        let (err, msg) = load_error(&path);
+        assert!(matches!(err, WeightsError::InvalidTensor { .. }), "{msg}");
+        assert!(
+            msg.contains("labels.merge")
+                && msg.contains("cluster 2")
+                && msg.contains("0..4")
+                && msg.contains("edited.safetensors"),
+            "{msg}"
+        );
+    }
+}
+
+#[test]
+fn intention_wrong_shapes_and_missing_tensors_are_named() {
+    for name in [
+        "intent_conv.weight",
+        "labels.centroids",
+        "labels.merge",
+        "label_encoder.weight_ih",
+        "label_out.weight",
+        "pose_encoder.weight_hh",
+        "rnn.0.weight_ih",
+    ] {
+        let (_dir, path) = edited("intention.safetensors", |parts| {
+            edit_tensor(parts, name, |shape, values| {
+                // One row (or value) fewer.
+                let row: usize = shape[1..].iter().product();
+                shape[0] -= 1;
+                values.truncate(values.len() - row);
+            })
+        });
+        let (err, msg) = load_error(&path);
+        assert!(
+            matches!(err, WeightsError::WrongShape { .. }),
+            "{name}: {msg}"
+        );
+        assert!(
+            msg.contains(name) && msg.contains("edited.safetensors"),
+            "{msg}"
+        );
+    }
+    let (_dir, path) = edited("intention.safetensors", |(t, _)| {
+        t.retain(|(n, _, _)| n != "label_decoder.bias_hh")
+    });
+    let (err, msg) = load_error(&path);
+    assert!(matches!(err, WeightsError::MissingTensor { .. }), "{msg}");
+    assert!(msg.contains("label_decoder.bias_hh"), "{msg}");
+}
+
+#[test]
+fn intention_bad_configs_are_refused() {
+    let cases: [(&str, &str, serde_json::Value); 6] = [
+        (
+            "noise_dims",
+            "0 < noise_dims < hidden",
+            serde_json::json!(24),
+        ),
+        (
+            "noise_dims",
+            "0 < noise_dims < hidden",
+            serde_json::json!(0),
+        ),
+        ("lookahead", "lookahead >= 1", serde_json::json!(0)),
+        ("intentions", "needs intentions", serde_json::Value::Null),
+        ("residual", "residual", serde_json::json!(false)),
+        ("derivative_order", "derivative_order", serde_json::json!(3)),
+    ];
+    for (field, needle, value) in cases {
+        let (_dir, path) = edited("intention.safetensors", |(_, m)| {
+            let mut config: serde_json::Value = serde_json::from_str(&m["config"]).unwrap();
+            if value.is_null() {
+                config.as_object_mut().unwrap().remove(field);
+            } else {
+                config[field] = value.clone();
+            }
+            m.insert("config".into(), config.to_string());
+        });
+        let (err, msg) = load_error(&path);
+        assert!(
+            matches!(err, WeightsError::BadConfig { .. }),
+            "{field}: {msg}"
+        );
+        assert!(msg.contains(needle), "{field}: {msg}");
+    }
+}
+
+#[test]
+fn intention_labels_ties_go_to_the_lowest_cluster() {
+    let (_dir, path) = edited("intention.safetensors", |parts| {
+        edit_tensor(parts, "labels.merge", |_, v| {
+            v.copy_from_slice(&[0.0, 1.0, 2.0, 3.0, 0.0, 1.0, 2.0])
+        });
+        edit_tensor(parts, "labels.centroids", |shape, v| {
+            let o = shape[1];
+            let (first, rest) = v.split_at_mut(o);
+            rest[..o].copy_from_slice(first); // cluster 1 = cluster 0
+            let (head, tail) = v.split_at_mut(4 * o);
+            tail[..o].copy_from_slice(&head[2 * o..3 * o]); // cluster 4 = cluster 2
+        });
+    });
+    let model = MotionModel::load(&path).unwrap();
+    let Network::Intention(net) = model.network() else {
+        panic!("not an intention model")
+    };
+    let store = WeightStore::open(&path).unwrap();
+    let (shape, centroids) = store.tensor_any_shape("labels.centroids").unwrap();
+    let o = shape[1];
+    let at = |k: usize| &centroids[k * o..(k + 1) * o];
+    assert_eq!(net.label(at(0)), 0, "cluster 0, not its twin 1");
+    assert_eq!(net.label(at(1)), 0);
+    assert_eq!(net.label(at(2)), 2, "cluster 2, not its twin 4");
+    assert_eq!(net.label(at(3)), 3);
+    assert_eq!(net.label(at(6)), 2);
 }

@@ -150,6 +150,18 @@ LATE_MODEL_SPECS = {
     "dae_lstm": ("dae-lstm", {"layers": 2, "dae_hidden": 24, "dae_layers": 2}, torch.float32, "walking"),
 }
 
+# Intention fixtures (paper 003), drawn after every file above so those stay byte-identical:
+# file stem -> look-ahead gamma (3: the general case; 1 and 2: the edges of the engine's ring of
+# intention probabilities, no forecast ahead of the first pose step).
+INTENTION_SPECS = {"intention": 3, "intention_lookahead1": 1, "intention_lookahead2": 2}
+INTENTION_SIZES = {
+    "hidden": 24, "noise_dims": 6, "label_hidden": 10, "intentions": 4, "clusters": 7, "intention_features": 5,
+    "layers": 2,
+}  # fmt: skip
+# Smallest gap between a seed frame's nearest and second-nearest centroid (squared distance in
+# normalized units), so that the engine's f32 labelling cannot pick another cluster.
+LABEL_MARGIN = 1e-2
+
 PROVENANCE = {
     "data": "none: random weights (parity fixture)",
     "iterations": 0,
@@ -243,6 +255,70 @@ def model_fixture(stem: str, gen: torch.Generator) -> tuple[Fixture, Fixture]:
     return weights, (expected, meta)
 
 
+def intention_fixture(stem: str, gen: torch.Generator) -> tuple[Fixture, Fixture]:
+    """``<stem>.safetensors`` (an ``intention`` model) and ``<stem>.expected.safetensors``: ``seed [S, 99]``,
+    ``eps`` (the noise ``z [N]``), ``seed_labels [S]`` (intention of each seed frame, as floats), ``intentions
+    [horizon + γ - 2, C]`` (the forecast probabilities of frames ``S ..``) and ``closed_loop [horizon, 99]``; no
+    ``teacher_forced`` (the model makes no predictions during the seed)."""
+    lookahead = INTENTION_SPECS[stem]
+    config = make_config(
+        "intention", H36M_DIMS_USED, seed_frames=SEED_FRAMES, horizon=HORIZON, lookahead=lookahead, **INTENTION_SIZES
+    )
+    model = build_model(config)
+    hidden, label_hidden = config["hidden"], config["label_hidden"]
+    bounds = {
+        "decoder.weight": 0.3 * hidden**-0.5,  # modest drift, as the residual fixtures above
+        "decoder.bias": 0.02,
+        "label_out.weight": 3.0 * label_hidden**-0.5,  # peaked intention probabilities that move
+    }
+    _randomize(model, gen, bounds)
+    used = config["dims_used"]
+    mean, std = _random_norm(model, gen)
+    seed = _seed_frames(gen, mean, std, used)
+
+    # Centroids: normalized seed frames, jittered, so that the seed visits several clusters; a merge table
+    # that uses every intention.
+    clusters, intentions = config["clusters"], config["intentions"]
+    normalized = (seed[:, used] - mean[used]) / std[used]
+    picks = torch.randperm(SEED_FRAMES, generator=gen)[:clusters]
+    centroids = normalized[picks] + 0.1 * torch.randn(clusters, len(used), generator=gen)
+    merge = (torch.randperm(clusters, generator=gen) % intentions).to(torch.float32)
+    assert set(merge.long().tolist()) == set(range(intentions))
+    with torch.no_grad():
+        model.labels.centroids.copy_(centroids)
+        model.labels.merge.copy_(merge)
+    z = torch.randn(config["noise_dims"], generator=gen)
+
+    tensors = weights_tensors(model)
+    weights = (tensors, weights_metadata(model, PROVENANCE))
+
+    ref = build_model(config).double().eval()
+    ref.load_state_dict({k: v.to(torch.float64) for k, v in tensors.items()})
+    with torch.no_grad():
+        norm_seed = ref.norm.normalize(seed.double().unsqueeze(0))
+        d = ((norm_seed[0].unsqueeze(-2) - ref.labels.centroids) ** 2).sum(-1).sort(-1).values
+        margin = (d[:, 1] - d[:, 0]).min().item()
+        assert margin > LABEL_MARGIN, f"{stem}: a seed frame is {margin:.3g} from a tie between centroids"
+        labels, _, probs = ref.forecast_intentions(norm_seed, HORIZON + lookahead - 2)
+        assert len(set(labels[0].tolist())) >= 2, f"{stem}: the seed has a single intention"
+        closed_loop = ref.predict(seed.double(), horizon=HORIZON, eps=z.double())
+    expected = {
+        "seed": seed,
+        "eps": z,
+        "seed_labels": labels[0].to(torch.float32),
+        "intentions": _f32(probs[0]),
+        "closed_loop": _f32(closed_loop),
+    }
+    meta = {
+        "action": "",
+        "horizon": str(HORIZON),
+        "lookahead": str(lookahead),
+        "seed_frames": str(SEED_FRAMES),
+        "weights": f"{stem}.safetensors",
+    }
+    return weights, (expected, meta)
+
+
 def classifier_fixture(gen: torch.Generator) -> tuple[Fixture, Fixture]:
     """``action_classifier.safetensors`` (2 LSTM layers, centered windows, velocity features) and its expected outputs:
     ``windows [N, T, 99]`` (full frames, junk in dropped dims), ``logits [N, A]``, ``probabilities [N, A]``."""
@@ -277,6 +353,11 @@ def build_all() -> dict[str, Fixture]:
     files["action_classifier.expected.safetensors"] = expected
     for stem in LATE_MODEL_SPECS:
         weights, expected = model_fixture(stem, gen)
+        files[f"{stem}.safetensors"] = weights
+        files[f"{stem}.expected.safetensors"] = expected
+    # Drawn last, for the same reason.
+    for stem in INTENTION_SPECS:
+        weights, expected = intention_fixture(stem, gen)
         files[f"{stem}.safetensors"] = weights
         files[f"{stem}.expected.safetensors"] = expected
     return files

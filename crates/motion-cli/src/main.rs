@@ -13,6 +13,10 @@ use std::process::ExitCode;
 #[derive(Parser, Debug)]
 #[command(name = "motion-cli", version, about, long_about = None)]
 struct Cli {
+    /// On an error, print every cause on its own line (the libraries' source chain) instead of
+    /// one line.
+    #[arg(long, global = true)]
+    verbose: bool,
     #[command(subcommand)]
     command: Command,
 }
@@ -37,12 +41,21 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    // SIGINT / SIGTERM: remove the temporary files of outputs being written, then exit 1 (an
+    // interruption is the environment's doing, not bad input). A handler that cannot be
+    // installed (another one is) changes nothing else.
+    let _ = ctrlc::set_handler(|| {
+        let removed = motion_core::formats::atomic::remove_live_temp_files();
+        eprintln!("error: interrupted; {removed} unfinished output file(s) removed");
+        std::process::exit(1);
+    });
     // MOTION_SIMD=avx512|avx2|neon|portable picks the kernels; a bad value is bad input.
     if let Err(err) = motion_core::nn::simd::init_from_env() {
         let err = anyhow::Error::new(err);
         eprintln!("error: {}", commands::error_chain(&err));
         return ExitCode::from(commands::exit_code(&err));
     }
+    let verbose = cli.verbose;
     let result = match cli.command {
         Command::Convert(args) => commands::convert::run(args),
         Command::Info(args) => commands::info::run(args),
@@ -54,6 +67,10 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        Err(err) if verbose => {
+            eprintln!("{}", commands::error_causes(&err));
+            ExitCode::from(commands::exit_code(&err))
+        }
         Err(err) => {
             eprintln!("error: {}", commands::error_chain(&err));
             ExitCode::from(commands::exit_code(&err))

@@ -24,7 +24,7 @@ pub fn load_classifier(path: Option<&Path>) -> anyhow::Result<Arc<ActionClassifi
     };
     classifier
         .map(Arc::new)
-        .map_err(|e| UsageError(format!("cannot load the action classifier: {e}")).into())
+        .map_err(|e| anyhow::Error::new(e).context("cannot load the action classifier"))
 }
 
 /// Whether this binary carries a built-in action classifier.
@@ -34,7 +34,7 @@ pub fn has_default_classifier() -> bool {
 
 /// Loads the model of `--model PATH`, or the built-in default weights when `path` is `None`.
 ///
-/// Errors (all [`UsageError`], exit code 2): the file is missing, unreadable or not a valid
+/// Errors (exit code 2: a [`UsageError`] or the loader's typed `WeightsError` as the source): the file is missing, unreadable or not a valid
 /// motion-weights file (the message names the file and the problem), or `path` is `None` and no
 /// default weights were built into this binary.
 pub fn load_model(path: Option<&Path>) -> anyhow::Result<Arc<MotionModel>> {
@@ -46,7 +46,7 @@ pub fn load_model(path: Option<&Path>) -> anyhow::Result<Arc<MotionModel>> {
     };
     model
         .map(Arc::new)
-        .map_err(|e| UsageError(format!("cannot load the model: {e}")).into())
+        .map_err(|e| anyhow::Error::new(e).context("cannot load the model"))
 }
 
 /// How to name the model's source in reports: the path given, or the built-in default.

@@ -281,7 +281,7 @@ fn bad_input_exits_2_with_one_line_and_no_output() {
     assert_rejected(
         &dir,
         &[&txt, &out_bvh, &"--fps", &"0.5"],
-        "--fps must be at least 1",
+        "--fps: 0.5 fps is outside 1 ..= 10000 frames per second",
     );
 
     let malformed = dir.join("malformed.bvh");

@@ -634,3 +634,126 @@ fn a_huge_name_in_a_file_gives_a_short_error_line() {
         stderr.len()
     );
 }
+
+#[test]
+fn one_frame_rate_rule_for_every_command() {
+    // A Frame Time in milliseconds (20 for 50 Hz) or one of 1e-9 s, and --input-fps outside
+    // 1 ..= 10,000: refused by convert, render (and predict, tested with the seeds) alike.
+    let dir = scratch("rates");
+    let text = walk_with_frames(&walk_frames());
+    for (name, frame_time, expected) in [
+        ("ms.bvh", "20", "milliseconds"),
+        ("fast.bvh", "1e-9", "fps"),
+    ] {
+        std::fs::write(
+            dir.join(name),
+            text.replace("Frame Time: 0.04", &format!("Frame Time: {frame_time}")),
+        )
+        .unwrap();
+        bad_input(&dir, &[&"convert", &name, &"o.npy"], &[name, expected]);
+        bad_input(
+            &dir,
+            &[&"render", &name, &"--out", &"o.gif"],
+            &[name, expected],
+        );
+        bad_input(
+            &dir,
+            &[
+                &"render",
+                &walk_seed(),
+                &"--compare",
+                &name,
+                &"--out",
+                &"o.gif",
+            ],
+            &[name, expected],
+        );
+        std::fs::remove_file(dir.join(name)).unwrap();
+    }
+    std::fs::write(dir.join("w.bvh"), &text).unwrap();
+    bad_input(
+        &dir,
+        &[&"convert", &"w.bvh", &"o.npy", &"--fps", &"0.5"],
+        &["--fps", "0.5 fps"],
+    );
+    bad_input(
+        &dir,
+        &[&"convert", &"w.bvh", &"o.npy", &"--fps", &"1e300"],
+        &["--fps"],
+    );
+    bad_input(
+        &dir,
+        &[
+            &"render",
+            &"w.bvh",
+            &"--out",
+            &"o.gif",
+            &"--input-fps",
+            &"0",
+        ],
+        &["--input-fps"],
+    );
+}
+
+#[test]
+fn render_sizes_are_bounded() {
+    let dir = scratch("render-sizes");
+    std::fs::write(dir.join("w.bvh"), walk_with_frames(&walk_frames())).unwrap();
+    bad_input(
+        &dir,
+        &[
+            &"render", &"w.bvh", &"--out", &"o.png", &"--cells", &"1000000",
+        ],
+        &["--cells", "400"],
+    );
+    bad_input(
+        &dir,
+        &[&"render", &"w.bvh", &"--out", &"o.png", &"--columns", &"0"],
+        &["--columns"],
+    );
+    // 40,000 frames: over the 30,000-frame limit of an animation, refused before drawing
+    let many: Vec<String> = walk_frames().into_iter().cycle().take(40_000).collect();
+    std::fs::write(dir.join("long.bvh"), walk_with_frames(&many)).unwrap();
+    bad_input(
+        &dir,
+        &[&"render", &"long.bvh", &"--out", &"o.gif"],
+        &["long.bvh", "30000"],
+    );
+}
+
+#[test]
+fn only_regular_files_are_read() {
+    // A symlink to /dev/zero used to be read until 8 GB; a directory or a FIFO is no file either.
+    let dir = scratch("regular");
+    std::os::unix::fs::symlink("/dev/zero", dir.join("zero.bvh")).unwrap();
+    std::os::unix::fs::symlink("/dev/zero", dir.join("zero.safetensors")).unwrap();
+    std::fs::create_dir(dir.join("folder.npy")).unwrap();
+    bad_input(
+        &dir,
+        &[&"convert", &"zero.bvh", &"o.npy"],
+        &["zero.bvh", "not a regular file"],
+    );
+    bad_input(
+        &dir,
+        &[&"convert", &"folder.npy", &"o.bvh"],
+        &["folder.npy", "not a regular file"],
+    );
+    bad_input(
+        &dir,
+        &[&"info", &"zero.safetensors"],
+        &["zero.safetensors", "not a regular file"],
+    );
+    bad_input(
+        &dir,
+        &[
+            &"predict",
+            &"--model",
+            &"zero.safetensors",
+            &"--seed",
+            &walk_seed(),
+            &"--out",
+            &"o.bvh",
+        ],
+        &["zero.safetensors", "not a regular file"],
+    );
+}

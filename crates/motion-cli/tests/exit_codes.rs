@@ -75,3 +75,99 @@ fn a_full_disk_exits_1_and_leaves_nothing_behind() {
         .collect();
     assert!(left.is_empty(), "left behind: {left:?}");
 }
+
+#[test]
+fn sigterm_and_sigint_exit_1_and_remove_the_unfinished_output() {
+    // `eval --save-predictions` streams its .npy through a temporary file for the whole run:
+    // a signal in the middle must leave nothing behind.
+    let data = common::data_dir();
+    if !data.join("h3.6m/dataset/S5/walking_1.txt.gz").exists()
+        && !data.join("h3.6m/dataset/S5/walking_1.txt").exists()
+    {
+        eprintln!(
+            "SKIPPED: the signal test runs eval, which needs the H3.6M data (set MOTION_DATA_DIR)"
+        );
+        return;
+    }
+    for signal in ["TERM", "INT"] {
+        let dir = scratch(&format!("exit-signal-{signal}"));
+        let out = dir.join("p.npy");
+        let mut child = Command::new(env!("CARGO_BIN_EXE_motion-cli"))
+            .args([
+                "eval",
+                "--data",
+                data.to_str().unwrap(),
+                "--actions",
+                "walking,eating,smoking",
+            ])
+            .args([
+                "--horizon",
+                "300",
+                "--samples",
+                "4",
+                "--no-classifier",
+                "--quiet",
+                "--save-predictions",
+            ])
+            .arg(&out)
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        let temp = dir.join(format!(".p.npy.tmp{}", child.id()));
+        let start = std::time::Instant::now();
+        while !temp.exists() {
+            assert!(
+                start.elapsed().as_secs() < 120,
+                "{} never appeared",
+                temp.display()
+            );
+            assert!(
+                child.try_wait().unwrap().is_none(),
+                "eval ended before the signal"
+            );
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        }
+        let kill = Command::new("kill")
+            .args([format!("-{signal}"), child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(kill.success());
+        let run = child.wait_with_output().unwrap();
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert_eq!(code(&run), 1, "SIG{signal}: {stderr}");
+        assert!(stderr.contains("interrupted"), "SIG{signal}: {stderr}");
+        let left: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert!(left.is_empty(), "SIG{signal} left behind: {left:?}");
+    }
+}
+
+#[test]
+fn verbose_prints_the_source_chain_one_cause_a_line() {
+    let dir = scratch("exit-verbose");
+    let out = motion_cli([
+        "--verbose",
+        "convert",
+        "no_such_file.bvh",
+        dir.join("o.npy").to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(code(&out), 2, "{stderr}");
+    let lines: Vec<&str> = stderr.lines().collect();
+    assert!(lines.len() >= 2, "{stderr}");
+    assert!(
+        lines[0].starts_with("error: ") && lines[0].contains("no_such_file.bvh"),
+        "{stderr}"
+    );
+    assert!(lines[1].starts_with("  caused by: "), "{stderr}");
+    // without --verbose: one line
+    let plain = motion_cli([
+        "convert",
+        "no_such_file.bvh",
+        dir.join("o.npy").to_str().unwrap(),
+    ]);
+    assert_eq!(String::from_utf8_lossy(&plain.stderr).lines().count(), 1);
+}

@@ -315,6 +315,55 @@ fn output_is_deterministic_for_a_noise_seed() {
 }
 
 #[test]
+fn intention_model_samples_each_draw_their_own_z() {
+    // The intention fixture (paper 003, unconditioned): --samples N gives N different
+    // predictions, sample i from --rng-seed + i, reproducibly; an action is refused as for any
+    // unconditioned model.
+    let dir = scratch("intention");
+    let model = repo().join("tests/fixtures/parity/intention.safetensors");
+    let run = |out: &Path, samples: &str, rng_seed: &str, action: Option<&str>| {
+        let mut command = Command::new(env!("CARGO_BIN_EXE_motion-cli"));
+        command.arg("predict").arg("--model").arg(&model);
+        command
+            .arg("--seed")
+            .arg(walk_seed())
+            .arg("--prediction-only");
+        command.args([
+            "--frames",
+            "20",
+            "--samples",
+            samples,
+            "--rng-seed",
+            rng_seed,
+        ]);
+        if let Some(action) = action {
+            command.args(["--action", action]);
+        }
+        let output = command.arg("--out").arg(out).output().unwrap();
+        (
+            output.status.code().unwrap_or(-1),
+            String::from_utf8_lossy(&output.stderr).into_owned(),
+        )
+    };
+    let (three, one) = (dir.join("three.npy"), dir.join("one.npy"));
+    assert_eq!(run(&three, "3", "5", None).0, 0);
+    assert_eq!(run(&one, "1", "6", None).0, 0);
+    let three = read_npy_dyn(&three).unwrap();
+    assert_eq!(three.shape(), &[3, 20, 99]);
+    let sample = |k: usize| three.index_axis(ndarray::Axis(0), k).to_owned();
+    assert_ne!(sample(0), sample(1));
+    assert_ne!(sample(1), sample(2));
+    let one = read_npy_dyn(&one).unwrap();
+    assert_eq!(one.shape(), &[20, 99], "one sample: frames x dims");
+    // Sample 1 of seed 5 is sample 0 of seed 6 (up to the summation order of batch 3 vs 1).
+    let diff = (&one - &sample(1)).fold(0.0f64, |m, v| m.max(v.abs()));
+    assert!(diff < 1e-4, "max diff {diff}");
+    let (code, stderr) = run(&dir.join("x.npy"), "1", "0", Some("walking"));
+    assert_eq!(code, 2, "{stderr}");
+    assert!(stderr.contains("not action-conditioned"), "{stderr}");
+}
+
+#[test]
 fn seed_end_and_truth_line_up_with_the_seed_file() {
     let dir = scratch("truth");
     let walk = read_bvh(walk_seed()).unwrap();

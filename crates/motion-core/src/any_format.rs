@@ -13,7 +13,9 @@ use crate::formats::h36m_text::{downsample_protocol, read_expmap_text, write_exp
 use crate::formats::npy::{read_npy_dyn, read_npy_frames, write_npy};
 use crate::formats::FileFormat;
 use crate::kinematics::channel_positions;
-use crate::motion::{expmap_layout_for_width, Motion, MotionLayout, RootEncoding};
+use crate::motion::{
+    check_fps, check_frame_time, expmap_layout_for_width, Motion, MotionLayout, RootEncoding,
+};
 use crate::resample::resample_bvh;
 use crate::skeleton::{Skeleton, CMU_FRAME_DIMS, H36M_FRAME_DIMS};
 
@@ -60,10 +62,19 @@ pub enum AnyMotion {
 }
 
 /// Reads `path` (format by extension); exp-map files are taken to be at `input_fps`.
+/// Rates outside [`crate::motion::check_fps`] (a BVH's `Frame Time`, or `input_fps` for the
+/// others) are refused.
 pub fn read_any(path: &Path, input_fps: f64) -> Result<AnyMotion, AnyMotionError> {
     let format = FileFormat::from_path(path)?;
+    if format != FileFormat::Bvh {
+        check_fps(input_fps).map_err(|p| invalid(path, format!("read at {p}")))?;
+    }
     let frames = match format {
-        FileFormat::Bvh => return Ok(AnyMotion::Bvh(read_bvh(path)?)),
+        FileFormat::Bvh => {
+            let bvh = read_bvh(path)?;
+            check_frame_time(bvh.frame_time).map_err(|p| invalid(path, p))?;
+            return Ok(AnyMotion::Bvh(bvh));
+        }
         FileFormat::ExpMapText => read_expmap_text(path)?,
         FileFormat::Npy => read_npy_frames(path)?,
     };
@@ -278,9 +289,14 @@ pub fn read_positions(
     input_fps: f64,
     sample: usize,
 ) -> Result<PositionTrack, AnyMotionError> {
-    let (skeleton, positions, fps) = match FileFormat::from_path(path)? {
+    let format = FileFormat::from_path(path)?;
+    if format != FileFormat::Bvh {
+        check_fps(input_fps).map_err(|p| invalid(path, format!("read at {p}")))?;
+    }
+    let (skeleton, positions, fps) = match format {
         FileFormat::Bvh => {
             let bvh = read_bvh(path)?;
+            check_frame_time(bvh.frame_time).map_err(|p| invalid(path, p))?;
             let positions = channel_positions(&bvh.skeleton, bvh.frames.view())
                 .map_err(|e| invalid(path, e))?;
             let fps = bvh.fps();

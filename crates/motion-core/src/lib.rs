@@ -81,6 +81,7 @@ pub mod clip;
 pub mod derivatives;
 pub mod error;
 pub mod formats;
+pub mod input_file;
 pub mod kinematics;
 pub mod model;
 pub mod motion;

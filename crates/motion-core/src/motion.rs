@@ -9,6 +9,42 @@ use crate::skeleton::{Skeleton, H36M_SOURCE_FPS};
 
 pub use crate::root::RootEncoding;
 
+/// The slowest frame rate any reader or command accepts: H3.6M root deltas are per 50 Hz source
+/// frame, and below 1 fps one frame would span more than 50 of them.
+pub const MIN_FPS: f64 = 1.0;
+/// The fastest frame rate any reader or command accepts: above it a file's frame time is almost
+/// surely in the wrong unit (a BVH `Frame Time` in milliseconds), and resampling it would take
+/// thousands of times its frames.
+pub const MAX_FPS: f64 = 10_000.0;
+
+/// The one frame-rate rule of every command: `fps` finite and within [`MIN_FPS`] ..= [`MAX_FPS`];
+/// `Err` says what is wrong.
+pub fn check_fps(fps: f64) -> Result<(), String> {
+    if fps.is_finite() && (MIN_FPS..=MAX_FPS).contains(&fps) {
+        Ok(())
+    } else {
+        Err(format!(
+            "{fps} fps is outside {MIN_FPS} ..= {MAX_FPS} frames per second"
+        ))
+    }
+}
+
+/// [`check_fps`] for a BVH `Frame Time` (seconds per frame), naming it and hinting at
+/// milliseconds when it looks like them.
+pub fn check_frame_time(frame_time: f64) -> Result<(), String> {
+    check_fps(1.0 / frame_time).map_err(|_| {
+        format!(
+            "Frame Time {frame_time} s is {:.4} fps, outside {MIN_FPS} ..= {MAX_FPS} fps{}",
+            1.0 / frame_time,
+            if frame_time >= 1.0 {
+                " (is it in milliseconds? BVH frame times are seconds)"
+            } else {
+                ""
+            }
+        )
+    })
+}
+
 /// How the channels of a frame are laid out.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum MotionLayout {

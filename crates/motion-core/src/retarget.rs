@@ -317,7 +317,8 @@ impl JointMap {
 
     /// Reads a joint map file (see [`JointMap::from_json`]); errors carry the path.
     pub fn read(rig: &Skeleton, path: &Path) -> Result<JointMap, String> {
-        let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let text = crate::input_file::read_regular_text(path)
+            .map_err(|e| format!("{}: {e}", path.display()))?;
         JointMap::from_json(rig, &text).map_err(|e| format!("{}: {e}", path.display()))
     }
 }

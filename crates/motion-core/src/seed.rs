@@ -37,10 +37,10 @@ pub enum SeedError {
     },
 }
 
-/// The slowest BVH seed rate accepted (H3.6M root deltas need at least 1 fps).
-pub const MIN_SEED_FPS: f64 = 1.0;
-/// The fastest BVH seed rate accepted.
-pub const MAX_SEED_FPS: f64 = 10_000.0;
+/// The slowest BVH seed rate accepted: [`crate::motion::MIN_FPS`], the rule of every command.
+pub const MIN_SEED_FPS: f64 = crate::motion::MIN_FPS;
+/// The fastest BVH seed rate accepted: [`crate::motion::MAX_FPS`].
+pub const MAX_SEED_FPS: f64 = crate::motion::MAX_FPS;
 
 /// Two frame rates closer than this (relative) are the same: BVH frame times are rounded in files.
 const SAME_RATE: f64 = 1e-3;
@@ -170,21 +170,7 @@ fn bvh_frames(
 ) -> Result<Array2<f64>, SeedError> {
     // Checked before anything is resampled: a Frame Time in milliseconds (20 for 50 Hz) would
     // otherwise be stretched to thousands of times its frames.
-    let rate = bvh.fps();
-    if !(MIN_SEED_FPS..=MAX_SEED_FPS).contains(&rate) {
-        return Err(usage(
-            path,
-            format!(
-                "Frame Time {} s is {rate:.4} fps, outside {MIN_SEED_FPS} ..= {MAX_SEED_FPS} fps{}",
-                bvh.frame_time,
-                if bvh.frame_time >= 1.0 {
-                    " (is it in milliseconds? BVH frame times are seconds)"
-                } else {
-                    ""
-                }
-            ),
-        ));
-    }
+    crate::motion::check_frame_time(bvh.frame_time).map_err(|problem| usage(path, problem))?;
     if let Some(frame) = first_non_finite(&bvh.frames) {
         return Err(usage(
             path,

@@ -147,7 +147,7 @@ impl WeightStore {
     /// Reads a safetensors file.
     pub fn open(path: impl AsRef<Path>) -> Result<Self, WeightsError> {
         let path = path.as_ref();
-        let bytes = std::fs::read(path).map_err(|source| WeightsError::Io {
+        let bytes = crate::input_file::read_regular(path).map_err(|source| WeightsError::Io {
             path: path.to_path_buf(),
             source,
         })?;
@@ -304,14 +304,18 @@ impl WeightStore {
         Ok(values)
     }
 
-    /// A copy with every tensor except the normalization statistics (`norm.*`) rounded to f16,
+    /// A copy with every tensor except the normalization statistics (`norm.*`) and the intention
+    /// model's label tables (`labels.*`) rounded to f16,
     /// the layout `training.export` writes for f16 files: random models with half-size weights
     /// for benchmarks and tests. Tensors already f16 are kept; non-float tensors are left as they
     /// are (loading them fails as usual).
     pub fn with_f16_parameters(&self) -> WeightStore {
         let mut out = self.clone();
         for (name, stored) in out.tensors.iter_mut() {
-            if name.starts_with("norm.") || !matches!(stored.dtype, Dtype::F32 | Dtype::BF16) {
+            if name.starts_with("norm.")
+                || name.starts_with("labels.")
+                || !matches!(stored.dtype, Dtype::F32 | Dtype::BF16)
+            {
                 continue;
             }
             let values: Vec<f32> = match stored.dtype {

@@ -24,6 +24,7 @@
 //! forecasts scored without seed. Files are read outside the clock; each repetition builds every
 //! set's words and index and scores its forecasts (sets in parallel), and the median is reported
 //! with a breakdown of one sequential pass into words, index build, search and similarity.
+use anyhow::Context;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
@@ -298,9 +299,7 @@ fn run_npss(args: &Args) -> anyhow::Result<()> {
         let mut times = Vec::with_capacity(args.reps);
         for _ in 0..args.reps {
             let start = Instant::now();
-            value = npss
-                .score(gt.view(), pred.view(), power)
-                .map_err(|e| UsageError(format!("NPSS: {e}")))?;
+            value = npss.score(gt.view(), pred.view(), power).context("NPSS")?;
             times.push(start.elapsed().as_secs_f64() * 1e3);
         }
         times.sort_by(f64::total_cmp);

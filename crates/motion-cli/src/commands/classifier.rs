@@ -8,7 +8,6 @@ use serde_json::Value;
 use motion_core::model::ActionClassifier;
 use motion_metrics::{classifier_protocol, ClassifierCurve};
 
-use super::UsageError;
 use crate::plot::{Chart, Series};
 
 /// [`classifier_protocol`] with its errors as usage errors naming `what`.
@@ -20,7 +19,7 @@ pub fn curve(
     what: &str,
 ) -> Result<ClassifierCurve> {
     classifier_protocol(classifier, seeds, predictions, action)
-        .map_err(|e| UsageError(format!("{what}: action classifier: {e}")).into())
+        .map_err(|e| anyhow::Error::new(e).context(format!("{what}: action classifier")))
 }
 
 /// The class with the highest mean probability at window `k`.

@@ -7,6 +7,7 @@ use motion_core::any_format::{
 };
 use motion_core::formats::npy::write_npy;
 use motion_core::formats::FileFormat;
+use motion_core::motion::check_fps;
 use motion_core::skeleton::H36M_SOURCE_FPS;
 use serde_json::json;
 
@@ -84,13 +85,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         ))
         .into());
     }
-    // H3.6M root deltas are per 50 Hz source frame: below 1 fps one frame would span more than 50.
+    // The one frame-rate rule of every command (motion_core::motion::check_fps).
     for (flag, rate) in [("--input-fps", Some(args.input_fps)), ("--fps", args.fps)] {
-        if let Some(rate) = rate.filter(|r| !(r.is_finite() && *r >= 1.0)) {
-            return Err(UsageError(format!(
-                "{flag} must be at least 1 (frames per second), got {rate}"
-            ))
-            .into());
+        if let Some(Err(problem)) = rate.map(check_fps) {
+            return Err(UsageError(format!("{flag}: {problem}")).into());
         }
     }
 

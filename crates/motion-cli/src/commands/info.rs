@@ -1,6 +1,7 @@
 //! `motion-cli info WEIGHTS [--json]`: describe a motion-weights file (schema: weights/README.md)
-//! — architecture, sizes, parameter count, fps, actions, dims, residual, GRU convention and
-//! training provenance; for an `action-classifier` file its windows, sizes and classes. Loading
+//! — architecture, sizes (an intention model's noise, forecaster, intentions, clusters,
+//! look-ahead and convolution too), parameter count, fps, actions, dims, residual, GRU convention
+//! and training provenance; for an `action-classifier` file its windows, sizes and classes. Loading
 //! checks every tensor, so this also validates the file.
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -105,6 +106,46 @@ fn text_summary(model: &MotionModel) -> String {
                 c.actions.len(),
                 c.dae_layers.unwrap_or(0),
                 c.dae_hidden.unwrap_or(0)
+            )
+        }
+        Architecture::Intention => {
+            line(
+                "architecture",
+                "intention (seed labelled with intentions, intention forecaster GRU, stacked GRU \
+                 pose generator on noise z and the intentions forecast ahead + linear decoder, \
+                 paper 003)"
+                    .into(),
+            );
+            let n = c.noise_dims.unwrap_or(0);
+            let (fe, g) = (c.intention_features.unwrap_or(0), c.lookahead.unwrap_or(0));
+            line(
+                "intentions",
+                format!(
+                    "{} intentions from {} pose clusters (labels.centroids, labels.merge); \
+                     forecaster GRUs (label_hidden) {} units; look-ahead {} frames, \
+                     intent_conv {} channels",
+                    c.intentions.unwrap_or(0),
+                    c.clusters.unwrap_or(0),
+                    c.label_hidden.unwrap_or(0),
+                    g,
+                    fe
+                ),
+            );
+            line(
+                "noise",
+                format!(
+                    "z ~ N(0, I) of noise_dims {n} per sample; pose encoder {} units, decoder \
+                     layers start at its state + z",
+                    c.hidden.saturating_sub(n)
+                ),
+            );
+            format!(
+                "{} GRU layers x {} units (first layer input {} = pose {} + noise {n} + \
+                 intention features {fe})",
+                c.layers,
+                c.hidden,
+                c.output_dims() + n + fe,
+                c.output_dims()
             )
         }
     };
@@ -335,5 +376,32 @@ mod tests {
         let json: serde_json::Value = serde_json::from_str(&json_summary(&model).unwrap()).unwrap();
         assert_eq!(json["parameters"], 2748982);
         assert_eq!(json["config"]["architecture"], "vgru-d");
+    }
+
+    #[test]
+    fn summary_of_an_intention_model() {
+        let config = motion_core::model::ModelConfig::paper(Architecture::Intention);
+        let model = MotionModel::random(&config, 3).unwrap();
+        let text = text_summary(&model);
+        for needle in [
+            "intention (",
+            "paper 003",
+            "1,410,654",
+            "8 intentions from 32 pose clusters",
+            "128 units",
+            "look-ahead 10 frames",
+            "intent_conv 32 channels",
+            "noise_dims 32",
+            "pose encoder 224 units",
+            "3 GRU layers x 256 units (first layer input 118",
+            "pytorch",
+            "none (unconditioned)",
+        ] {
+            assert!(text.contains(needle), "{needle} missing from:\n{text}");
+        }
+        let json: serde_json::Value = serde_json::from_str(&json_summary(&model).unwrap()).unwrap();
+        assert_eq!(json["config"]["architecture"], "intention");
+        assert_eq!(json["config"]["lookahead"], 10);
+        assert_eq!(json["config"]["noise_dims"], 32);
     }
 }

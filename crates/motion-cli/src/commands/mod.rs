@@ -25,6 +25,26 @@ impl std::error::Error for UsageError {}
 
 /// The error and its causes on one line, each cause once, shortened to [`MAX_ERROR_CHARS`]
 /// characters (a 10 MB joint name stays a readable line) and with line breaks flattened.
+/// With `--verbose`: every cause of `err` on its own line, outermost first, as the libraries'
+/// `source()` chains give them (each line capped like [`error_chain`]'s).
+pub fn error_causes(err: &anyhow::Error) -> String {
+    err.chain()
+        .enumerate()
+        .map(|(k, cause)| {
+            let text = shorten(
+                &cause.to_string().replace(['\n', '\r'], " "),
+                MAX_ERROR_CHARS,
+            );
+            if k == 0 {
+                format!("error: {text}")
+            } else {
+                format!("  caused by: {text}")
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
 pub fn error_chain(err: &anyhow::Error) -> String {
     let mut parts: Vec<String> = Vec::new();
     for cause in err.chain() {
@@ -98,14 +118,26 @@ pub fn exit_code(err: &anyhow::Error) -> u8 {
             }
         }
     }
+    // Every typed error of the libraries describes what the user gave (files, arguments, shapes,
+    // values); only a `WriteFailure` (above) can be the machine's.
     let is_input = err.chain().any(|c| {
         c.is::<UsageError>()
             || c.is::<motion_core::FormatError>()
+            || c.is::<motion_core::error::SkeletonError>()
+            || c.is::<motion_core::error::MotionError>()
+            || c.is::<motion_core::formats::expmap_bvh::ConvertError>()
             || c.is::<motion_core::model::WeightsError>()
+            || c.is::<motion_core::model::GenerateError>()
+            || c.is::<motion_core::model::ClassifyError>()
+            || c.is::<motion_core::model::CharacterError>()
             || c.is::<motion_core::nn::SimdError>()
             || c.is::<motion_core::seed::SeedError>()
             || c.is::<motion_core::clip::ClipError>()
+            || c.is::<motion_core::resample::ResampleError>()
+            || c.is::<motion_core::retarget::RetargetError>()
             || c.is::<motion_core::any_format::AnyMotionError>()
+            || c.is::<motion_metrics::MetricError>()
+            || c.is::<motion_metrics::plausibility::ReferenceError>()
             || c.is::<std::io::Error>()
     });
     if is_input {

@@ -1,6 +1,7 @@
 //! `motion-cli predict --seed SEQ --out OUT`: closed-loop prediction from a seed sequence (BVH,
 //! exp-map text or `.npy`), one file or a whole directory in parallel.
 
+use anyhow::Context;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -32,7 +33,8 @@ frame is kept for a 25 Hz model, as in the evaluation protocol. The last seed-le
 OUT's extension picks the format: .bvh (seed + prediction, the root integrated so the character \
 moves; --prediction-only drops the seed), .npy or .txt (exp-map frames, root as per-50 Hz-frame \
 deltas). With --samples N > 1, .bvh and .txt outputs become OUT_0, OUT_1, ... and .npy one array \
-samples x frames x 99. VGRU-d models draw each sample's plan noise from --rng-seed + sample.
+samples x frames x 99. Stochastic models draw each sample's noise from --rng-seed + sample \
+(VGRU-d its plan noise, the intention model its z); GRU-d and DAE-LSTM give identical samples.
 
 Batch mode: --seed DIR --out DIR predicts every .bvh/.txt/.txt.gz/.npy in DIR in parallel into \
 DIR/<name>.<--format>; a bad file is reported and the others go on.
@@ -72,10 +74,10 @@ pub struct Args {
     /// Frames to predict, at the model's frame rate.
     #[arg(long, default_value_t = 100)]
     pub frames: usize,
-    /// Number of samples (different plan noise for VGRU-d).
+    /// Number of samples (different noise: VGRU-d's plan noise, the intention model's z).
     #[arg(long, value_name = "N", default_value_t = 1)]
     pub samples: usize,
-    /// Seed of sample 0's plan noise (sample i uses S + i).
+    /// Seed of sample 0's noise (sample i uses S + i).
     #[arg(long, value_name = "S", default_value_t = 0)]
     pub rng_seed: u64,
     /// Output file (.bvh, .npy, .txt, .txt.gz), or a directory in batch mode.
@@ -151,11 +153,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         return Err(UsageError("--samples must be at least 1".into()).into());
     }
     if let Some(fps) = args.fps {
-        if !(fps.is_finite() && fps >= 1.0) {
-            return Err(UsageError(format!(
-                "--fps must be at least 1 (frames per second), got {fps}"
-            ))
-            .into());
+        if let Err(problem) = motion_core::motion::check_fps(fps) {
+            return Err(UsageError(format!("--fps: {problem}")).into());
         }
         let bvh = if args.seed.is_dir() {
             args.format == "bvh"
@@ -226,9 +225,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         out_fps: args.fps,
         joint_map: args.joint_map.clone(),
     };
-    if args.samples > 1 && job.model.config().architecture.name() == "gru-d" {
+    let architecture = job.model.config().architecture;
+    if args.samples > 1 && !architecture.is_stochastic() {
         args.reporting.notice(format_args!(
-            "note: the model is deterministic (gru-d): all {} samples are identical",
+            "note: the model is deterministic ({}): all {} samples are identical",
+            architecture.name(),
             args.samples
         ));
     }
@@ -329,7 +330,7 @@ fn resolve_action(
     };
     let (label, p) = classifier
         .infer_action(seed.view())
-        .map_err(|e| UsageError(format!("{}: action classifier: {e}", seed_path.display())))?;
+        .with_context(|| format!("{}: action classifier", seed_path.display()))?;
     let notice = format!(
         "{}: action `{label}` inferred from the seed (classifier probability {p:.2}; --action NAME overrides)",
         seed_path.display()
@@ -480,8 +481,7 @@ fn generate(job: &Job, action: Option<&str>, seed: &Array2<f64>) -> anyhow::Resu
 
 /// The seed files of a directory (BVH, exp-map text, `.npy`), sorted by name.
 fn seed_files(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
-    let entries =
-        std::fs::read_dir(dir).map_err(|e| UsageError(format!("{}: {e}", dir.display())))?;
+    let entries = std::fs::read_dir(dir).with_context(|| dir.display().to_string())?;
     let mut files: Vec<PathBuf> = entries
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| p.is_file() && FileFormat::from_path(p).is_ok())

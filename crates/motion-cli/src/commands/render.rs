@@ -61,16 +61,18 @@ pub struct Args {
     /// IN's first N frames are the seed: drawn grey, the boundary marked.
     #[arg(long, value_name = "N")]
     pub seed_frames: Option<usize>,
-    /// Frame rate of exp-map inputs (.txt, .txt.gz, .npy), which files do not store.
+    /// Frame rate of exp-map inputs (.txt, .txt.gz, .npy), which files do not store (1 to
+    /// 10,000; a BVH's Frame Time must give a rate in that range too). Animations are limited
+    /// to 30,000 frames.
     #[arg(long, value_name = "HZ", default_value_t = H36M_SOURCE_FPS)]
     pub input_fps: f64,
     /// Which sample of a samples x frames x dims .npy to draw.
     #[arg(long, default_value_t = 0)]
     pub sample: usize,
-    /// Cells of the PNG contact sheet.
+    /// Cells of the PNG contact sheet (1 to 400).
     #[arg(long, default_value_t = 12)]
     pub cells: usize,
-    /// Cells per row of the PNG contact sheet.
+    /// Cells per row of the PNG contact sheet (1 to 400).
     #[arg(long, default_value_t = 6)]
     pub columns: usize,
     /// Animation width in pixels.
@@ -90,6 +92,11 @@ pub struct Args {
     #[command(flatten)]
     pub reporting: super::output::Output,
 }
+
+/// Most cells of a contact sheet (and cells per row).
+pub const MAX_CELLS: usize = 400;
+/// Most frames of an animation (20 minutes at 25 fps); a longer one is refused up front.
+pub const MAX_FRAMES: usize = 30_000;
 
 /// What the output extension asks for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -131,10 +138,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         ))
         .into());
     }
-    if !(args.input_fps.is_finite() && args.input_fps > 0.0) {
+    if let Err(problem) = motion_core::motion::check_fps(args.input_fps) {
+        return Err(UsageError(format!("--input-fps: {problem}")).into());
+    }
+    if !(1..=MAX_CELLS).contains(&args.cells) || !(1..=MAX_CELLS).contains(&args.columns) {
         return Err(UsageError(format!(
-            "--input-fps must be positive, got {}",
-            args.input_fps
+            "--cells and --columns must be between 1 and {MAX_CELLS}"
         ))
         .into());
     }
@@ -201,7 +210,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         camera: Camera::three_quarter(35f64.to_radians(), 12f64.to_radians()),
         seed_frames: args.seed_frames,
     };
-    let times = timeline(&picture.tracks);
+    let times = timeline(&picture.tracks, MAX_FRAMES).map_err(|frames| {
+        UsageError(format!(
+            "{}: {frames} frames to draw at {} fps, over the limit of {MAX_FRAMES}: render a shorter clip",
+            args.input.display(),
+            first.fps
+        ))
+    })?;
     let bytes = match kind {
         Kind::Svg => svg_anim::animate(&picture, &times, args.width, args.height).into_bytes(),
         Kind::Gif => gif_anim::animate(&picture, &times, args.width, args.height)?,

@@ -71,7 +71,7 @@ impl Bvh {
 /// Reads a `.bvh` file.
 pub fn read_bvh(path: impl AsRef<Path>) -> Result<Bvh, FormatError> {
     let path = path.as_ref();
-    let bytes = std::fs::read(path).map_err(|source| FormatError::Io {
+    let bytes = crate::input_file::read_regular(path).map_err(|source| FormatError::Io {
         path: path.to_path_buf(),
         source,
     })?;

@@ -1,7 +1,6 @@
 //! H3.6M / CMU exp-map text: one frame per line, comma-separated floats, any column count
 //! (99 for H3.6M, 117 for CMU), plain (`.txt`) or gzip (`.txt.gz`); plus the protocol's 25 Hz
 //! downsampling.
-use std::fs::File;
 use std::io::{BufRead, BufReader, Read, Write};
 use std::path::Path;
 
@@ -32,7 +31,7 @@ fn io_error(path: &Path, source: std::io::Error) -> FormatError {
 /// surrounding whitespace are ignored.
 pub fn read_expmap_text(path: impl AsRef<Path>) -> Result<Array2<f64>, FormatError> {
     let path = path.as_ref();
-    let file = File::open(path).map_err(|e| io_error(path, e))?;
+    let file = crate::input_file::open_regular(path).map_err(|e| io_error(path, e))?;
     let reader: Box<dyn Read> = if is_gzip(path) {
         Box::new(flate2::read::MultiGzDecoder::new(file))
     } else {

@@ -8,6 +8,7 @@ pub mod bvh;
 pub mod expmap_bvh;
 pub mod h36m_text;
 pub mod npy;
+pub mod npy_stream;
 pub mod pose_bvh;
 
 /// A motion file format, as named by a file's extension.

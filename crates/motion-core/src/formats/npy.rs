@@ -25,7 +25,7 @@ fn invalid(path: &Path, problem: String) -> FormatError {
 /// against the file size before anything is allocated.
 pub fn read_npy_dyn(path: impl AsRef<Path>) -> Result<ArrayD<f64>, FormatError> {
     let path = path.as_ref();
-    let bytes = std::fs::read(path).map_err(|source| FormatError::Io {
+    let bytes = crate::input_file::read_regular(path).map_err(|source| FormatError::Io {
         path: path.to_path_buf(),
         source,
     })?;

@@ -2,7 +2,8 @@
 //!
 //! Every step is the same sequence for all rows: derivative features of the current normalized
 //! frame, one recurrent step, the decoder, optional residual, the DAE-LSTM's autoencoder filter,
-//! un-normalization. The per-step work
+//! un-normalization. (The intention model's seed frames only feed its encoders: it makes no
+//! prediction before the last seed frame, see [`super::intention`].) The per-step work
 //! is matrix-matrix products over the batch (see [`crate::nn::gemm`]); all buffers are sized in
 //! [`BatchGenerator::new`], so a step allocates nothing of its own. At batch 1 the products are
 //! GEMVs and a step touches no heap at all (tested); at larger batches rayon may allocate its task
@@ -21,6 +22,7 @@ use super::config::ModelConfig;
 use super::dae_lstm::DaeLstmState;
 use super::generate_error::GenerateError;
 use super::grud::GruDState;
+use super::intention::IntentionState;
 use super::predictor::{MotionModel, Network};
 use super::vgru::{NoiseSource, VgruState};
 use crate::derivatives::DerivativeBuffer;
@@ -36,12 +38,15 @@ const POOL_STEP_MIN_PARAMETERS: usize = 1 << 19;
 
 pub use crate::motion::FrameScalar;
 
-/// The plan noise of one character (VGRU-d only; deterministic models ignore it).
+/// The noise of one character: VGRU-d's plan noise `eps`, the intention model's `z`
+/// (deterministic models ignore it).
 #[derive(Debug, Clone, Copy)]
 pub enum Noise<'a> {
-    /// `eps ~ N(0, I)` from `StdRng::seed_from_u64(seed)`; each new plan block draws again.
+    /// `N(0, I)` draws from `StdRng::seed_from_u64(seed)`: VGRU-d draws a new `eps` for each plan
+    /// block, the intention model its `z` once per start.
     Seed(u64),
-    /// This `eps` (length `plan_hidden`) for every plan block.
+    /// This vector: VGRU-d's `eps` (length `plan_hidden`) for every plan block, or the intention
+    /// model's `z` (length `noise_dims`).
     Explicit(&'a [f32]),
 }
 
@@ -50,6 +55,7 @@ enum NetState {
     Vgru(Box<VgruState>),
     Grud(GruDState),
     DaeLstm(Box<DaeLstmState>),
+    Intention(Box<IntentionState>),
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -104,6 +110,7 @@ impl Shard {
             }
             Network::Grud(g) => NetState::Grud(g.new_state(rows)),
             Network::DaeLstm(d) => NetState::DaeLstm(Box::new(d.new_state(rows))),
+            Network::Intention(n) => NetState::Intention(Box::new(n.new_state(rows))),
         };
         Self {
             rows,
@@ -118,7 +125,8 @@ impl Shard {
     }
 
     /// One body step of this shard's rows from `x_norm` to `out_norm` and `out_full`
-    /// (`[rows, frame_dims]`, this shard's part of the batch's frames).
+    /// (`[rows, frame_dims]`, this shard's part of the batch's frames); the intention model's
+    /// seed frames before the last leave both untouched (no prediction is made there).
     fn advance(&mut self, model: &MotionModel, body_step: usize, out_full: &mut [f32]) {
         let cfg = model.config();
         let (o, i, f) = (cfg.output_dims(), cfg.input_dims(), cfg.frame_dims);
@@ -136,6 +144,12 @@ impl Shard {
             (NetState::Grud(state), Network::Grud(net)) => net.step(state, &self.features, rows),
             (NetState::DaeLstm(state), Network::DaeLstm(net)) => {
                 net.step(state, &self.features, rows)
+            }
+            (NetState::Intention(state), Network::Intention(net)) => {
+                match net.step(state, &self.features, rows, body_step) {
+                    Some(hidden) => hidden,
+                    None => return,
+                }
             }
             _ => unreachable!("state built for this model"),
         };
@@ -247,8 +261,8 @@ impl BatchGenerator {
 
     /// Seeds every character: `seeds [batch, S, frame_dims]` full frames, `actions` one label per
     /// character or one for all (ignored by unconditioned models), `noise` one per character
-    /// (VGRU-d; may be empty for deterministic models). Afterwards [`step`](Self::step) yields
-    /// frame `S` first.
+    /// (VGRU-d, intention; may be empty for deterministic models). Afterwards
+    /// [`step`](Self::step) yields frame `S` first.
     pub fn start<T: FrameScalar>(
         &mut self,
         seeds: ArrayView3<'_, T>,
@@ -260,6 +274,10 @@ impl BatchGenerator {
 
     /// Like [`start`](Self::start), also handing out each teacher-forced prediction: after seed
     /// frame `t`, `teacher_forced(t, frames [batch, frame_dims])` gets the prediction of frame `t + 1`.
+    ///
+    /// The intention model makes no teacher-forced predictions (its seed frames feed encoders,
+    /// and its first prediction, frame `S`, is what the first [`step`](Self::step) returns):
+    /// for it `teacher_forced` is never called.
     pub fn start_with<T: FrameScalar, F: FnMut(usize, ArrayView2<'_, f32>)>(
         &mut self,
         seeds: ArrayView3<'_, T>,
@@ -282,9 +300,11 @@ impl BatchGenerator {
         let action_indices = self.action_indices(cfg, actions)?;
         let mut sources = match model.network() {
             Network::Vgru(net) => self.noise_sources(net.plan_hidden(), noise)?,
+            Network::Intention(net) => self.noise_sources(net.noise_dims(), noise)?,
             Network::Grud(_) | Network::DaeLstm(_) => Vec::new(),
         }
         .into_iter();
+        let teacher_forcing = !matches!(model.network(), Network::Intention(_));
         for (k, shard) in self.shards.iter_mut().enumerate() {
             let rows = k * self.shard_rows..k * self.shard_rows + shard.rows;
             match (&mut shard.state, model.network()) {
@@ -301,6 +321,10 @@ impl BatchGenerator {
                 (NetState::Grud(state), Network::Grud(net)) => net.reset(state, shard.rows),
                 (NetState::DaeLstm(state), Network::DaeLstm(net)) => {
                     net.begin(state, &action_indices[rows])
+                }
+                (NetState::Intention(state), Network::Intention(net)) => {
+                    let shard_sources = sources.by_ref().take(shard.rows).collect();
+                    net.begin(state, shard_sources, seed_len);
                 }
                 _ => unreachable!("state built for this model"),
             }
@@ -327,7 +351,9 @@ impl BatchGenerator {
                 );
             }
             self.advance(&model);
-            teacher_forced(t, self.frames());
+            if teacher_forcing {
+                teacher_forced(t, self.frames());
+            }
         }
         self.phase = Phase::Fresh;
         Ok(())

@@ -25,31 +25,44 @@ pub enum Architecture {
     /// before it is fed back (paper 002, section 3).
     #[serde(rename = "dae-lstm")]
     DaeLstm,
+    /// Intention forecaster + noise-conditioned stacked GRU pose generator reading the
+    /// intentions forecast ahead (paper 003, section 3).
+    #[serde(rename = "intention")]
+    Intention,
 }
 
 impl Architecture {
-    /// The schema name (`vgru-d`, `gru-d` or `dae-lstm`).
+    /// The schema name (`vgru-d`, `gru-d`, `dae-lstm` or `intention`).
     pub fn name(self) -> &'static str {
         match self {
             Architecture::VgruD => "vgru-d",
             Architecture::GruD => "gru-d",
             Architecture::DaeLstm => "dae-lstm",
+            Architecture::Intention => "intention",
         }
+    }
+
+    /// Whether the model draws noise, so that samples of one seed differ (`vgru-d`: its plan
+    /// noise; `intention`: its `z`); `gru-d` and `dae-lstm` are deterministic.
+    pub fn is_stochastic(self) -> bool {
+        matches!(self, Architecture::VgruD | Architecture::Intention)
     }
 }
 
 /// The `config` JSON object: everything an engine needs to build and drive the model.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ModelConfig {
-    /// `vgru-d`, `gru-d` or `dae-lstm`.
+    /// `vgru-d`, `gru-d`, `dae-lstm` or `intention`.
     pub architecture: Architecture,
     /// Width of a full frame as callers see it (99 for H3.6M).
     pub frame_dims: usize,
     /// Indices of the full-frame dims the model predicts; the others are restored to the mean.
     pub dims_used: Vec<usize>,
-    /// Body GRU units (`vgru-d`) or units per recurrent layer (`gru-d`, `dae-lstm`).
+    /// Body GRU units (`vgru-d`) or units per recurrent layer (`gru-d`, `dae-lstm`, the pose
+    /// decoder of `intention`).
     pub hidden: usize,
-    /// Stacked GRU (`gru-d`) or LSTM (`dae-lstm`) layers; 1 for `vgru-d`.
+    /// Stacked GRU (`gru-d`, `intention`'s pose decoder) or LSTM (`dae-lstm`) layers; 1 for
+    /// `vgru-d`.
     pub layers: usize,
     /// Plan GRU units (`vgru-d` only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -60,6 +73,28 @@ pub struct ModelConfig {
     /// Hidden layers of the dropout autoencoder (`dae-lstm` only; paper 002: 3).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub dae_layers: Option<usize>,
+    /// Width `N` of the noise `z ~ N(0, I)` appended to the pose decoder's initial state and to
+    /// its every input (`intention` only; `0 < N < hidden`, the pose encoder has `hidden - N`
+    /// units).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub noise_dims: Option<usize>,
+    /// Units of the intention forecaster's encoder and decoder GRUs (`intention` only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub label_hidden: Option<usize>,
+    /// Number of intention labels `C` (`intention` only; paper 003: 8).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub intentions: Option<usize>,
+    /// Pose clusters `K` whose centroids label the seed frames (`intention` only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub clusters: Option<usize>,
+    /// Look-ahead `γ`: intention probabilities of frames `τ-1 .. τ+γ-2` are read by the step
+    /// producing frame `τ` (`intention` only; paper 003: 10).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lookahead: Option<usize>,
+    /// Output channels `Fe` of the temporal convolution over those probabilities (`intention`
+    /// only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub intention_features: Option<usize>,
     /// Candidate convention of every GRU cell in the file (no GRU in `dae-lstm`: ignored there).
     pub gru_convention: GruConvention,
     /// How `norm.mean` / `norm.std` were computed: `standard` (mean and standard deviation) or
@@ -100,6 +135,12 @@ pub mod limits {
     pub const FRAMES: usize = 100_000;
     /// Action labels.
     pub const ACTIONS: usize = 10_000;
+    /// Intention labels (`intentions`) and pose clusters (`clusters`).
+    pub const INTENTIONS: usize = 10_000;
+    /// Look-ahead of the intention model (frames).
+    pub const LOOKAHEAD: usize = 10_000;
+    /// Values of one row's window of intention probabilities, `lookahead * intentions`.
+    pub const WINDOW_VALUES: usize = 1 << 20;
     /// Frames per second: 1 ..= this.
     pub const FPS: f64 = 1000.0;
     /// Values in a plan's frames, `(seed_frames + horizon) * frame_dims` (a generator keeps
@@ -138,6 +179,29 @@ impl ModelConfig {
         at_most("seed_frames", self.seed_frames, limits::FRAMES)?;
         at_most("horizon", self.horizon, limits::FRAMES)?;
         at_most("actions", self.actions.len(), limits::ACTIONS)?;
+        at_most("noise_dims", self.noise_dims.unwrap_or(0), limits::UNITS)?;
+        at_most(
+            "label_hidden",
+            self.label_hidden.unwrap_or(0),
+            limits::UNITS,
+        )?;
+        at_most(
+            "intention_features",
+            self.intention_features.unwrap_or(0),
+            limits::UNITS,
+        )?;
+        at_most(
+            "intentions",
+            self.intentions.unwrap_or(0),
+            limits::INTENTIONS,
+        )?;
+        at_most("clusters", self.clusters.unwrap_or(0), limits::INTENTIONS)?;
+        at_most("lookahead", self.lookahead.unwrap_or(0), limits::LOOKAHEAD)?;
+        at_most(
+            "lookahead * intentions",
+            self.lookahead.unwrap_or(0) * self.intentions.unwrap_or(0),
+            limits::WINDOW_VALUES,
+        )?;
         at_most(
             "(seed_frames + horizon) * frame_dims",
             (self.seed_frames + self.horizon) * self.frame_dims,
@@ -180,11 +244,56 @@ impl ModelConfig {
                     return Err("dae-lstm needs dae_layers".into());
                 }
             }
+            Architecture::Intention => self.validate_intention()?,
         }
         if !matches!(self.normalization.as_str(), "standard" | "min-max") {
             return Err(format!(
                 "normalization {:?} is neither \"standard\" nor \"min-max\"",
                 self.normalization
+            ));
+        }
+        Ok(())
+    }
+
+    /// The `intention` fields: present, in range, and the fixed choices of the model.
+    fn validate_intention(&self) -> Result<(), String> {
+        let need = |field: &str, value: Option<usize>| {
+            value.ok_or_else(|| format!("intention needs {field}"))
+        };
+        let noise = need("noise_dims", self.noise_dims)?;
+        if noise == 0 || noise >= self.hidden {
+            return Err(format!(
+                "intention needs 0 < noise_dims < hidden, got noise_dims {noise}, hidden {}",
+                self.hidden
+            ));
+        }
+        for (field, value) in [
+            ("label_hidden", self.label_hidden),
+            ("intentions", self.intentions),
+            ("clusters", self.clusters),
+            ("lookahead", self.lookahead),
+            ("intention_features", self.intention_features),
+        ] {
+            if need(field, value)? == 0 {
+                return Err(format!("intention needs {field} >= 1"));
+            }
+        }
+        if self.layers == 0 {
+            return Err("intention with 0 GRU layers".into());
+        }
+        if !self.residual {
+            return Err("intention is residual (output = previous pose + decoder)".into());
+        }
+        if self.derivative_order != 0 {
+            return Err(format!(
+                "intention reads plain poses: derivative_order {} (expected 0)",
+                self.derivative_order
+            ));
+        }
+        if self.gru_convention != GruConvention::PyTorch {
+            return Err(format!(
+                "intention's GRUs use the pytorch convention, the config says `{}`",
+                self.gru_convention.name()
             ));
         }
         Ok(())
@@ -333,6 +442,12 @@ mod tests {
             plan_hidden: Some(4),
             dae_hidden: None,
             dae_layers: None,
+            noise_dims: None,
+            label_hidden: None,
+            intentions: None,
+            clusters: None,
+            lookahead: None,
+            intention_features: None,
             gru_convention: serde_json::from_str("\"pytorch\"").unwrap(),
             normalization: "standard".into(),
             residual: true,
@@ -369,6 +484,48 @@ mod tests {
             break_it(&mut c);
             let e = c.validate().unwrap_err();
             assert!(e.starts_with(field), "{field}: {e}");
+        }
+    }
+
+    #[test]
+    fn intention_fields_are_checked() {
+        let good = ModelConfig::paper(Architecture::Intention);
+        assert_eq!(good.validate(), Ok(()));
+        let json = serde_json::to_string(&good).unwrap();
+        assert!(json.contains(r#""architecture":"intention""#), "{json}");
+        assert!(json.contains(r#""lookahead":10"#), "{json}");
+        assert_eq!(ModelConfig::from_json(&json, Path::new("x")).unwrap(), good);
+        // Other architectures do not write the fields.
+        let vgru_json = serde_json::to_string(&vgru()).unwrap();
+        assert!(!vgru_json.contains("noise_dims"), "{vgru_json}");
+        type Break = fn(&mut ModelConfig);
+        let cases: [(&str, Break); 14] = [
+            ("0 < noise_dims < hidden", |c| c.noise_dims = Some(0)),
+            ("0 < noise_dims < hidden", |c| c.noise_dims = Some(256)),
+            ("intention needs noise_dims", |c| c.noise_dims = None),
+            ("intention needs lookahead >= 1", |c| c.lookahead = Some(0)),
+            ("intention needs intentions >= 1", |c| {
+                c.intentions = Some(0)
+            }),
+            ("intention needs clusters >= 1", |c| c.clusters = Some(0)),
+            ("intention needs label_hidden", |c| c.label_hidden = None),
+            ("intention with 0 GRU layers", |c| c.layers = 0),
+            ("intention is residual", |c| c.residual = false),
+            ("intention reads plain poses", |c| c.derivative_order = 1),
+            ("intention's GRUs use the pytorch", |c| {
+                c.gru_convention = GruConvention::Paper
+            }),
+            ("lookahead 20000 is over", |c| c.lookahead = Some(20_000)),
+            ("intentions 20000 is over", |c| c.intentions = Some(20_000)),
+            ("lookahead * intentions", |c| {
+                (c.lookahead, c.intentions) = (Some(5_000), Some(5_000))
+            }),
+        ];
+        for (needle, break_it) in cases {
+            let mut c = good.clone();
+            break_it(&mut c);
+            let e = c.validate().unwrap_err();
+            assert!(e.contains(needle), "{needle}: {e}");
         }
     }
 }

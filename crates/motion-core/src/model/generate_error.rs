@@ -59,9 +59,9 @@ pub enum GenerateError {
         valid: Vec<String>,
     },
     /// An explicit noise vector of the wrong length.
-    #[error("noise eps has {got} values, the plan needs {expected}")]
+    #[error("explicit noise has {got} values, the model needs {expected} (vgru-d: plan_hidden, intention: noise_dims)")]
     WrongNoiseLength {
-        /// The plan width `P`.
+        /// The noise width: VGRU-d's plan width `P`, the intention model's `noise_dims`.
         expected: usize,
         /// The length given.
         got: usize,

@@ -36,7 +36,8 @@ impl Generator {
     }
 
     /// Teacher-forces `seed [S, frame_dims]` (full frames, `S >= 1`), conditioned on `action`
-    /// (required by action-conditioned models) with plan `noise` (ignored by GRU-d).
+    /// (required by action-conditioned models) with `noise` (VGRU-d's plan noise, the intention
+    /// model's `z`; ignored by GRU-d and DAE-LSTM).
     pub fn start<T: FrameScalar>(
         &mut self,
         seed: ArrayView2<'_, T>,
@@ -47,7 +48,8 @@ impl Generator {
     }
 
     /// Like [`start`](Self::start); `teacher_forced(t, frame)` receives the prediction of frame
-    /// `t + 1` made after reading seed frame `t`.
+    /// `t + 1` made after reading seed frame `t` (never called for the intention model, which
+    /// makes no teacher-forced predictions; see [`BatchGenerator::start_with`]).
     pub fn start_with<T: FrameScalar, F: FnMut(usize, &[f32])>(
         &mut self,
         seed: ArrayView2<'_, T>,

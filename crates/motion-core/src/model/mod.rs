@@ -1,9 +1,10 @@
-//! Motion predictors (VGRU-d, GRU-d, DAE-LSTM), self-describing weights and closed-loop generation.
+//! Motion predictors (VGRU-d, GRU-d, DAE-LSTM, intention), self-describing weights and
+//! closed-loop generation.
 //!
 //! - [`weights`]: safetensors tensors by state-dict name, [`WeightsError`].
 //! - [`config`]: the `config` / `provenance` metadata of the schema in `weights/README.md`.
-//! - [`MotionModel`]: a loaded predictor (shared, immutable); [`vgru`], [`grud`] and [`dae_lstm`]
-//!   its networks.
+//! - [`MotionModel`]: a loaded predictor (shared, immutable); [`vgru`], [`grud`], [`dae_lstm`]
+//!   and [`intention`] its networks.
 //! - [`Generator`] (one character) and [`BatchGenerator`] (many in lockstep): closed-loop frames.
 //! - [`ActionClassifier`]: the action classifier of paper 002 (section 4.5), the long-horizon
 //!   evaluation instrument.
@@ -34,6 +35,7 @@ pub mod dae_lstm;
 pub mod generate_error;
 pub mod generator;
 pub mod grud;
+pub mod intention;
 pub mod norm;
 pub mod predictor;
 pub mod random;

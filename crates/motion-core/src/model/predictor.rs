@@ -4,10 +4,12 @@
 //! Citation: Gopalakrishnan, Mali, Kifer, Giles, Ororbia, "A Neural Temporal Model for Human
 //! Motion Prediction", CVPR 2019 — paper 000, sections 3.2-3.3 (VGRU-d, GRU-d); Ghosh, Song,
 //! Aksan, Hilliges, "Learning Human Motion Models for Long-term Predictions", 3DV 2017 — paper
-//! 002, section 3 (DAE-LSTM).
+//! 002, section 3 (DAE-LSTM); Tanke, Zaveri, Gall, "Intention-based Long-Term Human Motion
+//! Anticipation", 3DV 2021 — paper 003, section 3 (intention).
 use super::config::{check_format, parse_provenance, Architecture, ModelConfig, Provenance};
 use super::dae_lstm::DaeLstm;
 use super::grud::GruD;
+use super::intention::Intention;
 use super::norm::Normalization;
 use super::vgru::VgruD;
 use super::weights::{WeightStore, WeightsError};
@@ -23,6 +25,8 @@ pub enum Network {
     Grud(GruD),
     /// DAE-LSTM: stacked LSTM layers and the dropout autoencoder that filters each output.
     DaeLstm(Box<DaeLstm>),
+    /// Intention forecaster and noise-conditioned stacked GRU pose generator.
+    Intention(Box<Intention>),
 }
 
 /// Immutable predictor weights; share one across characters and threads with `Arc`.
@@ -58,6 +62,9 @@ impl MotionModel {
             Architecture::VgruD => Network::Vgru(Box::new(VgruD::load(store, &config)?)),
             Architecture::GruD => Network::Grud(GruD::load(store, &config)?),
             Architecture::DaeLstm => Network::DaeLstm(Box::new(DaeLstm::load(store, &config)?)),
+            Architecture::Intention => {
+                Network::Intention(Box::new(Intention::load(store, &config)?))
+            }
         };
         let decoder = Linear::load(
             store,
@@ -122,6 +129,7 @@ impl MotionModel {
             Network::Vgru(v) => v.parameter_count(),
             Network::Grud(g) => g.parameter_count(),
             Network::DaeLstm(d) => d.parameter_count(),
+            Network::Intention(i) => i.parameter_count(),
         };
         net + self.decoder.parameter_count()
     }

@@ -15,31 +15,45 @@ impl ModelConfig {
     /// derivative order 3, 512 units (GRU-d: 2 layers, PyTorch convention, unconditioned;
     /// VGRU-d: plan 512, paper convention, the 15 H3.6M actions), 50 seed + 100 predicted frames.
     /// DAE-LSTM (paper 002, 4.1): 3 LSTM layers of 1000 units over plain min-max scaled poses and
-    /// the action one-hot, a 3 x 3000 autoencoder.
+    /// the action one-hot, a 3 x 3000 autoencoder. Intention (paper 003; `make_config` of
+    /// `training/models.py`): 3 GRU layers of 256 units over plain poses, residual,
+    /// unconditioned, noise 32, forecaster 128 units, 8 intentions from 32 clusters, look-ahead
+    /// 10, 32 convolution channels.
     pub fn paper(architecture: Architecture) -> Self {
         let vgru = architecture == Architecture::VgruD;
         let dae = architecture == Architecture::DaeLstm;
+        let intention = architecture == Architecture::Intention;
         ModelConfig {
             architecture,
             frame_dims: H36M_FRAME_DIMS,
             dims_used: H36M_DIMS_USED.to_vec(),
-            hidden: if dae { 1000 } else { 512 },
+            hidden: match architecture {
+                Architecture::DaeLstm => 1000,
+                Architecture::Intention => 256,
+                _ => 512,
+            },
             layers: match architecture {
                 Architecture::VgruD => 1,
                 Architecture::GruD => 2,
-                Architecture::DaeLstm => 3,
+                Architecture::DaeLstm | Architecture::Intention => 3,
             },
             plan_hidden: vgru.then_some(512),
             dae_hidden: dae.then_some(3000),
             dae_layers: dae.then_some(3),
+            noise_dims: intention.then_some(32),
+            label_hidden: intention.then_some(128),
+            intentions: intention.then_some(8),
+            clusters: intention.then_some(32),
+            lookahead: intention.then_some(10),
+            intention_features: intention.then_some(32),
             normalization: if dae { "min-max" } else { "standard" }.into(),
             gru_convention: if vgru {
                 GruConvention::Paper
             } else {
                 GruConvention::PyTorch
             },
-            residual: false,
-            derivative_order: if dae { 0 } else { 3 },
+            residual: intention,
+            derivative_order: if dae || intention { 0 } else { 3 },
             derivative_padding: DERIVATIVE_PADDING.into(),
             fps: 25.0,
             skeleton: "h36m-32".into(),
@@ -65,25 +79,54 @@ impl ModelConfig {
             ("norm.mean".to_string(), vec![f]),
             ("norm.std".to_string(), vec![f]),
         ];
-        let mut gru = |prefix: &str, inputs: usize, hidden: usize| {
+        fn gru(shapes: &mut Vec<(String, Vec<usize>)>, prefix: &str, inputs: usize, hidden: usize) {
             shapes.push((format!("{prefix}.weight_ih"), vec![3 * hidden, inputs]));
             shapes.push((format!("{prefix}.weight_hh"), vec![3 * hidden, hidden]));
             shapes.push((format!("{prefix}.bias_ih"), vec![3 * hidden]));
             shapes.push((format!("{prefix}.bias_hh"), vec![3 * hidden]));
-        };
+        }
         match self.architecture {
             Architecture::GruD => {
                 for k in 0..self.layers {
-                    gru(&format!("rnn.{k}"), if k == 0 { i } else { h }, h);
+                    gru(
+                        &mut shapes,
+                        &format!("rnn.{k}"),
+                        if k == 0 { i } else { h },
+                        h,
+                    );
                 }
             }
             Architecture::VgruD => {
                 let p = self.plan_hidden.unwrap_or(0);
-                gru("plan.cell", self.actions.len(), p);
-                gru("body", i, h);
+                gru(&mut shapes, "plan.cell", self.actions.len(), p);
+                gru(&mut shapes, "body", i, h);
                 shapes.push(("plan.mu".into(), vec![p]));
                 shapes.push(("plan.sigma".into(), vec![p]));
                 shapes.push(("body.weight_ph".into(), vec![3 * h, p]));
+            }
+            Architecture::Intention => {
+                let c = super::intention::IntentionConfig::of(self);
+                let (l, n) = (c.label_hidden, c.intentions);
+                shapes.push(("labels.centroids".into(), vec![c.clusters, o]));
+                shapes.push(("labels.merge".into(), vec![c.clusters]));
+                gru(&mut shapes, "label_encoder", o + n, l);
+                gru(&mut shapes, "label_decoder", n, l);
+                shapes.push(("label_out.weight".into(), vec![n, l]));
+                shapes.push(("label_out.bias".into(), vec![n]));
+                gru(&mut shapes, "pose_encoder", o, c.pose_hidden());
+                shapes.push((
+                    "intent_conv.weight".into(),
+                    vec![c.features, n, c.lookahead],
+                ));
+                shapes.push(("intent_conv.bias".into(), vec![c.features]));
+                for k in 0..self.layers {
+                    gru(
+                        &mut shapes,
+                        &format!("rnn.{k}"),
+                        if k == 0 { c.rnn_input_dims() } else { h },
+                        h,
+                    );
+                }
             }
             Architecture::DaeLstm => {
                 for k in 0..self.layers {
@@ -106,7 +149,8 @@ impl ModelConfig {
 }
 
 /// Safetensors bytes of a schema-conformant file for `config` with random weights drawn from
-/// `seed` (norm: mean 0, std 1).
+/// `seed` (norm: mean 0, std 1; an intention model's merge table maps cluster `k` to intention
+/// `k mod intentions`).
 pub fn random_weights_bytes(config: &ModelConfig, seed: u64) -> Vec<u8> {
     let mut rng = StdRng::seed_from_u64(seed);
     let tensors: Vec<(String, Vec<usize>, Vec<f32>)> = config
@@ -117,6 +161,10 @@ pub fn random_weights_bytes(config: &ModelConfig, seed: u64) -> Vec<u8> {
             let values: Vec<f32> = match name.as_str() {
                 "norm.mean" | "plan.mu" | "plan.sigma" => vec![0.0; n],
                 "norm.std" => vec![1.0; n],
+                "labels.merge" => {
+                    let c = config.intentions.unwrap_or(1).max(1);
+                    (0..n).map(|k| (k % c) as f32).collect()
+                }
                 _ => {
                     let fan = if name.contains("bias") || shape.len() < 2 {
                         config.hidden

@@ -35,7 +35,8 @@ pub fn check_sample_size(
 
 /// `samples` closed-loop predictions of `frames` frames each after `seed` (`S x frame_dims`
 /// at the model's rate, `S >= 1`; the model reads all of it), conditioned on `action`:
-/// `[samples, frames, frame_dims]` in f64. Sample `i` draws its plan noise from
+/// `[samples, frames, frame_dims]` in f64. Sample `i` draws its noise (VGRU-d's plan noise, the
+/// intention model's `z`) from
 /// `StdRng::seed_from_u64(rng_seed + i)` (wrapping), so sample `i` is the same whatever the
 /// sample count.
 pub fn generate_samples(

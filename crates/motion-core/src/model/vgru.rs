@@ -42,7 +42,8 @@ pub struct VgruD {
     actions: usize,
 }
 
-/// Where a row's plan noise `eps ~ N(0, I)` comes from.
+/// Where a row's noise `N(0, I)` comes from: VGRU-d's plan noise `eps`, also the intention
+/// model's `z` ([`super::intention`]).
 #[derive(Debug)]
 pub enum NoiseSource {
     /// A seeded generator: every plan block draws a fresh `eps`.
@@ -57,7 +58,8 @@ impl NoiseSource {
         NoiseSource::Rng(Box::new(StdRng::seed_from_u64(seed)))
     }
 
-    fn fill(&mut self, eps: &mut [f32]) {
+    /// The next `eps` (a seeded source draws `N(0, I)`; a fixed one copies its vector).
+    pub(crate) fn fill(&mut self, eps: &mut [f32]) {
         match self {
             NoiseSource::Rng(rng) => {
                 for e in eps {

@@ -5,9 +5,9 @@
 //! - [`selection`]: the dataset directory and the actions to run;
 //! - [`scoring`]: every metric of one action's predictions;
 //! - [`published`]: the papers' tables as code;
-//! - [`report`]: the human-readable table;
-//! - [`npy_stream`]: `--save-predictions` written piece by piece.
-pub mod npy_stream;
+//! - [`report`]: the human-readable table.
+//!
+//! `--save-predictions` is written piece by piece ([`motion_core::formats::npy_stream`]).
 mod plots;
 pub mod published;
 pub mod report;
@@ -35,7 +35,7 @@ use motion_metrics::{euler_error_at_horizons, EULER_HORIZONS_MS};
 use super::plausibility;
 use super::UsageError;
 use crate::model_source;
-use npy_stream::NpyStream;
+use motion_core::formats::npy_stream::NpyStream;
 use scoring::{ActionTruth, Coverage, NpssScores, Scores, Speed};
 use selection::{Planned, Selection};
 
@@ -105,10 +105,11 @@ pub struct Args {
     /// 12 s, paper 002's horizon, where ground-truth metrics use what the S5 files cover).
     #[arg(long, default_value_t = LONG_TERM_HORIZON)]
     pub horizon: usize,
-    /// Samples per window (stochastic models draw a new plan noise for each).
+    /// Samples per window (stochastic models draw new noise for each: VGRU-d its plan noise,
+    /// the intention model its z).
     #[arg(long, value_name = "K", default_value_t = 1)]
     pub samples: usize,
-    /// Seed of the plan noise; sample k of window w of an action gets its own stream.
+    /// Seed of the noise; sample k of window w of an action gets its own stream.
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub rng_seed: u64,
     /// Write the predictions (actions x 8 x K x horizon x 99, float64, un-normalized exp-map frames).
@@ -313,7 +314,8 @@ fn check_model(model: &MotionModel) -> Result<(), UsageError> {
     Ok(())
 }
 
-/// A well-mixed 64-bit seed for the plan noise of (action, window, sample): SplitMix64 steps.
+/// A well-mixed 64-bit seed for the noise (VGRU-d plan noise, intention z) of (action, window,
+/// sample): SplitMix64 steps.
 fn noise_seed(rng_seed: u64, action: usize, window: usize, sample: usize) -> u64 {
     let mut z = rng_seed;
     for part in [action as u64, window as u64, sample as u64] {
@@ -353,7 +355,7 @@ fn predict(
     let labels: Vec<&str> = planned.label.iter().map(String::as_str).collect();
     generator
         .start(seeds.view(), &labels, &noise)
-        .map_err(|e| UsageError(format!("{}: {e}", planned.action)))?;
+        .with_context(|| planned.action.to_string())?;
     let mut out = Array4::zeros((windows.len(), samples, horizon, H36M_FRAME_DIMS));
     for t in 0..horizon {
         let frames = generator
@@ -585,11 +587,20 @@ fn mean_over_actions(results: &[Value], who: &str) -> Value {
             )
         })
         .collect();
+    let bins = results
+        .first()
+        .and_then(|r| r[who]["ndms"]["bins"].as_array())
+        .map_or(0, Vec::len);
+    let ndms_bins: Vec<Option<f64>> = (0..bins)
+        .map(|i| mean(&format!("/ndms/bins/{i}")))
+        .collect();
     json!({
         "npss_reference": mean("/npss_reference/whole"),
         "npss": mean("/npss/whole"),
         "euler_error_ms": euler,
         "ndms": mean("/ndms/mean"),
+        "ndms_bins": ndms_bins,
+        "apd": mean("/apd"),
     })
 }
 
@@ -602,7 +613,7 @@ fn full_report(
     saved: Option<Value>,
 ) -> Value {
     let config = model.config();
-    let stochastic = matches!(model.network(), Network::Vgru(_));
+    let stochastic = config.architecture.is_stochastic();
     let mut report = json!({
         "model": {
             "source": model_source::describe(args.model.as_deref()),
@@ -611,7 +622,7 @@ fn full_report(
             "actions": config.actions,
             "actions_trained": selection::trained_actions(model),
             "stochastic": stochastic,
-            "plan_horizon": stochastic.then_some(config.horizon),
+            "plan_horizon": matches!(model.network(), Network::Vgru(_)).then_some(config.horizon),
             "stored_dtype": model.stored_dtype(),
         },
         "data": dataset.display().to_string(),

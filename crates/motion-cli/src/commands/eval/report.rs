@@ -262,6 +262,37 @@ pub fn table(report: &Value, plausibility: &[String]) -> String {
             "",
         );
     }
+    out.push_str(&format!(
+        "  NDMS 0.4 s bins   model    {}\n                    zero-vel {}\n",
+        cells(&means["model"]["ndms_bins"]),
+        cells(&means["zero_velocity"]["ndms_bins"])
+    ));
+    for r in published::ndms_rows("average") {
+        if r.method.starts_with("Ours") {
+            let bins: Vec<String> = r
+                .bins
+                .iter()
+                .map(|b| b.map_or("-".into(), |v| format!("{v:.3}")))
+                .collect();
+            out.push_str(&format!(
+                "                    paper 003 {} (average of 15 actions)\n",
+                bins.join(" ")
+            ));
+        }
+    }
+    if means["model"]["apd"].is_number() {
+        let paper: Vec<String> = published::P003_TABLE5_APD_H36M
+            .iter()
+            .map(|(m, v)| format!("{m} {v:.2}"))
+            .collect();
+        row(
+            &mut out,
+            "APD (mm)",
+            &means["model"]["apd"],
+            &Value::Null,
+            &format!("paper 003 Table 5 (unit unstated): {}", paper.join(", ")),
+        );
+    }
     for ms in EULER_HORIZONS_MS {
         let key = ms.to_string();
         row(

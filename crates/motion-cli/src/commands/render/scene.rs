@@ -326,11 +326,16 @@ pub fn floor_grid(
 
 /// Frame times of an animation of `tracks`: every frame of the first track, extended to the
 /// longest track at the same rate.
-pub fn timeline(tracks: &[&Track]) -> Vec<f64> {
+///
+/// `Err(frames)` when that is more than `max_frames` frames (nothing is allocated then).
+pub fn timeline(tracks: &[&Track], max_frames: usize) -> Result<Vec<f64>, f64> {
     let fps = tracks[0].fps;
     let duration = tracks.iter().map(|t| t.duration()).fold(0.0, f64::max);
-    let frames = ((duration * fps).round() as usize).max(1);
-    (0..frames).map(|k| k as f64 / fps).collect()
+    let frames = (duration * fps).round().max(1.0);
+    if frames.is_nan() || frames > max_frames as f64 {
+        return Err(frames);
+    }
+    Ok((0..frames as usize).map(|k| k as f64 / fps).collect())
 }
 
 #[cfg(test)]

@@ -1,5 +1,6 @@
-//! The BVH writer: the standard layout (tab indentation, one frame per line) with numbers in
-//! Rust's shortest round-trip representation, so that reading back gives the same `f64`s.
+//! The BVH writer: the standard layout (tab indentation up to [`MAX_INDENT`] levels, one frame
+//! per line) with numbers in Rust's shortest round-trip representation, so that reading back
+//! gives the same `f64`s. Output size is linear in joints and frames.
 use std::fmt::Write as _;
 use std::io::{self, Write};
 
@@ -99,8 +100,14 @@ fn write_hierarchy<W: Write>(out: &mut W, skeleton: &Skeleton) -> io::Result<()>
     Ok(())
 }
 
-fn indent(depth: usize) -> String {
-    "\t".repeat(depth)
+/// Deepest indentation written: past it every line gets this many tabs, so the hierarchy's size
+/// stays linear in the joint count (a 100,000-deep chain would otherwise take 5 * 10^9 tabs).
+/// Readers ignore indentation.
+pub const MAX_INDENT: usize = 32;
+
+fn indent(depth: usize) -> &'static str {
+    const TABS: &str = "\t\t\t\t\t\t\t\t\t\t\t\t\t\t\t\t\t\t\t\t\t\t\t\t\t\t\t\t\t\t\t\t";
+    &TABS[..depth.min(MAX_INDENT)]
 }
 
 fn open_joint<W: Write>(
@@ -148,4 +155,48 @@ fn write_offset<W: Write>(out: &mut W, offset: &[f64; 3], depth: usize) -> io::R
         offset[1],
         offset[2]
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::formats::bvh::parse_bvh;
+
+    /// A chain of `n` joints, each the child of the one before, one frame of zeros.
+    fn chain(n: usize) -> String {
+        let mut text = String::from("HIERARCHY\n");
+        for k in 0..n {
+            let keyword = if k == 0 { "ROOT" } else { "JOINT" };
+            text.push_str(&format!(
+                "{keyword} j{k}\n{{\nOFFSET 0 1 0\nCHANNELS 3 Zrotation Xrotation Yrotation\n"
+            ));
+        }
+        text.push_str("End Site\n{\nOFFSET 0 1 0\n}\n");
+        text.push_str(&"}\n".repeat(n));
+        text.push_str(&format!(
+            "MOTION\nFrames: 1\nFrame Time: 0.04\n{}\n",
+            vec!["0"; 3 * n].join(" ")
+        ));
+        text
+    }
+
+    #[test]
+    fn a_deep_hierarchy_is_written_in_linear_size_and_reads_back() {
+        assert_eq!(indent(MAX_INDENT + 5).len(), MAX_INDENT);
+        assert_eq!(indent(3), "\t\t\t");
+        let n = 20_000;
+        let bvh = parse_bvh(&chain(n), "deep.bvh").unwrap();
+        let mut written = Vec::new();
+        write_to(&mut written, &bvh).unwrap();
+        // ~240 bytes a joint (at most 32 tabs on its 4 lines); quadratic indentation would be
+        // about n^2 / 2 * 4 lines = 8 * 10^8 bytes
+        assert!(
+            written.len() < 400 * n,
+            "{} bytes for {n} joints",
+            written.len()
+        );
+        let back = parse_bvh(std::str::from_utf8(&written).unwrap(), "back.bvh").unwrap();
+        assert_eq!(back.skeleton.joints().len(), bvh.skeleton.joints().len());
+        assert_eq!(back.frames, bvh.frames);
+    }
 }

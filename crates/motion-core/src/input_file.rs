@@ -1,0 +1,67 @@
+//! Opening the files users name: regular files only. A device (`/dev/zero`, a symlink to it), a
+//! FIFO or a directory given as a motion, weights or joint-map file is refused before a byte is
+//! read, instead of being read until memory runs out or blocking forever.
+use std::fs::File;
+use std::io::{Error, ErrorKind, Read};
+use std::path::Path;
+
+/// Opens `path` (following symlinks) if it is a regular file.
+pub fn open_regular(path: &Path) -> std::io::Result<File> {
+    let file = File::open(path)?;
+    let kind = file.metadata()?.file_type();
+    if !kind.is_file() {
+        let what = if kind.is_dir() {
+            "a directory"
+        } else {
+            "a device, FIFO or socket"
+        };
+        return Err(Error::new(
+            ErrorKind::InvalidInput,
+            format!("not a regular file ({what})"),
+        ));
+    }
+    Ok(file)
+}
+
+/// Reads all of `path` if it is a regular file ([`open_regular`]).
+pub fn read_regular(path: &Path) -> std::io::Result<Vec<u8>> {
+    let mut file = open_regular(path)?;
+    let mut bytes = Vec::new();
+    file.read_to_end(&mut bytes)?;
+    Ok(bytes)
+}
+
+/// Reads all of `path` as UTF-8 text if it is a regular file ([`open_regular`]).
+pub fn read_regular_text(path: &Path) -> std::io::Result<String> {
+    let bytes = read_regular(path)?;
+    String::from_utf8(bytes).map_err(|e| Error::new(ErrorKind::InvalidData, e))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn devices_and_directories_are_refused_regular_files_read() {
+        for path in ["/dev/zero", "/dev/null", "/"] {
+            let e = read_regular(Path::new(path)).unwrap_err();
+            assert_eq!(e.kind(), ErrorKind::InvalidInput, "{path}: {e}");
+            assert!(e.to_string().contains("not a regular file"), "{e}");
+        }
+        let dir = std::env::temp_dir().join(format!("motion-input-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("a.txt");
+        std::fs::write(&file, "x").unwrap();
+        assert_eq!(read_regular_text(&file).unwrap(), "x");
+        #[cfg(unix)]
+        {
+            let link = dir.join("zero.bvh");
+            std::os::unix::fs::symlink("/dev/zero", &link).unwrap();
+            assert_eq!(
+                read_regular(&link).unwrap_err().kind(),
+                ErrorKind::InvalidInput
+            );
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

@@ -1,0 +1,491 @@
+//! The intention-based stochastic model: the seed's frames are labelled with intentions, an
+//! intention forecaster continues those labels as probabilities, and a stacked GRU pose
+//! generator conditioned on a noise vector `z` reads the intentions forecast ahead of it.
+//!
+//! Citation: Tanke, Zaveri, Gall, "Intention-based Long-Term Human Motion Anticipation", 3DV
+//! 2021 — paper 003, section 3 (3.1 the intention forecaster, eq. 3; 3.2 the pose generator,
+//! eq. 6; 3.3 the intention labels). Tensors as in `training/models.py` (`IntentionModel`,
+//! `IntentionLabels`; labelling in `training/intention_labels.py`):
+//! `labels.centroids [K, O]`, `labels.merge [K]`, `label_encoder.*`, `label_decoder.*`,
+//! `label_out.*`, `pose_encoder.*`, `intent_conv.*`, `rnn.{k}.*` (all GRUs in the PyTorch
+//! convention); the decoder and the normalization are the predictor's own (`decoder.*`,
+//! `norm.*`). Everything runs on normalized used dims.
+//!
+//! ## Inference (seed frames `0 .. S-1`, predictions `S ..`)
+//! - Each seed frame's label: the nearest centroid (squared distance, lowest index on ties), then
+//!   the merge table.
+//! - `label_encoder` reads pose ⊕ one-hot(label) over the seed from 0; `pose_encoder` reads the
+//!   seed poses from 0 and ends in `h_p`. Every decoder layer starts at `h_p ⊕ z`.
+//! - `label_decoder` starts from the label encoder's last state; its first input is the one-hot
+//!   of the last seed label, then its own previous `softmax(label_out(h))`: the intention
+//!   probabilities of frames `S, S+1, ..`.
+//! - The step producing frame `τ` reads `x̂_{τ-1} ⊕ z ⊕ intent_conv(window)`, the window being the
+//!   probabilities of frames `τ-1 .. τ+γ-2` (frame `S-1`: its label's one-hot), `x̂_{S-1}` the
+//!   last seed frame; the layers run bottom to top and `x̂_τ = x̂_{τ-1} + decoder(top)`.
+//!
+//! ## Streaming
+//! The forecaster runs ahead of the poses: when the seed is over it has produced frames
+//! `S .. S+γ-3` (none for `γ <= 2`), and each pose step first advances it to frame `τ+γ-2` (one
+//! frame per step; none at the first step when `γ = 1`). A ring of the last `γ` probability
+//! vectors per row holds the window. The forecaster does not read the poses, so this gives the
+//! same numbers as forecasting the whole horizon first (what `training/models.py` does).
+//! Every buffer is sized in [`Intention::new_state`]: a step allocates nothing.
+use super::config::ModelConfig;
+use super::vgru::NoiseSource;
+use super::weights::{WeightStore, WeightsError};
+use crate::nn::{GruCell, GruConfig, GruConvention, GruScratch, Linear, LinearConfig};
+
+/// The sizes of an intention model, read from its config.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct IntentionConfig {
+    /// Pose width `O` (used dims).
+    pub outputs: usize,
+    /// Units per pose-decoder layer `H`.
+    pub hidden: usize,
+    /// Pose-decoder layers.
+    pub layers: usize,
+    /// Noise width `N` (`0 < N < H`).
+    pub noise_dims: usize,
+    /// Units of the forecaster's GRUs `L`.
+    pub label_hidden: usize,
+    /// Intention labels `C`.
+    pub intentions: usize,
+    /// Pose clusters `K`.
+    pub clusters: usize,
+    /// Look-ahead `γ >= 1`.
+    pub lookahead: usize,
+    /// Convolution channels `Fe`.
+    pub features: usize,
+}
+
+impl IntentionConfig {
+    /// The sizes of `config` (an `intention` config that passed validation; absent fields read 0).
+    pub fn of(config: &ModelConfig) -> Self {
+        Self {
+            outputs: config.output_dims(),
+            hidden: config.hidden,
+            layers: config.layers,
+            noise_dims: config.noise_dims.unwrap_or(0),
+            label_hidden: config.label_hidden.unwrap_or(0),
+            intentions: config.intentions.unwrap_or(0),
+            clusters: config.clusters.unwrap_or(0),
+            lookahead: config.lookahead.unwrap_or(0),
+            features: config.intention_features.unwrap_or(0),
+        }
+    }
+
+    /// Width of the first decoder layer's input, `O + N + Fe`.
+    pub fn rnn_input_dims(&self) -> usize {
+        self.outputs + self.noise_dims + self.features
+    }
+
+    /// Units of the pose encoder, `H - N`.
+    pub fn pose_hidden(&self) -> usize {
+        self.hidden.saturating_sub(self.noise_dims)
+    }
+}
+
+/// Intention-model weights (immutable, shareable).
+#[derive(Debug, Clone)]
+pub struct Intention {
+    config: IntentionConfig,
+    /// `[K, O]`.
+    centroids: Vec<f32>,
+    /// The intention of each cluster, `[K]`, each `< C`.
+    merge: Vec<usize>,
+    label_encoder: GruCell,
+    label_decoder: GruCell,
+    label_out: Linear,
+    pose_encoder: GruCell,
+    /// `intent_conv.weight [Fe, C, γ]` stored as `[Fe, γ, C]` (a window frame's `C` values
+    /// contiguous).
+    conv_weight: Vec<f32>,
+    conv_bias: Vec<f32>,
+    layers: Vec<GruCell>,
+}
+
+/// Per-batch state of an [`Intention`] model, all sized once in [`Intention::new_state`].
+#[derive(Debug)]
+pub struct IntentionState {
+    capacity: usize,
+    /// Seed frames of the current sequence.
+    seed_len: usize,
+    /// The last frame whose intention probabilities are in `ring`.
+    forecast_last: usize,
+    /// `z` per row `[capacity, N]`.
+    z: Vec<f32>,
+    /// Label of each row's latest seed frame.
+    labels: Vec<usize>,
+    /// Label-encoder input per row, pose ⊕ one-hot `[capacity, O + C]`.
+    label_input: Vec<f32>,
+    /// Label encoder, then decoder state `[capacity, L]`.
+    label_h: Vec<f32>,
+    label_scratch: GruScratch,
+    /// The label decoder's next input `[capacity, C]`.
+    label_x: Vec<f32>,
+    logits: Vec<f32>,
+    /// Per row the probabilities of the last `γ` frames, frame `j` in slot `j % γ`:
+    /// `[capacity, γ, C]`.
+    ring: Vec<f32>,
+    pose_h: Vec<f32>,
+    pose_scratch: GruScratch,
+    /// First decoder layer's input per row, `x ⊕ z ⊕ features` `[capacity, O + N + Fe]`.
+    input: Vec<f32>,
+    hidden: Vec<Vec<f32>>,
+    scratch: Vec<GruScratch>,
+}
+
+fn gru(
+    store: &WeightStore,
+    prefix: &str,
+    inputs: usize,
+    hidden: usize,
+) -> Result<GruCell, WeightsError> {
+    GruCell::load(
+        store,
+        prefix,
+        GruConfig {
+            inputs,
+            hidden,
+            convention: GruConvention::PyTorch,
+        },
+    )
+}
+
+impl Intention {
+    /// Reads every tensor of the model but `decoder.*` and `norm.*` (the predictor's); checks
+    /// that `labels.merge` holds integers in `0..intentions`.
+    pub fn load(store: &WeightStore, config: &ModelConfig) -> Result<Self, WeightsError> {
+        let c = IntentionConfig::of(config);
+        let (o, k, n) = (c.outputs, c.clusters, c.intentions);
+        let centroids = store.tensor("labels.centroids", &[k, o])?;
+        let merge = store
+            .tensor("labels.merge", &[k])?
+            .into_iter()
+            .enumerate()
+            .map(|(cluster, v)| {
+                if v.fract() == 0.0 && v >= 0.0 && v < n as f32 {
+                    Ok(v as usize)
+                } else {
+                    Err(WeightsError::InvalidTensor {
+                        path: store.path().to_path_buf(),
+                        tensor: "labels.merge".into(),
+                        problem: format!(
+                            "cluster {cluster} maps to {v}, not an intention index in 0..{n}"
+                        ),
+                    })
+                }
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let label_encoder = gru(store, "label_encoder", o + n, c.label_hidden)?;
+        let label_decoder = gru(store, "label_decoder", n, c.label_hidden)?;
+        let label_out = Linear::load(
+            store,
+            "label_out",
+            LinearConfig {
+                inputs: c.label_hidden,
+                outputs: n,
+            },
+        )?;
+        let pose_encoder = gru(store, "pose_encoder", o, c.pose_hidden())?;
+        let (fe, g) = (c.features, c.lookahead);
+        let weight = store.tensor("intent_conv.weight", &[fe, n, g])?;
+        let mut conv_weight = vec![0.0; fe * g * n];
+        for f in 0..fe {
+            for ch in 0..n {
+                for j in 0..g {
+                    conv_weight[(f * g + j) * n + ch] = weight[(f * n + ch) * g + j];
+                }
+            }
+        }
+        let conv_bias = store.tensor("intent_conv.bias", &[fe])?;
+        let layers = (0..c.layers)
+            .map(|l| {
+                let inputs = if l == 0 { c.rnn_input_dims() } else { c.hidden };
+                gru(store, &format!("rnn.{l}"), inputs, c.hidden)
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Self {
+            config: c,
+            centroids,
+            merge,
+            label_encoder,
+            label_decoder,
+            label_out,
+            pose_encoder,
+            conv_weight,
+            conv_bias,
+            layers,
+        })
+    }
+
+    /// The model's sizes.
+    pub fn config(&self) -> IntentionConfig {
+        self.config
+    }
+
+    /// Number of trainable parameters (the forecaster, the pose encoder, the convolution and the
+    /// decoder layers; the label tables are not trained by gradient and not counted, as PyTorch
+    /// counts buffers).
+    pub fn parameter_count(&self) -> usize {
+        self.label_encoder.parameter_count()
+            + self.label_decoder.parameter_count()
+            + self.label_out.parameter_count()
+            + self.pose_encoder.parameter_count()
+            + self.conv_weight.len()
+            + self.conv_bias.len()
+            + self
+                .layers
+                .iter()
+                .map(GruCell::parameter_count)
+                .sum::<usize>()
+    }
+
+    /// Noise width `N` (the length of an explicit `z`).
+    pub fn noise_dims(&self) -> usize {
+        self.config.noise_dims
+    }
+
+    /// Units per decoder layer.
+    pub fn hidden(&self) -> usize {
+        self.config.hidden
+    }
+
+    /// The intention of normalized pose `x [O]`: the merge-table entry of the nearest centroid
+    /// (squared Euclidean distance accumulated in f64, the lowest index on ties).
+    pub fn label(&self, x: &[f32]) -> usize {
+        let o = self.config.outputs;
+        let mut best = (f64::INFINITY, 0);
+        for (k, centroid) in self.centroids.chunks_exact(o).enumerate() {
+            let d: f64 = x
+                .iter()
+                .zip(centroid)
+                .map(|(&a, &c)| {
+                    let e = f64::from(a) - f64::from(c);
+                    e * e
+                })
+                .sum();
+            if d < best.0 {
+                best = (d, k);
+            }
+        }
+        self.merge[best.1]
+    }
+
+    /// State for up to `capacity` rows.
+    pub fn new_state(&self, capacity: usize) -> IntentionState {
+        let c = &self.config;
+        let (o, n, l) = (c.outputs, c.intentions, c.label_hidden);
+        IntentionState {
+            capacity,
+            seed_len: 0,
+            forecast_last: 0,
+            z: vec![0.0; capacity * c.noise_dims],
+            labels: vec![0; capacity],
+            label_input: vec![0.0; capacity * (o + n)],
+            label_h: vec![0.0; capacity * l],
+            label_scratch: GruScratch::new(l, capacity),
+            label_x: vec![0.0; capacity * n],
+            logits: vec![0.0; capacity * n],
+            ring: vec![0.0; capacity * c.lookahead * n],
+            pose_h: vec![0.0; capacity * c.pose_hidden()],
+            pose_scratch: GruScratch::new(c.pose_hidden(), capacity),
+            input: vec![0.0; capacity * c.rnn_input_dims()],
+            hidden: self
+                .layers
+                .iter()
+                .map(|_| vec![0.0; capacity * c.hidden])
+                .collect(),
+            scratch: self
+                .layers
+                .iter()
+                .map(|_| GruScratch::new(c.hidden, capacity))
+                .collect(),
+        }
+    }
+
+    /// Starts `noise.len()` rows on a seed of `seed_len` frames: encoder states zeroed, each
+    /// row's `z` drawn once from its source (a seeded `N(0, I)` generator or a fixed vector).
+    pub fn begin(&self, state: &mut IntentionState, mut noise: Vec<NoiseSource>, seed_len: usize) {
+        let batch = noise.len();
+        assert!(batch <= state.capacity, "more rows than the state holds");
+        let nd = self.config.noise_dims;
+        for (source, z) in noise.iter_mut().zip(state.z.chunks_exact_mut(nd)) {
+            source.fill(z);
+        }
+        state.seed_len = seed_len;
+        state.forecast_last = 0;
+        state.label_h[..batch * self.config.label_hidden].fill(0.0);
+        state.pose_h[..batch * self.config.pose_hidden()].fill(0.0);
+    }
+
+    /// Body step `t` for `batch` rows of normalized poses `x [batch, O]`: seed frame `t` while
+    /// `t < S` (encoders only), otherwise the fed-back prediction `x̂_t`. From the last seed frame
+    /// on it returns the top decoder layer's hidden `[batch, H]`, from which the predictor's
+    /// decoder makes frame `t + 1` (residually, on `x`); before that `None`.
+    pub fn step<'s>(
+        &self,
+        state: &'s mut IntentionState,
+        x: &[f32],
+        batch: usize,
+        t: usize,
+    ) -> Option<&'s [f32]> {
+        if t < state.seed_len {
+            self.encode(state, x, batch);
+            if t + 1 < state.seed_len {
+                return None;
+            }
+            self.finish_seed(state, batch);
+        }
+        Some(self.pose_step(state, x, batch, t + 1))
+    }
+
+    /// One seed frame through the labelling and both encoders.
+    fn encode(&self, state: &mut IntentionState, x: &[f32], batch: usize) {
+        let (o, n) = (self.config.outputs, self.config.intentions);
+        let width = o + n;
+        for (b, row) in state.label_input[..batch * width]
+            .chunks_exact_mut(width)
+            .enumerate()
+        {
+            let pose = &x[b * o..(b + 1) * o];
+            let label = self.label(pose);
+            state.labels[b] = label;
+            let (p, onehot) = row.split_at_mut(o);
+            p.copy_from_slice(pose);
+            onehot.fill(0.0);
+            onehot[label] = 1.0;
+        }
+        self.label_encoder.step(
+            &state.label_input[..batch * width],
+            &mut state.label_h,
+            batch,
+            &mut state.label_scratch,
+        );
+        self.pose_encoder.step(
+            &x[..batch * o],
+            &mut state.pose_h,
+            batch,
+            &mut state.pose_scratch,
+        );
+    }
+
+    /// After the last seed frame: decoder layers at `h_p ⊕ z`, the forecaster's first input and
+    /// window frame `S-1` the last label's one-hot, frames `S .. S+γ-3` forecast.
+    fn finish_seed(&self, state: &mut IntentionState, batch: usize) {
+        let c = &self.config;
+        let (n, g, nd, ph) = (c.intentions, c.lookahead, c.noise_dims, c.pose_hidden());
+        for layer in &mut state.hidden {
+            for (b, h) in layer[..batch * c.hidden]
+                .chunks_exact_mut(c.hidden)
+                .enumerate()
+            {
+                h[..ph].copy_from_slice(&state.pose_h[b * ph..(b + 1) * ph]);
+                h[ph..].copy_from_slice(&state.z[b * nd..(b + 1) * nd]);
+            }
+        }
+        let last = state.seed_len - 1;
+        state.ring[..batch * g * n].fill(0.0);
+        for b in 0..batch {
+            let label = state.labels[b];
+            let x = &mut state.label_x[b * n..(b + 1) * n];
+            x.fill(0.0);
+            x[label] = 1.0;
+            state.ring[(b * g + last % g) * n + label] = 1.0;
+        }
+        state.forecast_last = last;
+        for _ in 0..g.saturating_sub(2) {
+            self.forecast(state, batch);
+        }
+    }
+
+    /// One forecaster step: the probabilities of frame `forecast_last + 1` into the ring and the
+    /// next input.
+    fn forecast(&self, state: &mut IntentionState, batch: usize) {
+        let (n, g) = (self.config.intentions, self.config.lookahead);
+        self.label_decoder.step(
+            &state.label_x[..batch * n],
+            &mut state.label_h,
+            batch,
+            &mut state.label_scratch,
+        );
+        let l = self.config.label_hidden;
+        self.label_out.forward(
+            &state.label_h[..batch * l],
+            batch,
+            &mut state.logits[..batch * n],
+        );
+        let frame = state.forecast_last + 1;
+        for b in 0..batch {
+            let logits = &state.logits[b * n..(b + 1) * n];
+            let max = logits.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+            let x = &mut state.label_x[b * n..(b + 1) * n];
+            let mut sum = 0.0f32;
+            for (p, &l) in x.iter_mut().zip(logits) {
+                *p = (l - max).exp();
+                sum += *p;
+            }
+            x.iter_mut().for_each(|p| *p /= sum);
+            let slot = (b * g + frame % g) * n;
+            state.ring[slot..slot + n].copy_from_slice(x);
+        }
+        state.forecast_last = frame;
+    }
+
+    /// The pose step producing frame `tau` from `x̂_{τ-1} = x`; returns the top hidden.
+    fn pose_step<'s>(
+        &self,
+        state: &'s mut IntentionState,
+        x: &[f32],
+        batch: usize,
+        tau: usize,
+    ) -> &'s [f32] {
+        let c = &self.config;
+        let (o, n, g, nd, fe) = (
+            c.outputs,
+            c.intentions,
+            c.lookahead,
+            c.noise_dims,
+            c.features,
+        );
+        // Window frames tau-1 ..= tau+g-2 (g >= 1, tau >= 1).
+        let newest = tau + g - 2;
+        while state.forecast_last < newest {
+            self.forecast(state, batch);
+        }
+        let width = c.rnn_input_dims();
+        for (b, row) in state.input[..batch * width]
+            .chunks_exact_mut(width)
+            .enumerate()
+        {
+            let (pose, rest) = row.split_at_mut(o);
+            let (z, features) = rest.split_at_mut(nd);
+            pose.copy_from_slice(&x[b * o..(b + 1) * o]);
+            z.copy_from_slice(&state.z[b * nd..(b + 1) * nd]);
+            let ring = &state.ring[b * g * n..(b + 1) * g * n];
+            for (f, out) in features.iter_mut().enumerate() {
+                let mut acc = self.conv_bias[f];
+                let weights = &self.conv_weight[f * g * n..(f + 1) * g * n];
+                for (j, w) in weights.chunks_exact(n).enumerate() {
+                    let slot = (tau - 1 + j) % g;
+                    let p = &ring[slot * n..(slot + 1) * n];
+                    acc += w.iter().zip(p).map(|(a, b)| a * b).sum::<f32>();
+                }
+                *out = acc;
+            }
+            debug_assert_eq!(features.len(), fe);
+        }
+        let h = c.hidden;
+        for (k, cell) in self.layers.iter().enumerate() {
+            let (below, rest) = state.hidden.split_at_mut(k);
+            let input: &[f32] = if k == 0 {
+                &state.input[..batch * width]
+            } else {
+                &below[k - 1][..batch * h]
+            };
+            cell.step(input, &mut rest[0], batch, &mut state.scratch[k]);
+        }
+        let top = state.hidden.last().expect("at least one layer");
+        &top[..batch * h]
+    }
+}
