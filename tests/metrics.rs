@@ -2,6 +2,7 @@
 //! NPSS against a naive O(T²) DFT, and both exact nearest-neighbour indexes against naive search.
 use motion::metrics::ndms::index::{nearest_naive, NearestIndex};
 use motion::metrics::ndms::{similarity, word, WordFrame};
+use motion::metrics::reference::npss_naive;
 use motion::metrics::{
     apd, apd_batch, euler_error, euler_error_at_horizons, npss, npss_reference, npss_windows,
     MetricError, NdmsConfig, NdmsDatabase, NnMethod, SpectrumPower,
@@ -34,44 +35,9 @@ fn close(a: f64, b: f64, tol: f64) -> bool {
 
 // ---------- NPSS ----------
 
-/// NPSS from the definition with a naive DFT: X[f] = Σ_t x[t] e^{-2πi f t / T}.
+/// The naive reference of the library (one copy for every accuracy test).
 fn naive_npss(gt: &Array3<f64>, pred: &Array3<f64>, real_only: bool) -> f64 {
-    let (n, t_len, d) = gt.dim();
-    let power = |x: &[f64]| -> Vec<f64> {
-        (0..t_len)
-            .map(|f| {
-                let (mut re, mut im) = (0.0, 0.0);
-                for (t, v) in x.iter().enumerate() {
-                    let angle = -2.0 * std::f64::consts::PI * (f * t) as f64 / t_len as f64;
-                    re += v * angle.cos();
-                    im += v * angle.sin();
-                }
-                if real_only {
-                    re * re
-                } else {
-                    re * re + im * im
-                }
-            })
-            .collect()
-    };
-    let (mut num, mut den) = (0.0, 0.0);
-    for i in 0..n {
-        for j in 0..d {
-            let x: Vec<f64> = (0..t_len).map(|t| gt[[i, t, j]]).collect();
-            let y: Vec<f64> = (0..t_len).map(|t| pred[[i, t, j]]).collect();
-            let (px, py) = (power(&x), power(&y));
-            let (sx, sy): (f64, f64) = (px.iter().sum(), py.iter().sum());
-            let (mut cx, mut cy, mut emd) = (0.0, 0.0, 0.0);
-            for f in 0..t_len {
-                cx += if sx > 0.0 { px[f] / sx } else { 0.0 };
-                cy += if sy > 0.0 { py[f] / sy } else { 0.0 };
-                emd += (cy - cx).abs();
-            }
-            num += sx * emd;
-            den += sx;
-        }
-    }
-    num / den
+    npss_naive(gt.view(), pred.view(), real_only)
 }
 
 #[test]

@@ -1,11 +1,10 @@
 //! `motion-cli bench`, driven through the built binary with tiny step counts: checks the JSON
 //! structure and the usage errors only (speed is measured, never asserted, in tests).
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
 
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
+use common::repo;
+use std::path::Path;
+use std::process::Command;
 
 /// Runs `motion-cli bench ARGS`; returns (exit code, stdout, stderr).
 fn bench(args: &[&str]) -> (i32, String, String) {

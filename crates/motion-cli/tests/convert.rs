@@ -3,8 +3,11 @@
 //! The acceptance test on `MOTION_DATA_DIR/h3.6m/dataset/S5/walking_1.txt.gz` (default
 //! `<repo>/../shared/data`) is skipped with a visible message when the data is absent; the other
 //! tests use motion generated here or the generated fixtures of `tests/fixtures/bvh/`.
+mod common;
+
+use common::{data_dir, repo, scratch};
 use std::f64::consts::PI;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
 use motion_core::formats::bvh::read_bvh;
@@ -15,24 +18,6 @@ use motion_core::motion::RootEncoding;
 use motion_core::rotation::expmap2rotmat;
 use motion_core::skeleton::Skeleton;
 use ndarray::{Array2, Array3};
-
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
-fn data_dir() -> PathBuf {
-    std::env::var_os("MOTION_DATA_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| repo().join("../shared/data"))
-}
-
-/// A fresh scratch directory for one test.
-fn scratch(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("convert-{name}"));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 /// Runs `motion-cli convert ARGS`; returns (exit code, stderr).
 fn convert(args: &[&dyn AsRef<std::ffi::OsStr>]) -> (i32, String) {

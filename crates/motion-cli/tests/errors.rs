@@ -4,39 +4,14 @@
 //!
 //! Each case must exit with status 2, print exactly one line on stderr (`error: ...`) naming the
 //! file and the problem, never panic, and leave no output (or temporary) file behind.
+mod common;
+
+use common::{fixture_model, listing, repo, scratch, walk_seed};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use motion_core::formats::npy::write_npy;
 use ndarray::Array2;
-
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
-fn fixture_model() -> PathBuf {
-    repo().join("tests/fixtures/parity/vgru_d.safetensors")
-}
-
-fn walk_seed() -> PathBuf {
-    repo().join("examples/walk_seed.bvh")
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("errors-{name}"));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn listing(dir: &Path) -> Vec<String> {
-    let mut names: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    names.sort();
-    names
-}
 
 /// Runs `motion-cli ARGS` in `dir` and checks the bad-input contract: exit 2, one `error:` line
 /// containing every string of `expected`, no new file in `dir`.

@@ -4,7 +4,10 @@
 //! The protocol run needs the H3.6M data in `MOTION_DATA_DIR` (default `<repo>/../shared/data`)
 //! and is skipped with a visible message without it; the bad-input tests build their own
 //! stand-in directories.
-use std::path::{Path, PathBuf};
+mod common;
+
+use common::{data_dir, fixture_model, scratch};
+use std::path::PathBuf;
 use std::process::Command;
 
 use motion_core::formats::npy::read_npy_dyn;
@@ -12,28 +15,6 @@ use motion_core::protocol::{expmap_batch_to_euler_protocol, load_action_windows,
 use motion_metrics::euler_error;
 use ndarray::{s, Axis, Ix5};
 use serde_json::Value;
-
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
-fn data_dir() -> PathBuf {
-    std::env::var_os("MOTION_DATA_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| repo().join("../shared/data"))
-}
-
-fn fixture_model() -> PathBuf {
-    repo().join("tests/fixtures/parity/vgru_d.safetensors")
-}
-
-/// A fresh scratch directory for one test.
-fn scratch(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("eval-{name}"));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 /// Runs `motion-cli eval ARGS`; returns (exit code, stdout, stderr).
 fn eval(args: &[&dyn AsRef<std::ffi::OsStr>]) -> (i32, String, String) {

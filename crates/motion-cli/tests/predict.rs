@@ -2,6 +2,9 @@
 //! model (`tests/fixtures/parity/vgru_d.safetensors`: 15 actions, seed 10 frames, 25 Hz) and the
 //! procedural seed `examples/walk_seed.bvh`. No `../shared` data is needed. The fixture's motion is
 //! meaningless; these tests check shapes, conventions and plumbing.
+mod common;
+
+use common::{data_dir, fixture_model, repo, scratch, walk_seed};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -11,26 +14,6 @@ use motion_core::formats::h36m_text::{read_expmap_text, write_expmap_text};
 use motion_core::formats::npy::{read_npy_dyn, read_npy_frames};
 use motion_core::kinematics::channel_positions;
 use motion_core::skeleton::Skeleton;
-
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
-fn fixture_model() -> PathBuf {
-    repo().join("tests/fixtures/parity/vgru_d.safetensors")
-}
-
-fn walk_seed() -> PathBuf {
-    repo().join("examples/walk_seed.bvh")
-}
-
-/// A fresh scratch directory for one test.
-fn scratch(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("predict-{name}"));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 /// Runs `motion-cli predict --model FIXTURE ARGS`; returns (exit code, stdout, stderr).
 fn predict(args: &[&dyn AsRef<std::ffi::OsStr>]) -> (i32, String, String) {
@@ -430,13 +413,6 @@ fn seed_end_and_truth_line_up_with_the_seed_file() {
         stderr.contains("--truth needs 20 frames after the seed window, the file has 15"),
         "{stderr}"
     );
-}
-
-/// `MOTION_DATA_DIR` (default `<repo>/../shared/data`).
-fn data_dir() -> PathBuf {
-    std::env::var_os("MOTION_DATA_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| repo().join("../shared/data"))
 }
 
 #[test]

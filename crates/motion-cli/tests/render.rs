@@ -2,23 +2,11 @@
 //! `examples/walk_seed.bvh` and a fixture-model prediction (no `../shared` data needed). The
 //! pictures are decoded and checked for size, frame count and the colours that should be there;
 //! `CARGO_TARGET_TMPDIR/render-*/` keeps them (and PNGs of two GIF frames) for a look.
+mod common;
+
+use common::{repo, scratch, walk_seed};
 use std::path::{Path, PathBuf};
 use std::process::Command;
-
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
-fn walk_seed() -> PathBuf {
-    repo().join("examples/walk_seed.bvh")
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("render-{name}"));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 fn motion_cli(args: &[&dyn AsRef<std::ffi::OsStr>]) -> (i32, String, String) {
     let output = Command::new(env!("CARGO_BIN_EXE_motion-cli"))

@@ -28,6 +28,7 @@ pub mod euler_error;
 pub mod ndms;
 pub mod npss;
 pub mod plausibility;
+pub mod reference;
 
 pub use apd::{apd, apd_batch};
 pub use classifier::{

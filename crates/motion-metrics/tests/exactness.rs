@@ -4,6 +4,7 @@
 //! words, duplicates and consecutive query words.
 use motion_metrics::ndms::index::{nearest_naive, NearestIndex, Neighbour};
 use motion_metrics::ndms::{word, NdmsConfig};
+use motion_metrics::reference::npss_naive;
 use motion_metrics::{MetricError, NnMethod, Npss, SpectrumPower};
 use ndarray::{s, Array3};
 
@@ -17,43 +18,9 @@ fn noise(i: u64) -> f64 {
     ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 52) as f64 - 1.0
 }
 
-/// The definition of metrics.md, term by term: full complex DFT by its sum, all T frequencies.
+/// The naive reference of the library (one copy for every accuracy test).
 fn naive_npss(gt: &Array3<f64>, pred: &Array3<f64>, real_only: bool) -> f64 {
-    let (n, t, d) = gt.dim();
-    let spectrum = |x: Vec<f64>| -> Vec<f64> {
-        (0..t)
-            .map(|f| {
-                let (mut re, mut im) = (0.0, 0.0);
-                for (k, v) in x.iter().enumerate() {
-                    let a = -2.0 * std::f64::consts::PI * (f * k) as f64 / t as f64;
-                    re += v * a.cos();
-                    im += v * a.sin();
-                }
-                if real_only {
-                    re * re
-                } else {
-                    re * re + im * im
-                }
-            })
-            .collect()
-    };
-    let (mut weighted, mut total) = (0.0, 0.0);
-    for i in 0..n {
-        for j in 0..d {
-            let g = spectrum(gt.slice(s![i, .., j]).to_vec());
-            let p = spectrum(pred.slice(s![i, .., j]).to_vec());
-            let (gs, ps): (f64, f64) = (g.iter().sum(), p.iter().sum());
-            let (mut cg, mut cp, mut emd) = (0.0, 0.0, 0.0);
-            for f in 0..t {
-                cg += if gs > 0.0 { g[f] / gs } else { 0.0 };
-                cp += if ps > 0.0 { p[f] / ps } else { 0.0 };
-                emd += (cp - cg).abs();
-            }
-            weighted += gs * emd;
-            total += gs;
-        }
-    }
-    weighted / total
+    npss_naive(gt.view(), pred.view(), real_only)
 }
 
 fn close(a: f64, b: f64) -> bool {

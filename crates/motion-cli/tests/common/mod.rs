@@ -18,9 +18,21 @@ pub fn data_dir() -> PathBuf {
         .unwrap_or_else(|| repo().join("../shared/data"))
 }
 
-/// A fresh, empty scratch directory for one test (under Cargo's target tmpdir).
+/// The small random-weight VGRU-d of the parity fixtures.
+pub fn fixture_model() -> PathBuf {
+    repo().join("tests/fixtures/parity/vgru_d.safetensors")
+}
+
+/// The example walking seed (BVH, H3.6M skeleton).
+pub fn walk_seed() -> PathBuf {
+    repo().join("examples/walk_seed.bvh")
+}
+
+/// A fresh, empty scratch directory for one test (under Cargo's target tmpdir), named after the
+/// test file and `name` so that no two test files share one.
 pub fn scratch(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let dir =
+        Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("{}-{name}", env!("CARGO_CRATE_NAME")));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     dir
@@ -36,4 +48,14 @@ where
         .args(args)
         .output()
         .expect("the motion-cli binary runs")
+}
+
+/// The sorted file names in `dir`.
+pub fn listing(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
 }
