@@ -277,7 +277,7 @@ fn bad_input_exits_with_2_and_a_clear_message() {
     assert_usage_error(&score(&["--pred", p(&a), "--metric", "ndms"]), "needs --db");
     assert_usage_error(
         &score(&["--pred", p(&a), "--metric", "fid"]),
-        "unknown metric",
+        "invalid value 'fid'",
     );
     assert_usage_error(&score(&["--pred", p(&a)]), "nothing to score");
     assert_usage_error(

@@ -80,6 +80,7 @@ pub mod any_format;
 pub mod clip;
 pub mod derivatives;
 pub mod error;
+pub mod file_sets;
 pub mod formats;
 pub mod input_file;
 pub mod kinematics;

@@ -136,6 +136,7 @@ pub fn exit_code(err: &anyhow::Error) -> u8 {
             || c.is::<motion_core::resample::ResampleError>()
             || c.is::<motion_core::retarget::RetargetError>()
             || c.is::<motion_core::any_format::AnyMotionError>()
+            || c.is::<motion_core::file_sets::FileSetError>()
             || c.is::<motion_metrics::MetricError>()
             || c.is::<motion_metrics::plausibility::ReferenceError>()
             || c.is::<std::io::Error>()

@@ -479,17 +479,6 @@ fn generate(job: &Job, action: Option<&str>, seed: &Array2<f64>) -> anyhow::Resu
     })
 }
 
-/// The seed files of a directory (BVH, exp-map text, `.npy`), sorted by name.
-fn seed_files(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
-    let entries = std::fs::read_dir(dir).with_context(|| dir.display().to_string())?;
-    let mut files: Vec<PathBuf> = entries
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.is_file() && FileFormat::from_path(p).is_ok())
-        .collect();
-    files.sort();
-    Ok(files)
-}
-
 /// Output names `DIR/<stem>.<ext>`; two seeds with one stem (`a.bvh`, `a.npy`) keep their
 /// extension in the name (`a_bvh.<ext>`, `a_npy.<ext>`) so that neither overwrites the other.
 fn output_names(files: &[PathBuf], out_dir: &Path, ext: &str) -> Vec<PathBuf> {
@@ -527,7 +516,7 @@ fn output_names(files: &[PathBuf], out_dir: &Path, ext: &str) -> Vec<PathBuf> {
 
 /// Batch mode: every seed of a directory, in parallel, with a progress bar and a summary.
 fn run_batch(args: &Args, job: &Job) -> anyhow::Result<()> {
-    let files = seed_files(&args.seed)?;
+    let files = motion_core::file_sets::motion_files_in(&args.seed)?;
     if files.is_empty() {
         return Err(UsageError(format!(
             "{}: no .bvh, .txt, .txt.gz or .npy files in this directory",

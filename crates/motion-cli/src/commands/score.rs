@@ -17,8 +17,8 @@ use serde_json::{json, Map, Value};
 
 use crate::plot::{bin_points, per_frame_points, window_points, Chart, Series};
 use motion_core::any_format::read_array;
+use motion_core::file_sets::{check_paired_by_name, expand};
 use motion_core::formats::bvh::read_bvh;
-use motion_core::formats::FileFormat;
 use motion_core::motion::Motion;
 use motion_core::protocol::expmap_batch_to_euler_protocol;
 use motion_core::skeleton::{
@@ -99,8 +99,14 @@ pub struct Args {
     /// Comma list of npss, npss-reference, euler, ndms, apd, classifier, speed_ratio, drift,
     /// foot_contact, or all (= every metric the inputs allow; classifier when --action is given,
     /// the last three when --action and --seed are given).
-    #[arg(long, default_value = "all", value_delimiter = ',')]
-    pub metric: Vec<String>,
+    #[arg(
+        long,
+        value_enum,
+        default_value = "all",
+        value_delimiter = ',',
+        ignore_case = true
+    )]
+    pub metric: Vec<Metric>,
     /// NDMS reference sequences (the word database). Exp-map text files are taken as the dataset's
     /// 50 Hz files and downsampled to the protocol's 25 Hz; .npy and BVH are used at their rate.
     #[arg(long, num_args = 1..)]
@@ -143,17 +149,32 @@ pub struct Args {
     pub plot: Option<PathBuf>,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Metric {
+/// A metric of `--metric` (a clap value enum: the names below, `-` or `_` alike).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Metric {
+    /// NPSS with the paper's |DFT|² power.
     Npss,
+    /// NPSS with the published code's Re(DFT)².
+    #[value(name = "npss-reference", alias = "npss_reference")]
     NpssReference,
+    /// The H3.6M protocol's Euler-angle error.
     Euler,
+    /// NDMS against --db.
     Ndms,
+    /// Average pairwise distance of samples.
     Apd,
+    /// Paper 002's action-classifier probability.
     Classifier,
+    /// Joint speed against the action's real data.
+    #[value(name = "speed_ratio", alias = "speed-ratio")]
     SpeedRatio,
+    /// Hip height and torso lean change since the seed.
     Drift,
+    /// Fraction of frames with both feet off the floor.
+    #[value(name = "foot_contact", alias = "foot-contact")]
     FootContact,
+    /// Every metric the inputs allow.
+    All,
 }
 
 const ALL_METRICS: [Metric; 9] = [
@@ -180,6 +201,7 @@ impl Metric {
             Metric::SpeedRatio => "speed_ratio",
             Metric::Drift => "drift",
             Metric::FootContact => "foot_contact",
+            Metric::All => "all",
         }
     }
 
@@ -221,8 +243,8 @@ pub fn run(args: Args) -> Result<()> {
         .as_deref()
         .map(super::plausibility::known_action)
         .transpose()?;
-    check_same_names(&args.pred, &args.gt, "--gt")?;
-    check_same_names(&args.pred, &args.seed, "--seed")?;
+    check_paired_by_name(&args.pred, &args.gt).context("--pred and --gt")?;
+    check_paired_by_name(&args.pred, &args.seed).context("--pred and --seed")?;
     let pred_raw = load_group(&args.pred, "--pred")?;
     let space = args.input_space.unwrap_or_else(|| default_space(&pred_raw));
     let pred = classify_group(pred_raw, space, "--pred")?;
@@ -400,92 +422,21 @@ pub fn run(args: Args) -> Result<()> {
     Ok(())
 }
 
-fn parse_metrics(list: &[String]) -> Result<Option<Vec<Metric>>> {
-    let mut out = Vec::new();
-    for item in list.iter().map(|s| s.trim().to_ascii_lowercase()) {
-        match item.as_str() {
-            "all" => return Ok(None),
-            "npss" => out.push(Metric::Npss),
-            "npss-reference" | "npss_reference" => out.push(Metric::NpssReference),
-            "euler" => out.push(Metric::Euler),
-            "ndms" => out.push(Metric::Ndms),
-            "apd" => out.push(Metric::Apd),
-            "classifier" => out.push(Metric::Classifier),
-            "speed_ratio" | "speed-ratio" => out.push(Metric::SpeedRatio),
-            "drift" => out.push(Metric::Drift),
-            "foot_contact" | "foot-contact" => out.push(Metric::FootContact),
-            other => {
-                return Err(usage(format!(
-                "unknown metric {other:?} (expected npss, npss-reference, euler, ndms, apd, speed_ratio, drift, foot_contact or all)"
-            )))
-            }
+/// `None` for `all` (every metric the inputs allow), else the metrics asked for, once each.
+fn parse_metrics(list: &[Metric]) -> Result<Option<Vec<Metric>>> {
+    if list.contains(&Metric::All) {
+        return Ok(None);
+    }
+    let mut out: Vec<Metric> = Vec::new();
+    for &m in list {
+        if !out.contains(&m) {
+            out.push(m);
         }
     }
-    out.dedup();
     Ok(Some(out))
 }
 
 // ---------- loading ----------
-
-/// Files of `paths`, folders expanded to their motion files (sorted by name).
-fn expand(paths: &[PathBuf]) -> Result<Vec<PathBuf>> {
-    let mut files = Vec::new();
-    for path in paths {
-        if path.is_dir() {
-            let mut inside: Vec<PathBuf> = std::fs::read_dir(path)
-                .with_context(|| format!("{}: cannot list the folder", path.display()))?
-                .filter_map(|e| e.ok().map(|e| e.path()))
-                .filter(|p| p.is_file() && FileFormat::from_path(p).is_ok())
-                .collect();
-            inside.sort();
-            if inside.is_empty() {
-                return Err(usage(format!(
-                    "{}: no .npy, .txt, .txt.gz or .bvh files in the folder",
-                    path.display()
-                )));
-            }
-            files.extend(inside);
-        } else {
-            files.push(path.clone());
-        }
-    }
-    Ok(files)
-}
-
-/// Folders given to `--pred` and to `flag` are paired file by file: their file names must be the
-/// same (sorted order would otherwise pair `a.npy` with `b.npy` silently).
-fn check_same_names(pred: &[PathBuf], other: &[PathBuf], flag: &str) -> Result<()> {
-    let ([pred_dir], [other_dir]) = (pred, other) else {
-        return Ok(());
-    };
-    if !(pred_dir.is_dir() && other_dir.is_dir()) {
-        return Ok(());
-    }
-    let names = |dir: &PathBuf| -> Result<Vec<std::ffi::OsString>> {
-        Ok(expand(std::slice::from_ref(dir))?
-            .into_iter()
-            .filter_map(|p| p.file_name().map(|n| n.to_os_string()))
-            .collect())
-    };
-    let (a, b) = (names(pred_dir)?, names(other_dir)?);
-    if let Some(name) = a.iter().find(|n| !b.contains(n)) {
-        return Err(usage(format!(
-            "{flag} {}: no file named {} to pair with --pred {}'s (folders are paired by file name)",
-            other_dir.display(),
-            name.to_string_lossy(),
-            pred_dir.display()
-        )));
-    }
-    if let Some(name) = b.iter().find(|n| !a.contains(n)) {
-        return Err(usage(format!(
-            "--pred {}: no file named {} to pair with {flag} {}'s (folders are paired by file name)",
-            pred_dir.display(),
-            name.to_string_lossy(),
-            other_dir.display()
-        )));
-    }
-    Ok(())
-}
 
 /// The arrays of every file of a flag, as read.
 fn load_group(paths: &[PathBuf], flag: &str) -> Result<Vec<(PathBuf, ArrayD<f64>)>> {
