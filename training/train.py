@@ -34,7 +34,6 @@ import math
 import os
 import shlex
 import sys
-import tempfile
 import time
 from pathlib import Path
 
@@ -43,12 +42,11 @@ import torch
 
 from . import data as h36m
 from . import metrics_np
+from .checkpoint_io import BEST, CHECKPOINT, atomic_save, read_checkpoint
 from .features import DerivativeHistory
 from .models import build_model, make_config, parameter_count
 from .spectral import spectral_loss
 
-CHECKPOINT = "last.pt"
-BEST = "best.pt"
 #: Iterations at which the published lambda schedule steps up, and the values from then on.
 LAMBDA_STEPS = ((500, 0.2), (1000, 0.4), (2000, 0.6), (4000, 0.8), (7000, 1.0))
 #: Arguments that may be changed on --resume (they do not change what is computed, except --iterations
@@ -351,33 +349,13 @@ def better(a: dict | None, b: dict | None) -> bool:
 # ------------------------------------------------------------------------------------------ checkpoints
 
 
-def atomic_save(obj, path: Path) -> None:
-    """torch.save to a temp file in the same directory, then rename (never a half-written checkpoint)."""
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".pt", dir=path.parent)
-    os.close(fd)
-    try:
-        torch.save(obj, tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.remove(tmp)
-        raise
-
-
 #: What every checkpoint of `train` holds (load_checkpoint refuses a file without them).
 CHECKPOINT_KEYS = frozenset({"config", "model", "optimizer", "state", "args", "command"})
 
 
 def load_checkpoint(path: Path) -> dict:
     """A checkpoint written by this module. Raises ValueError naming the file if it is not one."""
-    try:
-        ck = torch.load(path, map_location="cpu", weights_only=False)
-    except Exception as e:  # torch.load raises many types for a file that is not a checkpoint
-        raise ValueError(f"{path}: not a training checkpoint ({e})") from None
-    if not isinstance(ck, dict) or not CHECKPOINT_KEYS <= ck.keys():
-        raise ValueError(f"{path}: not a training checkpoint (needs {', '.join(sorted(CHECKPOINT_KEYS))})")
-    return ck
+    return read_checkpoint(path, CHECKPOINT_KEYS, "training")
 
 
 def checkpoint_weights(ck: dict) -> dict:

@@ -36,9 +36,8 @@ from torch.nn import functional as F
 from . import data as h36m
 from .classifier import ActionClassifier, make_classifier_config
 from .export import save_weights
-from .train import atomic_save
+from .checkpoint_io import CHECKPOINT, atomic_save, read_checkpoint
 
-CHECKPOINT = "last.pt"
 CHECKPOINT_KEYS = ("config", "args", "model", "optimizer", "iteration", "numpy_rng", "torch_rng")
 
 
@@ -80,12 +79,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def load_checkpoint(path: Path) -> dict:
     """A classifier checkpoint; ValueError naming the file when it is not one."""
-    try:
-        state = torch.load(path, map_location="cpu", weights_only=False)
-    except Exception as e:  # noqa: BLE001 - any unpickling failure means "not a checkpoint"
-        raise ValueError(f"{path}: not a classifier checkpoint ({e})") from e
-    if not isinstance(state, dict) or any(k not in state for k in CHECKPOINT_KEYS):
-        raise ValueError(f"{path}: not a classifier checkpoint (expected keys {CHECKPOINT_KEYS})")
+    state = read_checkpoint(path, CHECKPOINT_KEYS, "classifier")
     if state["config"].get("architecture") != "action-classifier":
         raise ValueError(f"{path}: checkpoint holds {state['config'].get('architecture')!r}, not an action classifier")
     return state

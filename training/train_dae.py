@@ -54,10 +54,9 @@ import torch
 from . import data as h36m
 from .export import save_weights
 from .models import DAELSTM, H36M_ACTIONS, make_config, parameter_count
-from .train import RESUME_OVERRIDABLE, Logger, Validator, atomic_save, explicit_args
+from .checkpoint_io import BEST, CHECKPOINT, atomic_save, begin_run, read_checkpoint
+from .train import RESUME_OVERRIDABLE, Logger, Validator, explicit_args
 
-CHECKPOINT = "last.pt"
-BEST = "best.pt"
 CHECKPOINT_KEYS = ("stage", "config", "args", "model", "optimizer", "iteration", "numpy_rng", "torch_rng")
 STAGES = ("dae", "lstm", "finetune")
 DROP_SCHEDULE = (0.01, 0.02, 0.04, 0.08, 0.1)
@@ -131,12 +130,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def load_checkpoint(path: Path) -> dict:
     """A DAE-LSTM checkpoint; ValueError naming the file when it is not one."""
-    try:
-        state = torch.load(path, map_location="cpu", weights_only=False)
-    except Exception as e:  # noqa: BLE001 - any unpickling failure means "not a checkpoint"
-        raise ValueError(f"{path}: not a DAE-LSTM checkpoint ({e})") from e
-    if not isinstance(state, dict) or any(k not in state for k in CHECKPOINT_KEYS):
-        raise ValueError(f"{path}: not a DAE-LSTM checkpoint (expected keys {CHECKPOINT_KEYS})")
+    state = read_checkpoint(path, CHECKPOINT_KEYS, "DAE-LSTM")
     if state["config"].get("architecture") != "dae-lstm":
         raise ValueError(f"{path}: checkpoint holds {state['config'].get('architecture')!r}, not a DAE-LSTM")
     return state
@@ -317,22 +311,9 @@ def train(args, argv: list[str]) -> None:
     MOTION_LOSS[0] = getattr(args, "motion_loss", "log")
     if args.stage is None or args.run_dir is None:
         raise SystemExit("error: training needs --stage and --run-dir (or --export with --from)")
+    args, resume = begin_run(args, explicit_args(argv), RESUME_OVERRIDABLE, load_checkpoint)
     run_dir = args.run_dir
-    run_dir.mkdir(parents=True, exist_ok=True)
     ckpt_path = run_dir / CHECKPOINT
-    resume = None
-    if args.resume:
-        if not ckpt_path.is_file():
-            raise SystemExit(f"error: --resume but {ckpt_path} does not exist")
-        resume = load_checkpoint(ckpt_path)
-        saved = dict(resume["args"])
-        given = explicit_args(argv)
-        for k in RESUME_OVERRIDABLE + ("device",):  # --iterations extends (or shortens) the run
-            if k in given or k == "device":
-                saved[k] = getattr(args, k)
-        args = argparse.Namespace(**{**vars(args), **saved, "resume": True, "run_dir": run_dir})
-    elif ckpt_path.exists():
-        raise SystemExit(f"error: {ckpt_path} exists: --resume it or choose another --run-dir")
     stage = args.stage
     if stage == "finetune" and args.closed_loop_weight > 0 and args.closed_loop_seed + args.closed_loop_horizon > args.window + 1:
         raise SystemExit(f"error: --closed-loop-seed + --closed-loop-horizon ({args.closed_loop_seed} + "

@@ -59,10 +59,9 @@ from . import intention_labels
 from .export import save_weights
 from .layers import MLP
 from .models import IntentionModel, joint_groups, make_config, parameter_count
-from .train import RESUME_OVERRIDABLE, Logger, Validator, atomic_save, explicit_args
+from .checkpoint_io import BEST, CHECKPOINT, atomic_save, begin_run, read_checkpoint
+from .train import RESUME_OVERRIDABLE, Logger, Validator, explicit_args
 
-CHECKPOINT = "last.pt"
-BEST = "best.pt"
 CHECKPOINT_KEYS = ("config", "args", "model", "d_pose", "d_label", "opt_g", "opt_f", "opt_dp", "opt_dl",
                    "iteration", "numpy_rng", "torch_rng")
 LONG_HORIZON = 300  # 12 s at 25 Hz
@@ -126,13 +125,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def load_checkpoint(path: Path) -> dict:
     """An intention-model checkpoint; ValueError naming the file when it is not one."""
-    try:
-        state = torch.load(path, map_location="cpu", weights_only=False)
-    except Exception as e:  # noqa: BLE001 - any unpickling failure means "not a checkpoint"
-        raise ValueError(f"{path}: not an intention-model checkpoint ({e})") from e
-    if not isinstance(state, dict) or any(k not in state for k in CHECKPOINT_KEYS):
-        raise ValueError(f"{path}: not an intention-model checkpoint (expected keys {CHECKPOINT_KEYS})")
-    return state
+    return read_checkpoint(path, CHECKPOINT_KEYS, "intention-model")
 
 
 class PoseDiscriminator(nn.Module):
@@ -267,22 +260,9 @@ def build_config(args, dims_used) -> dict:
 def train(args, argv: list[str]) -> None:
     if args.run_dir is None:
         raise SystemExit("error: training needs --run-dir (or --export with --from)")
+    args, resume = begin_run(args, explicit_args(argv), RESUME_OVERRIDABLE, load_checkpoint)
     run_dir = args.run_dir
-    run_dir.mkdir(parents=True, exist_ok=True)
     ckpt_path = run_dir / CHECKPOINT
-    resume = None
-    if args.resume:
-        if not ckpt_path.is_file():
-            raise SystemExit(f"error: --resume but {ckpt_path} does not exist")
-        resume = load_checkpoint(ckpt_path)
-        saved = dict(resume["args"])
-        given = explicit_args(argv)
-        for k in RESUME_OVERRIDABLE + ("device",):
-            if k in given or k == "device":
-                saved[k] = getattr(args, k)
-        args = argparse.Namespace(**{**vars(args), **saved, "resume": True, "run_dir": run_dir})
-    elif ckpt_path.exists():
-        raise SystemExit(f"error: {ckpt_path} exists: --resume it or choose another --run-dir")
     if args.future < 2 or args.pose_window > args.future or args.label_window > args.future:
         raise SystemExit("error: --future must be >= 2 and at least --pose-window and --label-window frames")
     torch.set_num_threads(args.threads)

@@ -4,7 +4,7 @@
 //! meaningless; these tests check shapes, conventions and plumbing.
 mod common;
 
-use common::{data_dir, fixture_model, repo, scratch, walk_seed};
+use common::{data_dir, fixture_model, listing, repo, scratch, walk_seed};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -35,15 +35,6 @@ fn predict_ok(args: &[&dyn AsRef<std::ffi::OsStr>]) -> (String, String) {
     let (code, stdout, stderr) = predict(args);
     assert_eq!(code, 0, "motion-cli predict failed: {stderr}");
     (stdout, stderr)
-}
-
-fn files_in(dir: &Path) -> Vec<String> {
-    let mut names: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    names.sort();
-    names
 }
 
 #[test]
@@ -87,7 +78,7 @@ fn bvh_seed_gives_seed_plus_prediction_that_moves() {
     assert_eq!(report["seed_frames"], 10);
     assert_eq!(report["predicted_frames"], 100);
     assert_eq!(report["action"], "walking");
-    assert_eq!(files_in(&dir), ["pred.bvh"], "no temporary files left");
+    assert_eq!(listing(&dir), ["pred.bvh"], "no temporary files left");
 
     let pred = read_bvh(&out).unwrap();
     let seed = read_bvh(walk_seed()).unwrap();
@@ -129,7 +120,7 @@ fn samples_prediction_only_and_formats() {
         &bvh,
         &"--quiet",
     ]);
-    assert_eq!(files_in(&dir), ["walk_0.bvh", "walk_1.bvh", "walk_2.bvh"]);
+    assert_eq!(listing(&dir), ["walk_0.bvh", "walk_1.bvh", "walk_2.bvh"]);
     let a = read_bvh(dir.join("walk_0.bvh")).unwrap();
     let b = read_bvh(dir.join("walk_1.bvh")).unwrap();
     assert_eq!(a.frames.nrows(), 20);
@@ -251,7 +242,7 @@ fn batch_mode_keeps_going_past_a_bad_file() {
         &"--json",
     ]);
     assert_eq!(code, 2, "{stderr}");
-    assert_eq!(files_in(&outs), ["a.bvh", "b.bvh"]);
+    assert_eq!(listing(&outs), ["a.bvh", "b.bvh"]);
     let report: serde_json::Value = serde_json::from_str(&stdout).unwrap();
     assert_eq!(report["succeeded"], 2);
     assert_eq!(report["failed"], 1);

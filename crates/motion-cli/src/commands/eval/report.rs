@@ -30,6 +30,29 @@ fn cells(values: &Value) -> String {
         .unwrap_or_default()
 }
 
+/// The NDMS 0.4 s bins of model and baseline, then paper 003's "Ours" row for `action` (Table 2;
+/// `average` for the mean over 15 actions) followed by `note`.
+fn ndms_bins(out: &mut String, model: &Value, baseline: &Value, action: &str, note: &str) {
+    out.push_str(&format!(
+        "  NDMS 0.4 s bins   model    {}\n                    zero-vel {}\n",
+        cells(model),
+        cells(baseline)
+    ));
+    for r in published::ndms_rows(action) {
+        if r.method.starts_with("Ours") {
+            let bins: Vec<String> = r
+                .bins
+                .iter()
+                .map(|b| b.map_or("-".into(), |v| format!("{v:.3}")))
+                .collect();
+            out.push_str(&format!(
+                "                    paper 003 {}{note}\n",
+                bins.join(" ")
+            ));
+        }
+    }
+}
+
 /// `VGRU-d 0.887  GRU-d 0.931` for the values that exist.
 fn published_pairs(pairs: &[(&str, Option<f64>)]) -> String {
     pairs
@@ -171,27 +194,7 @@ fn action_block(out: &mut String, a: &Value) {
         &z["ndms"]["mean"],
         "",
     );
-    out.push_str(&format!(
-        "  NDMS 0.4 s bins   model    {}\n",
-        cells(&m["ndms"]["bins"])
-    ));
-    out.push_str(&format!(
-        "                    zero-vel {}\n",
-        cells(&z["ndms"]["bins"])
-    ));
-    for r in published::ndms_rows(action) {
-        if r.method.starts_with("Ours") {
-            let bins: Vec<String> = r
-                .bins
-                .iter()
-                .map(|b| b.map_or("-".into(), |v| format!("{v:.3}")))
-                .collect();
-            out.push_str(&format!(
-                "                    paper 003 {}\n",
-                bins.join(" ")
-            ));
-        }
-    }
+    ndms_bins(out, &m["ndms"]["bins"], &z["ndms"]["bins"], action, "");
     if m.get("apd").is_some() {
         row(out, "APD (mm)", &m["apd"], &Value::Null, "");
     }
@@ -262,24 +265,13 @@ pub fn table(report: &Value, plausibility: &[String]) -> String {
             "",
         );
     }
-    out.push_str(&format!(
-        "  NDMS 0.4 s bins   model    {}\n                    zero-vel {}\n",
-        cells(&means["model"]["ndms_bins"]),
-        cells(&means["zero_velocity"]["ndms_bins"])
-    ));
-    for r in published::ndms_rows("average") {
-        if r.method.starts_with("Ours") {
-            let bins: Vec<String> = r
-                .bins
-                .iter()
-                .map(|b| b.map_or("-".into(), |v| format!("{v:.3}")))
-                .collect();
-            out.push_str(&format!(
-                "                    paper 003 {} (average of 15 actions)\n",
-                bins.join(" ")
-            ));
-        }
-    }
+    ndms_bins(
+        &mut out,
+        &means["model"]["ndms_bins"],
+        &means["zero_velocity"]["ndms_bins"],
+        "average",
+        " (average of 15 actions)",
+    );
     if means["model"]["apd"].is_number() {
         let paper: Vec<String> = published::P003_TABLE5_APD_H36M
             .iter()
