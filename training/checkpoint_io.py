@@ -17,6 +17,25 @@ CHECKPOINT = "last.pt"
 BEST = "best.pt"
 
 
+def add_run_arguments(p: argparse.ArgumentParser, log_every: int) -> None:
+    """The "run" and "export" argument groups shared by the staged trainers (``train_dae``, ``train_intention``):
+    device, threads, logging, validation and checkpoint intervals, ``--resume``, ``--data-dir``; ``--export OUT
+    --from CKPT --dtype``."""
+    g = p.add_argument_group("run")
+    g.add_argument("--device", default="cpu", help="cpu or cuda")
+    g.add_argument("--threads", type=int, default=1)
+    g.add_argument("--log-every", type=int, default=log_every)
+    g.add_argument("--val-every", type=int, default=250)
+    g.add_argument("--val-per-action", type=int, default=4)
+    g.add_argument("--checkpoint-every", type=int, default=100)
+    g.add_argument("--resume", action="store_true", help="continue the run in --run-dir from last.pt")
+    g.add_argument("--data-dir", type=Path, default=None)
+    g = p.add_argument_group("export")
+    g.add_argument("--export", type=Path, metavar="OUT", help="write a weights file from --from and exit")
+    g.add_argument("--from", dest="from_", type=Path, metavar="CKPT")
+    g.add_argument("--dtype", default="float32", choices=["float32", "float16"])
+
+
 def atomic_save(obj, path: Path) -> None:
     """torch.save to a temp file in the same directory, then rename (never a half-written checkpoint)."""
     path = Path(path)

@@ -54,7 +54,7 @@ import torch
 from . import data as h36m
 from .export import save_weights
 from .models import DAELSTM, H36M_ACTIONS, make_config, parameter_count
-from .checkpoint_io import BEST, CHECKPOINT, atomic_save, begin_run, read_checkpoint
+from .checkpoint_io import BEST, CHECKPOINT, add_run_arguments, atomic_save, begin_run, read_checkpoint
 from .train import RESUME_OVERRIDABLE, Logger, Validator, explicit_args
 
 CHECKPOINT_KEYS = ("stage", "config", "args", "model", "optimizer", "iteration", "numpy_rng", "torch_rng")
@@ -109,19 +109,7 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--init-dae", type=Path, metavar="CKPT", help="finetune: the dae stage's checkpoint")
     g.add_argument("--init-lstm", type=Path, metavar="CKPT", help="finetune: the lstm stage's checkpoint")
     g.add_argument("--seed", type=int, default=1)
-    g = p.add_argument_group("run")
-    g.add_argument("--device", default="cpu", help="cpu or cuda")
-    g.add_argument("--threads", type=int, default=1)
-    g.add_argument("--log-every", type=int, default=50)
-    g.add_argument("--val-every", type=int, default=250)
-    g.add_argument("--val-per-action", type=int, default=4)
-    g.add_argument("--checkpoint-every", type=int, default=100)
-    g.add_argument("--resume", action="store_true", help="continue the run in --run-dir from last.pt")
-    g.add_argument("--data-dir", type=Path, default=None)
-    g = p.add_argument_group("export")
-    g.add_argument("--export", type=Path, metavar="OUT", help="write a weights file from --from and exit")
-    g.add_argument("--from", dest="from_", type=Path, metavar="CKPT")
-    g.add_argument("--dtype", default="float32", choices=["float32", "float16"])
+    add_run_arguments(p, log_every=50)
     return p
 
 

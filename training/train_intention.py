@@ -59,7 +59,7 @@ from . import intention_labels
 from .export import save_weights
 from .layers import MLP
 from .models import IntentionModel, joint_groups, make_config, parameter_count
-from .checkpoint_io import BEST, CHECKPOINT, atomic_save, begin_run, read_checkpoint
+from .checkpoint_io import BEST, CHECKPOINT, add_run_arguments, atomic_save, begin_run, read_checkpoint
 from .train import RESUME_OVERRIDABLE, Logger, Validator, explicit_args
 
 CHECKPOINT_KEYS = ("config", "args", "model", "d_pose", "d_label", "opt_g", "opt_f", "opt_dp", "opt_dl",
@@ -104,19 +104,7 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--long-frames", type=int, default=40, help="frames with gradient after the burn-in")
     g.add_argument("--clip", type=float, default=5.0, help="gradient-norm clipping")
     g.add_argument("--seed", type=int, default=1)
-    g = p.add_argument_group("run")
-    g.add_argument("--device", default="cpu", help="cpu or cuda")
-    g.add_argument("--threads", type=int, default=1)
-    g.add_argument("--log-every", type=int, default=25)
-    g.add_argument("--val-every", type=int, default=250)
-    g.add_argument("--val-per-action", type=int, default=4)
-    g.add_argument("--checkpoint-every", type=int, default=100)
-    g.add_argument("--resume", action="store_true", help="continue the run in --run-dir from last.pt")
-    g.add_argument("--data-dir", type=Path, default=None)
-    g = p.add_argument_group("export")
-    g.add_argument("--export", type=Path, metavar="OUT", help="write a weights file from --from and exit")
-    g.add_argument("--from", dest="from_", type=Path, metavar="CKPT")
-    g.add_argument("--dtype", default="float32", choices=["float32", "float16"])
+    add_run_arguments(p, log_every=25)
     return p
 
 
