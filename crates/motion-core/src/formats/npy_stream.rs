@@ -47,7 +47,7 @@ impl NpyStream {
         let expected = shape
             .iter()
             .try_fold(1usize, |n, &d| n.checked_mul(d))
-            .filter(|&n| n <= 1 << 60)
+            .filter(|&n| n as u64 <= 1u64 << 60)
             .ok_or_else(|| FormatError::Invalid {
                 path: destination.to_path_buf(),
                 problem: format!("the shape {shape:?} holds too many values for one file"),
