@@ -91,6 +91,10 @@ pub struct Args {
     /// a rayon pool thread, whose queue allocates now and then).
     #[arg(long)]
     pub row_split: bool,
+    /// Cut each batch into this many shards, one per thread (default: `BatchGenerator::new`'s
+    /// rule for the selected SIMD path; 1 keeps a batch in one piece).
+    #[arg(long, value_name = "N")]
+    pub shards: Option<usize>,
     /// SIMD paths to time, comma-separated (avx512, avx2, neon, portable; default: the one
     /// selected, i.e. $MOTION_SIMD or the best the CPU has). The model is loaded once per path,
     /// so each path also gets its own weight layout. A path the CPU lacks is refused.
@@ -119,6 +123,7 @@ struct Measurement {
     arch: &'static str,
     hidden: usize,
     batch: usize,
+    shards: usize,
     steps: usize,
     median_us: f64,
     mean_us: f64,
@@ -139,6 +144,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     if args.batch.is_empty() || args.batch.contains(&0) {
         return Err(UsageError("--batch needs sizes of at least 1, e.g. 1,16,256".into()).into());
+    }
+    if args.shards == Some(0) {
+        return Err(UsageError("--shards must be at least 1".into()).into());
     }
     if args.hidden == 0 {
         return Err(UsageError("--hidden must be at least 1".into()).into());
@@ -168,6 +176,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                     args.steps,
                     args.with_plan,
                     args.row_split,
+                    args.shards,
                 )?);
             }
         }
@@ -210,9 +219,13 @@ fn seeded(
     model: &Arc<MotionModel>,
     batch: usize,
     plan_horizon: usize,
+    shards: Option<usize>,
 ) -> anyhow::Result<BatchGenerator> {
     let cfg = model.config();
-    let mut generator = BatchGenerator::new(Arc::clone(model), batch);
+    let mut generator = match shards {
+        Some(n) => BatchGenerator::with_shards(Arc::clone(model), batch, n),
+        None => BatchGenerator::new(Arc::clone(model), batch),
+    };
     generator.set_plan_horizon(plan_horizon.max(1))?;
     let seeds = Array3::from_shape_fn((batch, SEED_FRAMES, cfg.frame_dims), |(b, t, d)| {
         0.1 * ((b * 7 + t * 3 + d) as f32 * 0.37).sin()
@@ -235,6 +248,7 @@ fn measure(
     steps: usize,
     with_plan: bool,
     row_split: bool,
+    shards: Option<usize>,
 ) -> anyhow::Result<Measurement> {
     let cfg = model.config();
     // Within-plan segments: the plan computed at seeding covers seed + horizon steps; re-seed
@@ -246,9 +260,11 @@ fn measure(
         horizon - WARM_UP_STEPS - 1
     };
     let mut times = Vec::with_capacity(steps);
+    let mut shard_count = 1;
     while times.len() < steps {
-        let mut generator = seeded(model, batch, horizon)?;
+        let mut generator = seeded(model, batch, horizon, shards)?;
         generator.set_row_split(row_split);
+        shard_count = generator.shards();
         for _ in 0..WARM_UP_STEPS {
             std::hint::black_box(generator.step()?[[0, 0]]);
         }
@@ -274,6 +290,7 @@ fn measure(
         arch: cfg.architecture.name(),
         hidden: cfg.hidden,
         batch,
+        shards: shard_count,
         steps,
         median_us,
         mean_us,
@@ -545,6 +562,7 @@ fn json_report(results: &[Measurement], peak: Option<f64>) -> String {
                 "arch": m.arch,
                 "hidden": m.hidden,
                 "batch": m.batch,
+                "shards": m.shards,
                 "steps": m.steps,
                 "us_per_step": m.median_us,
                 "mean_us_per_step": m.mean_us,
@@ -559,11 +577,12 @@ fn json_report(results: &[Measurement], peak: Option<f64>) -> String {
 
 fn text_report(results: &[Measurement], peak: Option<f64>) -> String {
     let mut s = format!(
-        "{:<8} {:<8} {:>6} {:>6} {:>6} {:>12} {:>12} {:>10} {:>10} {:>16}\n",
+        "{:<8} {:<8} {:>6} {:>6} {:>6} {:>6} {:>12} {:>12} {:>10} {:>10} {:>16}\n",
         "simd",
         "arch",
         "hidden",
         "batch",
+        "shards",
         "steps",
         "µs/step",
         "mean µs",
@@ -573,11 +592,12 @@ fn text_report(results: &[Measurement], peak: Option<f64>) -> String {
     );
     for m in results {
         s.push_str(&format!(
-            "{:<8} {:<8} {:>6} {:>6} {:>6} {:>12.1} {:>12.1} {:>10.1} {:>10.1} {:>16.0}\n",
+            "{:<8} {:<8} {:>6} {:>6} {:>6} {:>6} {:>12.1} {:>12.1} {:>10.1} {:>10.1} {:>16.0}\n",
             m.simd.name(),
             m.arch,
             m.hidden,
             m.batch,
+            m.shards,
             m.steps,
             m.median_us,
             m.mean_us,

@@ -13,7 +13,7 @@
 //! own recurrent state and buffers: a step is then one fork-join for the whole step instead of
 //! one per product and gate update, and every thread runs its rows' products on its own
 //! ([`crate::nn::parallel::serial`]). Rows never interact, so results do not depend on the split.
-//! Small batches (below [`SHARD_MIN_ROWS`] rows per thread) stay in one shard: they are bound by
+//! Small batches (below twice [`SHARD_MIN_ROWS`] rows) stay in one shard: they are bound by
 //! reading the weights, which every shard would read again.
 //!
 //! The fed-back frame is the model's normalized output itself (as in `training/models.py`), not
@@ -30,9 +30,14 @@ use crate::nn::parallel::pool::prelude::*;
 use ndarray::{ArrayView2, ArrayView3};
 use std::sync::Arc;
 
-/// Fewest rows per shard: batches smaller than twice this run as one shard (measured: at batch
-/// 16 and 32 a step reads the weights more than it computes, and a second shard reads them again).
-pub const SHARD_MIN_ROWS: usize = 48;
+/// Fewest rows per shard: batches smaller than twice this run as one shard. Measured on a 2-core
+/// AMD EPYC (`motion-cli bench --shards 1|2`, alternating runs, every SIMD path, the shipped
+/// VGRU-d and random GRU-d 2x512 / VGRU-d 512 with f16 weights): at batch 16 a step is
+/// compute-bound (the AVX2 row kernel runs at about 90 % of one core's FMA peak) and two shards
+/// of 8 rows take 0.53-0.64x the time of one (GRU-d, AVX2: 885 → 512 µs); at batch 8 two shards
+/// win on the portable path and tie or lose on AVX2 and AVX-512, where the second shard's
+/// reading of the weights again costs as much as it saves.
+pub const SHARD_MIN_ROWS: usize = 8;
 /// Smallest model whose steps run on a pool thread: below, no product is large enough to split.
 const POOL_STEP_MIN_PARAMETERS: usize = 1 << 19;
 

@@ -19,7 +19,7 @@
 //!   product is big enough to pay for the fork.
 //!
 //! For a given machine and path every result is deterministic.
-use super::packed::{PackedMatrix, RowDtype, Rows, Wide};
+use super::packed::{PackedMatrix, RowDtype, Wide};
 use super::sgemm_panels;
 use super::simd::SimdPath;
 
@@ -149,7 +149,7 @@ impl MatMul {
                 // SAFETY: as above (NEON).
                 unsafe { super::rows_neon::product(self, x, w.rows(), y, accumulate) };
             }
-            _ => rows_portable::<false>(self, x, w, y, accumulate),
+            _ => super::rows_portable::product(self, x, w, y, accumulate),
         }
     }
 
@@ -361,216 +361,6 @@ impl MatMul {
     }
 }
 
-/// The row-kernel product in portable code (`FMA` picks fused multiply-adds, only worth it
-/// where the target has them): [`ROW_GROUP`] weight rows at a time against every batch row, so
-/// each weight comes from memory once per product whatever the batch. 16-bit rows are widened
-/// once per group into a stack buffer (a branch-free conversion the compiler vectorizes).
-///
-/// Without AVX-512 a 16-bit matrix also holds an f32 copy of its rows for the large-batch GEMM
-/// (see [`super::packed`]); the portable kernel then reads that copy, with no conversion at all.
-#[inline(always)]
-fn rows_portable<const FMA: bool>(
-    mm: &MatMul,
-    x: &[f32],
-    w: &PackedMatrix,
-    y: &mut [f32],
-    accumulate: bool,
-) {
-    if let Some(f32_rows) = w.f32_rows() {
-        rows_grouped::<FMA>(mm, x, f32_rows, y, accumulate);
-        return;
-    }
-    match w.rows() {
-        Rows::F32(w) => rows_grouped::<FMA>(mm, x, w, y, accumulate),
-        Rows::F16(w) => rows_widened::<FMA>(mm, x, w, f16_to_f32, y, accumulate),
-        // bf16 is the upper half of an f32.
-        Rows::Bf16(w) => rows_widened::<FMA>(
-            mm,
-            x,
-            w,
-            |v| f32::from_bits(u32::from(v) << 16),
-            y,
-            accumulate,
-        ),
-    }
-}
-
-/// f32 rows [`ROW_GROUP`] at a time against every batch row (the group stays in L1 while the
-/// batch rows pass over it).
-#[inline(always)]
-fn rows_grouped<const FMA: bool>(
-    mm: &MatMul,
-    x: &[f32],
-    w: &[f32],
-    y: &mut [f32],
-    accumulate: bool,
-) {
-    let k = mm.inputs;
-    let mut o = 0;
-    while o < mm.outputs {
-        let n = ROW_GROUP.min(mm.outputs - o);
-        group_product::<FMA>(mm, x, &w[o * k..(o + n) * k], o, y, accumulate);
-        o += n;
-    }
-}
-
-/// Every batch row against the f32 weight rows `group` (rows `o..o + group.len() / inputs`).
-#[inline(always)]
-fn group_product<const FMA: bool>(
-    mm: &MatMul,
-    x: &[f32],
-    group: &[f32],
-    o: usize,
-    y: &mut [f32],
-    accumulate: bool,
-) {
-    let (k, n) = (mm.inputs, group.len() / mm.inputs);
-    for b in 0..mm.batch {
-        let xb = &x[b * mm.x_stride..b * mm.x_stride + k];
-        let yb = &mut y[b * mm.y_stride + o..b * mm.y_stride + o + n];
-        gemv_kernel::<f32, FMA>(xb, group, |v| v, yb, accumulate);
-    }
-}
-
-/// Weight rows taken together by the portable kernels.
-const ROW_GROUP: usize = 4;
-/// Widest row the portable 16-bit kernel widens into its stack buffer (`ROW_GROUP` x this f32 =
-/// 32 KiB); wider rows are widened per batch row instead.
-const WIDEN_MAX_INPUTS: usize = 2048;
-
-/// f16 bits to f32, exact, branch-free: the exponent and mantissa shifted into f32 position and
-/// scaled by 2^112 (right for normal and subnormal values alike), infinities and NaNs patched.
-#[inline(always)]
-fn f16_to_f32(h: u16) -> f32 {
-    let h = u32::from(h);
-    let sign = (h & 0x8000) << 16;
-    let magnitude = h & 0x7fff;
-    let scaled = (f32::from_bits(magnitude << 13) * f32::from_bits(0x7780_0000)).to_bits();
-    let bits = if magnitude >= 0x7c00 {
-        (magnitude << 13) | 0x7f80_0000
-    } else {
-        scaled
-    };
-    f32::from_bits(bits | sign)
-}
-
-/// The portable product over 16-bit rows widened by `widen` (see [`rows_portable`]).
-#[inline(always)]
-fn rows_widened<const FMA: bool>(
-    mm: &MatMul,
-    x: &[f32],
-    w: &[u16],
-    widen: impl Fn(u16) -> f32 + Copy,
-    y: &mut [f32],
-    accumulate: bool,
-) {
-    let k = mm.inputs;
-    if k > WIDEN_MAX_INPUTS {
-        for b in 0..mm.batch {
-            let xb = &x[b * mm.x_stride..b * mm.x_stride + k];
-            let yb = &mut y[b * mm.y_stride..b * mm.y_stride + mm.outputs];
-            gemv_kernel::<u16, FMA>(xb, w, widen, yb, accumulate);
-        }
-        return;
-    }
-    let mut buf = [0.0f32; ROW_GROUP * WIDEN_MAX_INPUTS];
-    let mut o = 0;
-    while o < mm.outputs {
-        let n = ROW_GROUP.min(mm.outputs - o);
-        let group = &mut buf[..n * k];
-        for (dst, src) in group.iter_mut().zip(&w[o * k..(o + n) * k]) {
-            *dst = widen(*src);
-        }
-        group_product::<FMA>(mm, x, group, o, y, accumulate);
-        o += n;
-    }
-}
-
-/// Lanes per accumulator row: 16 f32 = two AVX registers, enough independent sums to hide the
-/// add latency.
-const LANES: usize = 16;
-
-#[inline(always)]
-fn madd<const FMA: bool>(a: f32, b: f32, acc: f32) -> f32 {
-    if FMA {
-        a.mul_add(b, acc)
-    } else {
-        acc + a * b
-    }
-}
-
-/// Pairwise sum of the lanes (fixed order, so results are deterministic).
-#[inline(always)]
-fn reduce(mut acc: [f32; LANES]) -> f32 {
-    let mut width = LANES / 2;
-    while width > 0 {
-        for k in 0..width {
-            acc[k] += acc[k + width];
-        }
-        width /= 2;
-    }
-    acc[0]
-}
-
-/// `y (+)= W x` for one input row `x [inputs]` and `W [y.len(), inputs]` stored as `E`, widened
-/// by `widen`. Four rows at a time, so each load of `x` serves four dot products.
-#[inline(always)]
-fn gemv_kernel<E: Copy, const FMA: bool>(
-    x: &[f32],
-    w: &[E],
-    widen: impl Fn(E) -> f32 + Copy,
-    y: &mut [f32],
-    accumulate: bool,
-) {
-    let (rows, inputs) = (y.len(), x.len());
-    let w = &w[..rows * inputs];
-    let full = inputs / LANES * LANES;
-    let (x_body, x_tail) = x.split_at(full);
-    let tail_dot = |row: &[E], mut d: f32| {
-        for (a, b) in row[full..].iter().zip(x_tail) {
-            d = madd::<FMA>(widen(*a), *b, d);
-        }
-        d
-    };
-    let mut o = 0;
-    while o + 4 <= rows {
-        let r = |k: usize| &w[(o + k) * inputs..(o + k + 1) * inputs];
-        let (r0, r1, r2, r3) = (r(0), r(1), r(2), r(3));
-        let mut acc = [[0.0f32; LANES]; 4];
-        for ((((xc, c0), c1), c2), c3) in x_body
-            .chunks_exact(LANES)
-            .zip(r0.chunks_exact(LANES))
-            .zip(r1.chunks_exact(LANES))
-            .zip(r2.chunks_exact(LANES))
-            .zip(r3.chunks_exact(LANES))
-        {
-            for k in 0..LANES {
-                acc[0][k] = madd::<FMA>(widen(c0[k]), xc[k], acc[0][k]);
-                acc[1][k] = madd::<FMA>(widen(c1[k]), xc[k], acc[1][k]);
-                acc[2][k] = madd::<FMA>(widen(c2[k]), xc[k], acc[2][k]);
-                acc[3][k] = madd::<FMA>(widen(c3[k]), xc[k], acc[3][k]);
-            }
-        }
-        for (j, row) in [r0, r1, r2, r3].iter().enumerate() {
-            let d = tail_dot(row, reduce(acc[j]));
-            y[o + j] = if accumulate { y[o + j] + d } else { d };
-        }
-        o += 4;
-    }
-    while o < rows {
-        let row = &w[o * inputs..(o + 1) * inputs];
-        let mut acc = [0.0f32; LANES];
-        for (xc, c) in x_body.chunks_exact(LANES).zip(row.chunks_exact(LANES)) {
-            for k in 0..LANES {
-                acc[k] = madd::<FMA>(widen(c[k]), xc[k], acc[k]);
-            }
-        }
-        let d = tail_dot(row, reduce(acc));
-        y[o] = if accumulate { y[o] + d } else { d };
-        o += 1;
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -708,7 +498,7 @@ mod tests {
     fn portable_f16_widening_is_exact_for_every_bit_pattern() {
         for h in 0..=u16::MAX {
             let want = half::f16::from_bits(h).to_f32();
-            let got = f16_to_f32(h);
+            let got = super::super::rows_portable::f16_to_f32(h);
             if want.is_nan() {
                 assert!(got.is_nan(), "{h:#06x}");
                 assert_eq!(got.to_bits() & 0x8000_0000, want.to_bits() & 0x8000_0000);
@@ -796,17 +586,44 @@ mod tests {
     #[test]
     fn a_row_sums_the_same_in_any_batch_or_tile() {
         // The row kernels give every (batch row, output) the same arithmetic, so a character's
-        // step does not depend on the batch it runs in or the tile its output falls in.
+        // step does not depend on the batch it runs in or the tile its output falls in (13
+        // outputs: 8-, 4- and 1-row tiles; 5 batch rows: pairs and a single).
         let (inputs, outputs) = (216, 13);
         let values = data(outputs * inputs, 9);
-        for w in matrices(&values, outputs, inputs) {
-            let x = data(5 * inputs, 10);
-            let mut all = vec![0.0; 5 * outputs];
-            MatMul::dense(5, inputs, outputs).run_rows(&x, &w, &mut all, false);
-            for b in 0..5 {
-                let mut one = vec![0.0; outputs];
-                MatMul::dense(1, inputs, outputs).run_rows(&x[b * inputs..], &w, &mut one, false);
-                assert_eq!(one, all[b * outputs..(b + 1) * outputs]);
+        for path in SimdPath::available() {
+            for w in matrices(&values, outputs, inputs) {
+                let x = data(5 * inputs, 10);
+                let mut all = vec![0.0; 5 * outputs];
+                MatMul::dense(5, inputs, outputs)
+                    .run_rows_on(path, &x, &w, &mut all, false)
+                    .unwrap();
+                for b in 0..5 {
+                    let mut one = vec![0.0; outputs];
+                    MatMul::dense(1, inputs, outputs)
+                        .run_rows_on(path, &x[b * inputs..], &w, &mut one, false)
+                        .unwrap();
+                    assert_eq!(one, all[b * outputs..(b + 1) * outputs], "{path}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn rows_wider_than_the_widening_buffer_match_f64_reference() {
+        // The portable 16-bit kernel widens up to 8,192 inputs at a time; wider rows take the
+        // one-row fallback.
+        let (inputs, outputs, batch) = (8_203, 3, 2);
+        let values = data(outputs * inputs, 11);
+        let x = data(batch * inputs, 12);
+        let init = data(batch * outputs, 13);
+        let mm = MatMul::dense(batch, inputs, outputs);
+        for path in SimdPath::available() {
+            for w in matrices(&values, outputs, inputs) {
+                for accumulate in [false, true] {
+                    let mut y = init.clone();
+                    mm.run_rows_on(path, &x, &w, &mut y, accumulate).unwrap();
+                    assert_product(&format!("rows {path}"), &mm, &x, &w, &init, &y, accumulate);
+                }
             }
         }
     }

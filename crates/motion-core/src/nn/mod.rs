@@ -21,8 +21,10 @@ mod rows_avx2;
 mod rows_avx512;
 #[cfg(target_arch = "aarch64")]
 mod rows_neon;
+mod rows_portable;
 pub mod sgemm_panels;
 pub mod simd;
+mod vec128;
 
 pub use body_gru::{BodyGruCell, BodyGruConfig};
 pub use gru::{GruCell, GruConfig, GruConvention, GruScratch};
