@@ -42,13 +42,14 @@ DTYPES = {"float32": torch.float32, "float16": torch.float16, "bfloat16": torch.
 
 
 def step_matrices(model) -> list[str]:
-    """State-dict names of the weight matrices one closed-loop step multiplies by (the VGRU-d plan
-    GRU runs once per plan block, not per step, and is left out as in the timings)."""
+    """State-dict names of the weight matrices one closed-loop step multiplies by (VGRU-d: with the
+    plan GRU's recurrent matrix, one plan step per body step; its input projection is once per
+    block)."""
     names = []
     for name, tensor in model.state_dict().items():
         if tensor.dim() != 2:
             continue
-        if name.startswith(("rnn.", "body.", "decoder.")):
+        if name.startswith(("rnn.", "body.", "decoder.")) or name == "plan.cell.weight_hh":
             names.append(name)
     return names
 
@@ -77,15 +78,21 @@ def median_step_us(step_fn, state: dict, steps: int) -> float:
     return statistics.median(times)
 
 
+def fed_back(state: dict, outputs) -> dict:
+    """The next step's inputs: ``state`` with the step's outputs in place (frame, history, state,
+    and the VGRU-d plan GRU's state)."""
+    nxt = dict(state, x=outputs[0], history=outputs[2], h=outputs[3])
+    if len(outputs) > 4:
+        nxt["plan_h"] = outputs[4]
+    return nxt
+
+
 def torch_runner(step: ClosedLoopStep, inputs: dict[str, torch.Tensor], threads: int):
     """A closure that times PyTorch eager (no_grad) with ``threads`` intra-op threads."""
 
     def one(state):
         with torch.no_grad():
-            y, _full, history, h = step(**state)
-        nxt = dict(state)
-        nxt.update(x=y, history=history, h=h)
-        return nxt
+            return fed_back(state, step(**state))
 
     def run(steps: int) -> float:
         torch.set_num_threads(threads)
@@ -100,10 +107,7 @@ def ort_runner(session: ort.InferenceSession, inputs: dict[str, np.ndarray]):
     """A closure that times ONNX Runtime, outputs fed back as numpy inputs."""
 
     def one(state):
-        y, _full, history, h = session.run(None, state)
-        nxt = dict(state)
-        nxt.update(x=y, history=history, h=h)
-        return nxt
+        return fed_back(state, session.run(None, state))
 
     def run(steps: int) -> float:
         one(inputs)
@@ -148,7 +152,7 @@ def parity(step: ClosedLoopStep, session: ort.InferenceSession, batch: int) -> f
             ref = step(**state)
         got = session.run(None, {k: v.numpy() for k, v in state.items()})
         worst = max(worst, max(float(np.abs(r.numpy() - g).max()) for r, g in zip(ref, got)))
-        state = dict(state, x=ref[0], history=ref[2], h=ref[3])
+        state = fed_back(state, ref)
     return worst
 
 

@@ -4,13 +4,16 @@ ONNX export and PyTorch eager timing.
 The step does the same work as one `BatchGenerator::step` of the Rust engine: derivative features
 of the current normalized frame (repeat-first history of the last 3 frames), the recurrent step
 (GRU-d: every layer; VGRU-d: the body GRU reading the guide ``p_t``), the decoder, the optional
-residual and un-normalization to full frames. The VGRU-d plan GRU runs once per plan block, not
-per step, so its output (the guide) is an input here, as in the Rust engine's timed step.
+residual and un-normalization to full frames. VGRU-d: the body reads a guide computed earlier
+(an input here), and the step also takes one step of the plan GRU, because the Rust engine
+computes the next plan block ahead, one plan step per body step (its constant input projection
+``plan_gi``, the action one-hot through ``W_ih``, is computed once per block, an input here too).
 
 Inputs:  ``x [B, O]`` (normalized frame), ``history [B, 3, O]`` (x_{t-1}, x_{t-2}, x_{t-3}),
-         ``h`` (GRU-d ``[L, B, H]``; VGRU-d ``[B, H]``), VGRU-d also ``guide [B, P]``.
+         ``h`` (GRU-d ``[L, B, H]``; VGRU-d ``[B, H]``), VGRU-d also ``guide [B, P]``,
+         ``plan_gi [B, 3P]`` and ``plan_h [B, P]``.
 Outputs: ``y [B, O]`` (normalized prediction, fed back as the next ``x``), ``full [B, F]``,
-         ``history' [B, 3, O]``, ``h'``.
+         ``history' [B, 3, O]``, ``h'``, VGRU-d also ``plan_h' [B, P]``.
 """
 
 from __future__ import annotations
@@ -56,7 +59,7 @@ class ClosedLoopStep(nn.Module):
         self.register_buffer("std_used", model.norm.std[model.dims_used].clone())
         self.register_buffer("dims_used", torch.tensor(model.dims_used, dtype=torch.long))
 
-    def forward(self, x, history, h, guide=None):
+    def forward(self, x, history, h, guide=None, plan_gi=None, plan_h=None):
         m = self.model
         features = _differences([x, history[:, 0], history[:, 1], history[:, 2]], 3)
         if self.is_vgru:
@@ -77,6 +80,8 @@ class ClosedLoopStep(nn.Module):
         # Full frame: dropped dims at their mean, used dims un-normalized.
         full = m.norm.mean.expand(x.shape[0], -1).index_copy(1, self.dims_used, y * self.std_used + self.mean_used)
         new_history = torch.cat([x.unsqueeze(1), history[:, :2]], dim=1)
+        if self.is_vgru:
+            return y, full, new_history, new_h, m.plan.cell.step(plan_gi, plan_h)
         return y, full, new_history, new_h
 
     def initial_inputs(self, batch: int, seed: int = 0) -> dict[str, torch.Tensor]:
@@ -89,6 +94,10 @@ class ClosedLoopStep(nn.Module):
         if self.is_vgru:
             inputs["h"] = torch.zeros(batch, hdim)
             inputs["guide"] = torch.tanh(torch.randn(batch, m.plan_size, generator=g))
+            onehot = torch.nn.functional.one_hot(torch.zeros(batch, dtype=torch.long), m.plan.num_actions)
+            with torch.no_grad():
+                inputs["plan_gi"] = m.plan.cell.input_gates(onehot.to(x.dtype)).contiguous()
+            inputs["plan_h"] = torch.tanh(torch.randn(batch, m.plan_size, generator=g))
         else:
             inputs["h"] = torch.zeros(len(m.rnn), batch, hdim)
         return inputs
@@ -98,10 +107,10 @@ def export_onnx(step: ClosedLoopStep, path: str, batch: int) -> None:
     """Export ``step`` with a dynamic batch axis to ``path`` (legacy TorchScript exporter)."""
     inputs = step.initial_inputs(batch)
     names = list(inputs)
-    batch_axis = {"x": 0, "history": 0, "h": 0 if step.is_vgru else 1, "guide": 0}
+    batch_axis = {"x": 0, "history": 0, "h": 0 if step.is_vgru else 1, "guide": 0, "plan_gi": 0, "plan_h": 0}
     dynamic = {name: {batch_axis[name]: "batch"} for name in names}
-    outputs = ["y", "full", "history_out", "h_out"]
-    dynamic.update({"y": {0: "batch"}, "full": {0: "batch"}, "history_out": {0: "batch"}})
+    outputs = ["y", "full", "history_out", "h_out"] + (["plan_h_out"] if step.is_vgru else [])
+    dynamic.update({"y": {0: "batch"}, "full": {0: "batch"}, "history_out": {0: "batch"}, "plan_h_out": {0: "batch"}})
     dynamic["h_out"] = {batch_axis["h"]: "batch"}
     with torch.no_grad():
         torch.onnx.export(
