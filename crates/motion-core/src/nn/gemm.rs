@@ -23,20 +23,7 @@ use super::packed::{PackedMatrix, RowDtype, Wide};
 use super::sgemm_panels;
 use super::simd::SimdPath;
 
-/// Operand layout of one product `Y[b, o] = beta * Y[b, o] + Σ_i X[b, i] * W[o, i]`.
-#[derive(Debug, Clone, Copy)]
-pub struct MatMul {
-    /// Rows of `X` and `Y`.
-    pub batch: usize,
-    /// Columns of `X` (= columns of `W`).
-    pub inputs: usize,
-    /// Columns of `Y` (= rows of `W`).
-    pub outputs: usize,
-    /// Distance between consecutive rows of `X`.
-    pub x_stride: usize,
-    /// Distance between consecutive rows of `Y`.
-    pub y_stride: usize,
-}
+pub use super::layout::MatMul;
 
 /// Largest batch the row kernels take for `w`; larger batches go to the GEMM.
 ///
@@ -69,26 +56,6 @@ const PARALLEL_MIN_WORK: usize = 1 << 21;
 const PARALLEL_MIN_ROWS: usize = 16;
 
 impl MatMul {
-    /// A product over contiguous rows (`x_stride = inputs`, `y_stride = outputs`).
-    pub fn dense(batch: usize, inputs: usize, outputs: usize) -> Self {
-        Self {
-            batch,
-            inputs,
-            outputs,
-            x_stride: inputs,
-            y_stride: outputs,
-        }
-    }
-
-    /// Same product with explicit row strides.
-    pub fn strided(self, x_stride: usize, y_stride: usize) -> Self {
-        Self {
-            x_stride,
-            y_stride,
-            ..self
-        }
-    }
-
     /// `Y = X Wᵀ` (`accumulate = false`) or `Y += X Wᵀ` (`accumulate = true`), by the path
     /// the batch size picks (see the module doc).
     ///

@@ -10,6 +10,7 @@ pub mod body_gru;
 pub mod gates;
 pub mod gemm;
 pub mod gru;
+mod layout;
 pub mod linear;
 pub mod lstm;
 pub mod mlp;

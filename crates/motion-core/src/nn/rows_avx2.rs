@@ -8,7 +8,7 @@
 //! loop, so every weight is read from cache once per product whatever the batch. A row's last
 //! `inputs % 8` elements are copied into a zeroed 8-element buffer and loaded from there, so no
 //! element outside a row is read.
-use super::gemm::MatMul;
+use super::layout::MatMul;
 use super::packed::Rows;
 use std::arch::x86_64::*;
 

@@ -8,7 +8,7 @@
 //! product whatever the batch (the inputs, at most 16 rows, stay in L1/L2). Ragged input widths
 //! use masked loads, so no element outside a row is read (prefetch hints may name lines past
 //! the matrix; they never fault).
-use super::gemm::MatMul;
+use super::layout::MatMul;
 use super::packed::Rows;
 use std::arch::x86_64::*;
 

@@ -6,7 +6,7 @@
 //! `asm!`, as Rust's f16 NEON intrinsics are not stable), a 16-bit shift (`ushll`) for bf16; both
 //! are exact. A row's last `inputs % 4` elements are copied into a zeroed buffer first, so no
 //! element outside a row is read.
-use super::gemm::MatMul;
+use super::layout::MatMul;
 use super::packed::Rows;
 use std::arch::aarch64::*;
 use std::arch::asm;

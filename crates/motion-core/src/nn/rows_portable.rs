@@ -17,7 +17,7 @@
 //! conversion the compiler vectorizes) and tiled from there; without AVX-512 a 16-bit matrix also
 //! holds an f32 copy of its rows for the large-batch GEMM (see [`super::packed`]), which these
 //! kernels then read directly.
-use super::gemm::MatMul;
+use super::layout::MatMul;
 use super::packed::{PackedMatrix, Rows};
 use super::vec128::F4;
 
