@@ -83,7 +83,7 @@ pub struct BatchGenerator {
     shard_rows: usize,
     shards: Vec<Shard>,
     /// Whether a small-batch step of this model could split its products by output rows
-    /// (several threads, AVX-512 row kernels at this batch, a paper-size model).
+    /// (several threads, AVX-512 or AVX2 row kernels at this batch, a paper-size model).
     row_split_possible: bool,
     /// Run each (single-shard) step on a rayon pool thread, where the row kernels split their
     /// products over threads ([`set_row_split`](Self::set_row_split)).
@@ -223,7 +223,7 @@ impl BatchGenerator {
     /// Off by default because the step then runs on a pool thread: handing it there goes through
     /// rayon's injection queue, which allocates a queue block every 63 steps, and a real-time
     /// caller may prefer a step that touches no heap and no other thread. Returns whether the
-    /// split applies to this generator (several threads, AVX-512, batch and model size).
+    /// split applies to this generator (several threads, batch and model size).
     pub fn set_row_split(&mut self, enabled: bool) -> bool {
         self.pool_step = enabled && self.row_split_possible;
         self.pool_step

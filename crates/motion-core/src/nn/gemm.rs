@@ -8,12 +8,12 @@
 //!   once, and half-size when the file is half-size, is what matters. The kernels of the
 //!   selected [`super::simd::SimdPath`]: `rows_avx512` (AVX-512), `rows_avx2` (AVX2 + FMA +
 //!   F16C), `rows_neon` (aarch64), or the portable loop. No heap memory. With
-//!   AVX-512 and a matrix of at least 256 KiB, a product called from a rayon pool thread splits
+//!   AVX-512 or AVX2 and a matrix of at least 256 KiB, a product called from a rayon pool thread splits
 //!   its output rows over the pool (`rayon::join`, no allocation): one core streams weights from
 //!   L3 at about 25 GB/s on the 2-core Intel Xeon we measure on, two cores together at about
 //!   32-43 GB/s. Called from elsewhere it stays on the calling thread (see
 //!   [`crate::model::BatchGenerator::set_row_split`]).
-//! - **GEMM** (larger batches): with AVX-512, [`sgemm_panels::gemm_panels`] over the weights
+//! - **GEMM** (larger batches): with AVX-512 or AVX2, [`sgemm_panels::gemm_panels`] over the weights
 //!   packed into column panels at load; otherwise `matrixmultiply::sgemm` over the f32 rows (its
 //!   packing buffers are its own business), split over rayon threads by rows of `X` when the
 //!   product is big enough to pay for the fork.
@@ -99,7 +99,7 @@ impl MatMul {
             SimdPath::Avx512 => {
                 let parts = self.row_split_parts(w);
                 if parts > 1 {
-                    self.rows_avx512_split(x, w, y, accumulate, parts);
+                    self.rows_split(SimdPath::Avx512, x, w, y, accumulate, parts);
                 } else {
                     // SAFETY: the path is selected only on a CPU that has its features,
                     // `inputs > 0` and `check` asserted the slice lengths.
@@ -108,8 +108,13 @@ impl MatMul {
             }
             #[cfg(target_arch = "x86_64")]
             SimdPath::Avx2 => {
-                // SAFETY: as above (AVX2, FMA and F16C).
-                unsafe { super::rows_avx2::product(self, x, w.rows(), y, accumulate) };
+                let parts = self.row_split_parts(w);
+                if parts > 1 {
+                    self.rows_split(SimdPath::Avx2, x, w, y, accumulate, parts);
+                } else {
+                    // SAFETY: as above (AVX2, FMA and F16C).
+                    unsafe { super::rows_avx2::product(self, x, w.rows(), y, accumulate) };
+                }
             }
             #[cfg(target_arch = "aarch64")]
             SimdPath::Neon => {
@@ -168,8 +173,9 @@ impl MatMul {
     /// The row kernels over `parts` output ranges run by rayon (recursive halving; the caller's
     /// thread takes the first half of every split).
     #[cfg(target_arch = "x86_64")]
-    fn rows_avx512_split(
+    fn rows_split(
         &self,
+        path: SimdPath,
         x: &[f32],
         w: &PackedMatrix,
         y: &mut [f32],
@@ -183,7 +189,9 @@ impl MatMul {
         unsafe impl Send for Columns {}
         unsafe impl Sync for Columns {}
 
+        #[allow(clippy::too_many_arguments)]
         fn split(
+            path: SimdPath,
             mm: &MatMul,
             x: &[f32],
             w: &PackedMatrix,
@@ -193,17 +201,15 @@ impl MatMul {
             parts: usize,
         ) {
             if parts <= 1 {
-                // SAFETY: the caller checked the CPU and the layout; `outputs` ranges of
-                // different calls are disjoint, so no two threads write the same element.
+                // SAFETY: the caller checked that the CPU runs `path` and the layout; `outputs`
+                // ranges of different calls are disjoint, so no two threads write the same
+                // element.
                 unsafe {
-                    super::rows_avx512::product_outputs(
-                        mm,
-                        x.as_ptr(),
-                        w.rows(),
-                        y.0,
-                        accumulate,
-                        outputs,
-                    )
+                    let product_outputs = match path {
+                        SimdPath::Avx512 => super::rows_avx512::product_outputs,
+                        _ => super::rows_avx2::product_outputs,
+                    };
+                    product_outputs(mm, x.as_ptr(), w.rows(), y.0, accumulate, outputs)
                 };
                 return;
             }
@@ -212,11 +218,12 @@ impl MatMul {
             let at = (outputs.start + outputs.len() * left / parts).next_multiple_of(16);
             let at = at.min(outputs.end);
             super::parallel::pool::join(
-                || split(mm, x, w, y, accumulate, outputs.start..at, left),
-                || split(mm, x, w, y, accumulate, at..outputs.end, parts - left),
+                || split(path, mm, x, w, y, accumulate, outputs.start..at, left),
+                || split(path, mm, x, w, y, accumulate, at..outputs.end, parts - left),
             );
         }
         split(
+            path,
             self,
             x,
             w,

@@ -57,13 +57,47 @@ impl Elem for Bf16 {
 /// slices must be long enough for the layout (as `MatMul::run` asserts).
 #[target_feature(enable = "avx2,fma,f16c")]
 pub(crate) unsafe fn product(mm: &MatMul, x: &[f32], rows: &Rows, y: &mut [f32], accumulate: bool) {
-    let (x, y) = (x.as_ptr(), y.as_mut_ptr());
     // SAFETY: forwarded from the caller.
     unsafe {
+        product_outputs(
+            mm,
+            x.as_ptr(),
+            rows,
+            y.as_mut_ptr(),
+            accumulate,
+            0..mm.outputs,
+        )
+    }
+}
+
+/// [`product`] for the output columns `outputs` only (weight rows `outputs`, columns `outputs`
+/// of every row of `Y`): disjoint ranges may run on different threads at once.
+///
+/// # Safety
+/// As [`product`], with `x` and `y` pointing at slices long enough for the whole layout `mm`,
+/// `outputs` inside `0..mm.outputs`, and no other thread writing those columns of `Y`.
+#[target_feature(enable = "avx2,fma,f16c")]
+pub(crate) unsafe fn product_outputs(
+    mm: &MatMul,
+    x: *const f32,
+    rows: &Rows,
+    y: *mut f32,
+    accumulate: bool,
+    outputs: std::ops::Range<usize>,
+) {
+    let part = MatMul {
+        outputs: outputs.len(),
+        ..*mm
+    };
+    let (first, k) = (outputs.start, mm.inputs);
+    // SAFETY: forwarded from the caller; `drive` reads and writes only inside the layout `part`,
+    // which is the part of `mm` at weight row `first` and output column `first`.
+    unsafe {
+        let y = y.add(first);
         match rows {
-            Rows::F32(w) => drive::<F32>(mm, x, w.as_ptr(), y, accumulate),
-            Rows::F16(w) => drive::<F16>(mm, x, w.as_ptr(), y, accumulate),
-            Rows::Bf16(w) => drive::<Bf16>(mm, x, w.as_ptr(), y, accumulate),
+            Rows::F32(w) => drive::<F32>(&part, x, w.as_ptr().add(first * k), y, accumulate),
+            Rows::F16(w) => drive::<F16>(&part, x, w.as_ptr().add(first * k), y, accumulate),
+            Rows::Bf16(w) => drive::<Bf16>(&part, x, w.as_ptr().add(first * k), y, accumulate),
         }
     }
 }
