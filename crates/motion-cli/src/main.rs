@@ -5,6 +5,8 @@
 mod commands;
 mod model_source;
 mod plot;
+mod raster;
+mod usage;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;

@@ -7,7 +7,7 @@ use std::sync::Arc;
 
 use motion_core::model::{builtin, ActionClassifier, MotionModel};
 
-use crate::commands::UsageError;
+use crate::usage::UsageError;
 
 pub use motion_core::model::builtin::DEFAULT_WEIGHTS_NAME;
 

@@ -22,10 +22,8 @@ use std::path::Path;
 
 use anyhow::Context;
 
-use serde_json::Value;
-
-use crate::commands::render::raster::{Anchor, Canvas, Rgb};
-use crate::commands::UsageError;
+use crate::raster::{Anchor, Canvas, Rgb};
+use crate::usage::UsageError;
 use motion_core::formats::atomic::write_bytes_atomically;
 
 /// One line of a chart.
@@ -461,23 +459,22 @@ const MS_PER_FRAME: f64 = 40.0;
 /// Length of one NDMS bin (10 words at 25 Hz).
 const NDMS_BIN_MS: f64 = 400.0;
 
-/// A JSON array of per-frame values at 25 Hz as `(ms, value)`: frame `i` (0-based) ends at
-/// `(i + 1) * 40` ms.
-pub fn per_frame_points(values: &Value) -> Vec<(f64, f64)> {
+/// Per-frame values at 25 Hz as `(ms, value)`: frame `i` (0-based) ends at `(i + 1) * 40` ms
+/// (non-finite values, `null` in the JSON, as NaN: a gap).
+pub fn per_frame_points(values: &[f64]) -> Vec<(f64, f64)> {
     numbers(values)
         .enumerate()
         .map(|(i, v)| ((i + 1) as f64 * MS_PER_FRAME, v))
         .collect()
 }
 
-/// A JSON object of window values labelled `"A-B s"` as `(ms at the window centre, value)`.
-pub fn window_points(windows: &Value) -> Vec<(f64, f64)> {
-    let Some(windows) = windows.as_object() else {
-        return Vec::new();
-    };
+/// Window values labelled `"A-B s"` as `(ms at the window centre, value)`, sorted by time
+/// (non-finite values, `null` in the JSON, are left out).
+pub fn window_points<'a>(windows: impl IntoIterator<Item = (&'a str, f64)>) -> Vec<(f64, f64)> {
     let mut points: Vec<(f64, f64)> = windows
-        .iter()
-        .filter_map(|(label, value)| Some((window_centre_ms(label)?, value.as_f64()?)))
+        .into_iter()
+        .filter(|(_, value)| value.is_finite())
+        .filter_map(|(label, value)| Some((window_centre_ms(label)?, value)))
         .collect();
     points.sort_by(|a, b| a.0.total_cmp(&b.0));
     points
@@ -491,20 +488,18 @@ fn window_centre_ms(label: &str) -> Option<f64> {
     Some((start + end) * 500.0)
 }
 
-/// A JSON array of NDMS 0.4 s bin means as `(ms at the bin's end, value)`.
-pub fn bin_points(bins: &Value) -> Vec<(f64, f64)> {
+/// NDMS 0.4 s bin means as `(ms at the bin's end, value)`.
+pub fn bin_points(bins: &[f64]) -> Vec<(f64, f64)> {
     numbers(bins)
         .enumerate()
         .map(|(i, v)| ((i + 1) as f64 * NDMS_BIN_MS, v))
         .collect()
 }
 
-fn numbers(value: &Value) -> impl Iterator<Item = f64> + '_ {
-    value
-        .as_array()
-        .into_iter()
-        .flatten()
-        .map(|v| v.as_f64().unwrap_or(f64::NAN))
+fn numbers(values: &[f64]) -> impl Iterator<Item = f64> + '_ {
+    values
+        .iter()
+        .map(|&v| if v.is_finite() { v } else { f64::NAN })
 }
 
 #[cfg(test)]

@@ -3,7 +3,6 @@
 //! computed here.
 use anyhow::Result;
 use ndarray::ArrayView3;
-use serde_json::Value;
 
 use motion_core::model::ActionClassifier;
 use motion_metrics::{classifier_protocol, ClassifierCurve};
@@ -52,28 +51,24 @@ pub fn table(curve: &ClassifierCurve) -> String {
     out
 }
 
-/// Paper 002 Figure 4 style: the probability of the action and the top-1 rate vs time, from a
-/// curve's JSON (as `score` reports it).
-pub fn chart(curve: &Value) -> Chart {
-    let points = |key: &str| -> Vec<(f64, f64)> {
-        let times = curve["times_s"].as_array().cloned().unwrap_or_default();
-        let values = curve[key].as_array().cloned().unwrap_or_default();
-        times
+/// Paper 002 Figure 4 style: the probability of the action and the top-1 rate vs time.
+pub fn chart(curve: &ClassifierCurve) -> Chart {
+    let points = |values: &[f64]| -> Vec<(f64, f64)> {
+        curve
+            .times_s
             .iter()
-            .zip(&values)
-            .filter_map(|(t, v)| Some((t.as_f64()?, v.as_f64()?)))
+            .zip(values)
+            .filter(|(t, v)| t.is_finite() && v.is_finite())
+            .map(|(&t, &v)| (t, v))
             .collect()
     };
     Chart {
-        title: format!(
-            "action classifier: {}",
-            curve["action"].as_str().unwrap_or("?")
-        ),
+        title: format!("action classifier: {}", curve.action),
         x_label: "window end (s after the seed)".into(),
         y_label: "probability".into(),
         series: vec![
-            Series::new("p(action)", points("prob")),
-            Series::new("top-1 rate", points("top1")).dashed(),
+            Series::new("p(action)", points(&curve.prob)),
+            Series::new("top-1 rate", points(&curve.top1)).dashed(),
         ],
     }
 }

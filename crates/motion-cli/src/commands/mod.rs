@@ -11,17 +11,7 @@ pub mod predict;
 pub mod render;
 pub mod score;
 
-/// An error caused by what the user gave us (bad file, bad shape, bad flag): exit code 2.
-#[derive(Debug)]
-pub struct UsageError(pub String);
-
-impl std::fmt::Display for UsageError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.0)
-    }
-}
-
-impl std::error::Error for UsageError {}
+pub use crate::usage::UsageError;
 
 /// The error and its causes on one line, each cause once, shortened to [`MAX_ERROR_CHARS`]
 /// characters (a 10 MB joint name stays a readable line) and with line breaks flattened.

@@ -50,7 +50,7 @@ impl Output {
     }
 
     /// Prints `value` as the command's one JSON object on stdout.
-    pub fn print_json(&self, value: &serde_json::Value) -> anyhow::Result<()> {
+    pub fn print_json<T: serde::Serialize + ?Sized>(&self, value: &T) -> anyhow::Result<()> {
         println!("{}", serde_json::to_string_pretty(value)?);
         Ok(())
     }

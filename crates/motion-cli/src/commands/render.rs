@@ -1,9 +1,7 @@
 //! `motion-cli render IN [--compare OTHER] --out FILE.svg|FILE.gif|FILE.png`: the skeleton over
 //! time from a fixed camera, as an animation (SVG, GIF) or a contact sheet of frames (PNG).
-pub(crate) mod font;
 mod gif_anim;
 mod paint;
-pub(crate) mod raster;
 mod scene;
 mod sheet;
 mod style;

@@ -11,6 +11,7 @@ pub mod similarity;
 pub mod word;
 
 use motion_core::skeleton::{H36M_LEFT_HIP, H36M_NDMS_JOINTS, H36M_RIGHT_HIP};
+use motion_core::Skeleton;
 
 /// H3.6M left shoulder joint (LeftArm), for [`WordFrame::Body`].
 const H36M_LEFT_SHOULDER: usize = 17;
@@ -85,6 +86,29 @@ impl NdmsConfig {
             },
             ..Self::h36m()
         }
+    }
+
+    /// [`NdmsConfig::h36m`] (heading frame, for gravity-aligned positions) on another rig: each
+    /// NDMS joint and hip is found in `skeleton` by its H3.6M name (LeftHand, RightHand,
+    /// LeftForeArm, ..., LeftUpLeg, RightUpLeg, LeftLeg, RightLeg, LeftFoot, RightFoot).
+    /// `Err` holds the first H3.6M joint name `skeleton` lacks.
+    pub fn h36m_by_name(skeleton: &Skeleton) -> Result<Self, String> {
+        let h36m = Skeleton::h36m();
+        let lookup = |j: usize| {
+            let name = &h36m.joint(j).name;
+            skeleton.joint_index(name).ok_or_else(|| name.clone())
+        };
+        let config = Self::h36m();
+        Ok(Self {
+            joints: config
+                .joints
+                .iter()
+                .map(|&j| lookup(j))
+                .collect::<Result<_, _>>()?,
+            left_hip: lookup(config.left_hip)?,
+            right_hip: lookup(config.right_hip)?,
+            ..config
+        })
     }
 
     /// Numbers in one flattened word: `κ · joints · 3`.
@@ -388,4 +412,20 @@ fn check_positions(what: &str, positions: &ArrayView3<'_, f64>) -> Result<(), Me
         });
     }
     check_finite(what, positions)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn h36m_by_name_finds_the_h36m_joints_and_names_a_missing_one() {
+        let h36m = Skeleton::h36m();
+        assert_eq!(NdmsConfig::h36m_by_name(&h36m), Ok(NdmsConfig::h36m()));
+        let mut joints: Vec<_> = (0..h36m.len()).map(|j| h36m.joint(j).clone()).collect();
+        let left_hip = joints[H36M_LEFT_HIP].name.clone();
+        joints[H36M_LEFT_HIP].name = "LeftHip".into();
+        let renamed = Skeleton::new(joints).unwrap();
+        assert_eq!(NdmsConfig::h36m_by_name(&renamed), Err(left_hip));
+    }
 }

@@ -5,7 +5,8 @@
 //! - [`selection`]: the dataset directory and the actions to run;
 //! - [`scoring`]: every metric of one action's predictions;
 //! - [`published`]: the papers' tables as code;
-//! - [`report`]: the human-readable table.
+//! - [`report`]: the typed report (the JSON) and the human-readable table;
+//! - `plots`: the charts of `--plot`, from the same report.
 //!
 //! `--save-predictions` is written piece by piece ([`motion_core::formats::npy_stream`]).
 mod plots;
@@ -20,7 +21,6 @@ use std::sync::Arc;
 use anyhow::{Context, Result};
 
 use ndarray::{s, Array3, Array4};
-use serde_json::{json, Map, Value};
 
 use motion_core::model::{ActionClassifier, BatchGenerator, MotionModel, Network, Noise};
 use motion_core::protocol::{
@@ -28,14 +28,19 @@ use motion_core::protocol::{
     LONG_TERM_HORIZON, SEED_FRAMES, TEST_SUBJECT,
 };
 use motion_core::skeleton::{H36M_FRAME_DIMS, H36M_PROTOCOL_FPS};
+use motion_metrics::euler_error_at_horizons;
 use motion_metrics::plausibility::MAX_HORIZON_FRAMES;
 use motion_metrics::{classifier_curve_pairs, protocol_hop, ClassifierCurve, PlausibilityReport};
-use motion_metrics::{euler_error_at_horizons, EULER_HORIZONS_MS};
 
 use super::plausibility;
 use super::UsageError;
 use crate::model_source;
 use motion_core::formats::npy_stream::NpyStream;
+use report::{
+    ActionResult, ActionScores, CoverageReport, EvalReport, GroundTruth, Means, MeansOverActions,
+    Method, ModelInfo, NdmsScores, NpssReport, PlausibilityKeys, Protocol, SavedPredictions,
+    Skipped, SpeedReport,
+};
 use scoring::{ActionTruth, Coverage, NpssScores, Scores, Speed};
 use selection::{Planned, Selection};
 
@@ -183,7 +188,6 @@ pub fn run(args: Args) -> Result<()> {
     );
     let mut generator = BatchGenerator::new(Arc::clone(&model), WINDOWS_PER_ACTION * samples);
     let mut results = Vec::new();
-    let mut plausibility_rows = Vec::new();
     for planned in &selection.planned {
         progress.set_message(format!("{}: loading", planned.action));
         let windows = load_action_windows_covered(&dataset, planned.action, horizon)?;
@@ -251,19 +255,12 @@ pub fn run(args: Args) -> Result<()> {
             None => None,
         };
         drop(predictions);
-        plausibility_rows.push(format!(
-            "{}{}",
-            measured.classifier.as_ref().map_or_else(String::new, |c| {
-                super::classifier::comparison_rows(&c.model, &c.zero_velocity, &c.real)
-            }),
-            plausibility::comparison_rows(&measured.model, &measured.zero_velocity, &measured.real,)
-        ));
-        results.push(action_json(
+        results.push(action_result(
             planned,
             &truth,
             &model_scores,
             &baseline_scores,
-            &measured,
+            measured,
             samples,
             horizon,
         ));
@@ -273,23 +270,29 @@ pub fn run(args: Args) -> Result<()> {
     let saved = match (saver, &args.save_predictions) {
         (Some(saver), Some(path)) => {
             saver.finish()?;
-            Some(json!({
-                "path": path.display().to_string(),
-                "shape": [selection.planned.len(), WINDOWS_PER_ACTION, samples, horizon, H36M_FRAME_DIMS],
-                "axes": ["action", "window", "sample", "frame", "dim"],
-                "actions": selection.planned.iter().map(|p| p.action).collect::<Vec<_>>(),
-            }))
+            Some(SavedPredictions {
+                path: path.display().to_string(),
+                shape: [
+                    selection.planned.len(),
+                    WINDOWS_PER_ACTION,
+                    samples,
+                    horizon,
+                    H36M_FRAME_DIMS,
+                ],
+                axes: ["action", "window", "sample", "frame", "dim"],
+                actions: selection.planned.iter().map(|p| p.action).collect(),
+            })
         }
         _ => None,
     };
-    if let Some(plot) = &args.plot {
-        crate::plot::write_charts(plot, &plots::charts(&results), 3)?;
-    }
     let report = full_report(&args, &model, &dataset, &selection, results, saved);
+    if let Some(plot) = &args.plot {
+        crate::plot::write_charts(plot, &plots::charts(&report.actions), 3)?;
+    }
     if args.reporting.json {
         args.reporting.print_json(&report)?;
     } else {
-        print!("{}", report::table(&report, &plausibility_rows));
+        print!("{}", report::table(&report));
     }
     Ok(())
 }
@@ -443,33 +446,13 @@ fn plausibility_of(
     ))
 }
 
-/// The `speed_ratio`, `drift` and `foot_contact` keys of one report (the shapes `score` prints).
-fn plausibility_json(report: &PlausibilityReport) -> Result<Map<String, Value>> {
-    let mut out = Map::new();
-    out.insert(
-        "speed_ratio".into(),
-        serde_json::to_value(&report.speed_ratio)?,
-    );
-    out.insert("drift".into(), serde_json::to_value(&report.drift)?);
-    out.insert(
-        "foot_contact".into(),
-        serde_json::to_value(&report.foot_contact)?,
-    );
-    Ok(out)
-}
-
-fn coverage_json(coverage: &Coverage) -> Value {
-    let npss: Map<String, Value> = coverage
-        .npss_windows
-        .iter()
-        .map(|(label, n)| (label.clone(), json!(n)))
-        .collect();
-    json!({
-        "frames_per_window": coverage.frames_per_window,
-        "windows_per_second": coverage.windows_per_second,
-        "npss_whole_frames": coverage.npss_whole_frames,
-        "npss_windows": npss,
-    })
+fn coverage_report(coverage: Coverage) -> CoverageReport {
+    CoverageReport {
+        frames_per_window: coverage.frames_per_window,
+        windows_per_second: coverage.windows_per_second,
+        npss_whole_frames: coverage.npss_whole_frames,
+        npss_windows: coverage.npss_windows.into_iter().collect(),
+    }
 }
 
 /// The zero-velocity baseline of every window, root held
@@ -485,123 +468,90 @@ fn zero_velocity_predictions(truth: &ActionTruth, horizon: usize) -> Array4<f64>
     out
 }
 
-fn npss_json(scores: &NpssScores) -> Value {
-    let windows: Map<String, Value> = scores
-        .windows
-        .iter()
-        .map(|(label, v)| (label.to_string(), json!(v)))
-        .collect();
-    json!({ "whole": scores.whole, "windows": windows })
-}
-
-fn speed_json(speed: &Speed) -> Value {
-    json!({ "world": speed.world, "pose": speed.pose })
-}
-
-fn scores_json(scores: &Scores) -> Value {
-    let horizons: Map<String, Value> = euler_error_at_horizons(&scores.euler_per_frame)
-        .iter()
-        .map(|(ms, v)| (ms.to_string(), json!(v)))
-        .collect();
-    let mut out = json!({
-        "euler_error_ms": horizons,
-        "euler_error_per_frame": scores.euler_per_frame,
-        "npss": npss_json(&scores.npss),
-        "npss_reference": npss_json(&scores.npss_reference),
-        "ndms": {
-            "mean": scores.ndms.mean,
-            "bins": scores.ndms.bins,
-            "first_word_end": scores.ndms.first_word_end,
-            "exact": scores.ndms.exact,
-        },
-        "mean_joint_speed_last_1s": speed_json(&scores.speed_last_second),
-    });
-    if let Some(apd) = scores.apd {
-        out["apd"] = json!(apd);
+fn npss_report(scores: &NpssScores) -> NpssReport {
+    NpssReport {
+        whole: scores.whole,
+        windows: scores
+            .windows
+            .iter()
+            .map(|(label, v)| (label.to_string(), *v))
+            .collect(),
     }
-    out
 }
 
-fn action_json(
+fn speed_report(speed: &Speed) -> SpeedReport {
+    SpeedReport {
+        world: speed.world,
+        pose: speed.pose,
+    }
+}
+
+/// The scores of the model or the baseline beside its plausibility report and classifier curve.
+fn action_scores(
+    scores: &Scores,
+    plausibility: PlausibilityReport,
+    classifier: Option<ClassifierCurve>,
+) -> ActionScores {
+    ActionScores {
+        euler_error_ms: euler_error_at_horizons(&scores.euler_per_frame)
+            .iter()
+            .map(|(ms, v)| (ms.to_string(), *v))
+            .collect(),
+        euler_error_per_frame: scores.euler_per_frame.clone(),
+        npss: npss_report(&scores.npss),
+        npss_reference: npss_report(&scores.npss_reference),
+        ndms: NdmsScores {
+            mean: scores.ndms.mean,
+            bins: scores.ndms.bins.clone(),
+            first_word_end: scores.ndms.first_word_end,
+            exact: scores.ndms.exact,
+        },
+        mean_joint_speed_last_1s: speed_report(&scores.speed_last_second),
+        apd: scores.apd,
+        plausibility: PlausibilityKeys(plausibility),
+        classifier,
+    }
+}
+
+/// The result of one action: speed_ratio, drift, foot_contact for the model, the zero-velocity
+/// baseline and the real continuation (`ground_truth`) in the shapes of `score`, and the
+/// classifier curve beside them.
+fn action_result(
     planned: &Planned,
     truth: &ActionTruth,
     model: &Scores,
     baseline: &Scores,
-    plausibility: &Plausibility,
+    plausibility: Plausibility,
     samples: usize,
     horizon: usize,
-) -> Value {
-    let mut result = json!({
-        "action": planned.action,
-        "label": planned.label,
-        "windows": truth.windows().len(),
-        "samples": samples,
-        "horizon": horizon,
-        "ground_truth_coverage": coverage_json(&truth.coverage()),
-        "ndms_database_words": truth.database_words(),
-        "model": scores_json(model),
-        "zero_velocity": scores_json(baseline),
-        "ground_truth": {
-            "mean_joint_speed_last_1s": truth.speed_last_second.as_ref().map(speed_json),
-        },
-        "published": published::for_action(planned.action),
-    });
-    // speed_ratio, drift, foot_contact: model, zero-velocity and the real continuation
-    // (`ground_truth`) in the shapes of `score`, and the classifier curve beside them.
-    let curves = plausibility.classifier.as_ref();
-    for (who, report, curve) in [
-        ("model", &plausibility.model, curves.map(|c| &c.model)),
-        (
-            "zero_velocity",
-            &plausibility.zero_velocity,
-            curves.map(|c| &c.zero_velocity),
-        ),
-        ("ground_truth", &plausibility.real, curves.map(|c| &c.real)),
-    ] {
-        if let (Some(object), Ok(keys)) = (result[who].as_object_mut(), plausibility_json(report)) {
-            object.extend(keys);
-            if let Some(Ok(value)) = curve.map(serde_json::to_value) {
-                object.insert("classifier".into(), value);
-            }
-        }
-    }
-    result
-}
-
-/// Means over the evaluated actions of the headline numbers, for model and baseline.
-fn mean_over_actions(results: &[Value], who: &str) -> Value {
-    let mean = |pointer: &str| {
-        let values: Vec<f64> = results
-            .iter()
-            .filter_map(|r| r[who].pointer(pointer).and_then(Value::as_f64))
-            .collect();
-        (values.len() == results.len() && !values.is_empty())
-            .then(|| values.iter().sum::<f64>() / values.len() as f64)
+) -> ActionResult {
+    let Plausibility {
+        model: model_plausibility,
+        zero_velocity,
+        real,
+        classifier,
+    } = plausibility;
+    let (model_curve, baseline_curve, real_curve) = match classifier {
+        Some(c) => (Some(c.model), Some(c.zero_velocity), Some(c.real)),
+        None => (None, None, None),
     };
-    let euler: Map<String, Value> = EULER_HORIZONS_MS
-        .iter()
-        .map(|ms| {
-            (
-                ms.to_string(),
-                json!(mean(&format!("/euler_error_ms/{ms}"))),
-            )
-        })
-        .collect();
-    let bins = results
-        .first()
-        .and_then(|r| r[who]["ndms"]["bins"].as_array())
-        .map_or(0, Vec::len);
-    let ndms_bins: Vec<Option<f64>> = (0..bins)
-        .map(|i| mean(&format!("/ndms/bins/{i}")))
-        .collect();
-    json!({
-        "npss_reference": mean("/npss_reference/whole"),
-        "npss": mean("/npss/whole"),
-        "euler_error_ms": euler,
-        "ndms": mean("/ndms/mean"),
-        "ndms_bins": ndms_bins,
-        "apd": mean("/apd"),
-    })
+    ActionResult {
+        action: planned.action,
+        label: planned.label.clone(),
+        windows: truth.windows().len(),
+        samples,
+        horizon,
+        ground_truth_coverage: coverage_report(truth.coverage()),
+        ndms_database_words: truth.database_words(),
+        model: action_scores(model, model_plausibility, model_curve),
+        zero_velocity: action_scores(baseline, zero_velocity, baseline_curve),
+        ground_truth: GroundTruth {
+            mean_joint_speed_last_1s: truth.speed_last_second.as_ref().map(speed_report),
+            plausibility: PlausibilityKeys(real),
+            classifier: real_curve,
+        },
+        published: published::for_action(planned.action),
+    }
 }
 
 fn full_report(
@@ -609,58 +559,63 @@ fn full_report(
     model: &MotionModel,
     dataset: &std::path::Path,
     selection: &Selection,
-    results: Vec<Value>,
-    saved: Option<Value>,
-) -> Value {
+    results: Vec<ActionResult>,
+    saved: Option<SavedPredictions>,
+) -> EvalReport {
     let config = model.config();
     let stochastic = config.architecture.is_stochastic();
-    let mut report = json!({
-        "model": {
-            "source": model_source::describe(args.model.as_deref()),
-            "architecture": config.architecture.name(),
-            "hidden": config.hidden,
-            "actions": config.actions,
-            "actions_trained": selection::trained_actions(model),
-            "stochastic": stochastic,
-            "plan_horizon": matches!(model.network(), Network::Vgru(_)).then_some(config.horizon),
-            "stored_dtype": model.stored_dtype(),
+    let mean_over_actions = MeansOverActions {
+        actions: results.len(),
+        model: Means::of(&results.iter().map(|r| &r.model).collect::<Vec<_>>()),
+        zero_velocity: Means::of(&results.iter().map(|r| &r.zero_velocity).collect::<Vec<_>>()),
+    };
+    EvalReport {
+        model: ModelInfo {
+            source: model_source::describe(args.model.as_deref()),
+            architecture: config.architecture.name(),
+            hidden: config.hidden,
+            actions: config.actions.clone(),
+            actions_trained: selection::trained_actions(model),
+            stochastic,
+            plan_horizon: matches!(model.network(), Network::Vgru(_)).then_some(config.horizon),
+            stored_dtype: model.stored_dtype().to_string(),
+            note: (!stochastic && args.samples > 1)
+                .then_some("deterministic model: the K samples are identical (APD is 0)"),
         },
-        "data": dataset.display().to_string(),
-        "protocol": {
-            "subject": TEST_SUBJECT,
-            "fps": H36M_PROTOCOL_FPS,
-            "seed_frames": SEED_FRAMES,
-            "horizon": args.horizon,
-            "windows_per_action": WINDOWS_PER_ACTION,
-            "samples": args.samples,
-            "rng_seed": args.rng_seed,
+        data: dataset.display().to_string(),
+        protocol: Protocol {
+            subject: TEST_SUBJECT,
+            fps: H36M_PROTOCOL_FPS,
+            seed_frames: SEED_FRAMES,
+            horizon: args.horizon,
+            windows_per_action: WINDOWS_PER_ACTION,
+            samples: args.samples,
+            rng_seed: args.rng_seed,
         },
-        "method": {
-            "samples": "Euler error: mean over all 8 x K sequences; NPSS: each sample index scored as a set of the 8 windows, then the mean over the K sets; NDMS: f_sim over all words of all 8 x K forecasts; APD: per window over its K samples (world positions of all 32 joints, mm), mean over windows",
-            "npss": "npss = |DFT|² (paper 000's definition); npss_reference = Re(DFT)² (the published code, which every published NPSS used)",
-            "ndms": "database = every motion word (kappa 8, stride 1) of the action's S5 files at 25 Hz; queries = forecasts with the last 7 seed frames prepended; exact nearest neighbour (brute force); bins of 0.4 s by word end",
-            "positions": "FK of seed + forecast with the root integrated (each 25 Hz root delta applied twice)",
-            "mean_joint_speed_last_1s": "mean displacement per 25 Hz frame (mm) of the 12 NDMS joints over the last 25 frame steps; world = with the root trajectory, pose = root deltas zeroed (body motion only)",
-            "zero_velocity": "the last seed pose repeated with the root held (root deltas 0: no translation, no turning); its joint angles are the protocol's repeated last frame, so its Euler error and NPSS are paper 000 Table 6's zero-velocity baseline",
-            "ground_truth_coverage": "horizons past 100 frames: a window's ground truth ends with its S5 file; Euler error per frame = mean over the windows covering the frame (dims chosen over each window's covered frames); NPSS whole over the frames all windows cover (npss_whole_frames), each NPSS window over the windows covering it completely (npss_windows); windows_per_second = windows covering each second of the horizon",
-            "plausibility": "speed_ratio, drift, foot_contact (motion_metrics::plausibility) per window 0-2, 2-4, 4-8, 8-12 s for model (all 8 x K), zero_velocity and ground_truth (the real continuation; each window counts the test windows whose file covers it); speed reference = mean root-frame joint speed over the action's S5 files; drift p95 over real 12 s windows of the action, every subject, seeded by the 50 frames before each",
-        },
-        "actions": results,
-        "skipped": selection.skipped.iter().map(|(a, r)| json!({"action": a, "reason": r})).collect::<Vec<_>>(),
-        "published_averages": published::averages(),
-    });
-    let results = report["actions"].as_array().cloned().unwrap_or_default();
-    report["mean_over_actions"] = json!({
-        "actions": results.len(),
-        "model": mean_over_actions(&results, "model"),
-        "zero_velocity": mean_over_actions(&results, "zero_velocity"),
-    });
-    if !stochastic && args.samples > 1 {
-        report["model"]["note"] =
-            json!("deterministic model: the K samples are identical (APD is 0)");
+        method: METHOD,
+        actions: results,
+        skipped: selection
+            .skipped
+            .iter()
+            .map(|(action, reason)| Skipped {
+                action,
+                reason: reason.clone(),
+            })
+            .collect(),
+        published_averages: published::averages(),
+        mean_over_actions,
+        save_predictions: saved,
     }
-    if let Some(saved) = saved {
-        report["save_predictions"] = saved;
-    }
-    report
 }
+
+/// How each number of the report is computed.
+const METHOD: Method = Method {
+    samples: "Euler error: mean over all 8 x K sequences; NPSS: each sample index scored as a set of the 8 windows, then the mean over the K sets; NDMS: f_sim over all words of all 8 x K forecasts; APD: per window over its K samples (world positions of all 32 joints, mm), mean over windows",
+    npss: "npss = |DFT|² (paper 000's definition); npss_reference = Re(DFT)² (the published code, which every published NPSS used)",
+    ndms: "database = every motion word (kappa 8, stride 1) of the action's S5 files at 25 Hz; queries = forecasts with the last 7 seed frames prepended; exact nearest neighbour (brute force); bins of 0.4 s by word end",
+    positions: "FK of seed + forecast with the root integrated (each 25 Hz root delta applied twice)",
+    mean_joint_speed_last_1s: "mean displacement per 25 Hz frame (mm) of the 12 NDMS joints over the last 25 frame steps; world = with the root trajectory, pose = root deltas zeroed (body motion only)",
+    zero_velocity: "the last seed pose repeated with the root held (root deltas 0: no translation, no turning); its joint angles are the protocol's repeated last frame, so its Euler error and NPSS are paper 000 Table 6's zero-velocity baseline",
+    ground_truth_coverage: "horizons past 100 frames: a window's ground truth ends with its S5 file; Euler error per frame = mean over the windows covering the frame (dims chosen over each window's covered frames); NPSS whole over the frames all windows cover (npss_whole_frames), each NPSS window over the windows covering it completely (npss_windows); windows_per_second = windows covering each second of the horizon",
+    plausibility: "speed_ratio, drift, foot_contact (motion_metrics::plausibility) per window 0-2, 2-4, 4-8, 8-12 s for model (all 8 x K), zero_velocity and ground_truth (the real continuation; each window counts the test windows whose file covers it); speed reference = mean root-frame joint speed over the action's S5 files; drift p95 over real 12 s windows of the action, every subject, seeded by the 50 frames before each",
+};

@@ -1,18 +1,17 @@
 //! `eval --plot`: metric vs horizon per action (Euler error per frame, NPSS windows, NDMS bins),
 //! the model as solid lines and the zero-velocity baseline dashed beside it.
-use serde_json::Value;
-
+use super::report::{ActionResult, ActionScores};
 use crate::plot::{bin_points, per_frame_points, window_points, Chart, Series};
 
-/// Three charts per evaluated action, built from the per-action JSON results of `eval`.
-pub fn charts(results: &[Value]) -> Vec<Chart> {
+/// Three charts per evaluated action, built from the per-action results of the `eval` report.
+pub fn charts(results: &[ActionResult]) -> Vec<Chart> {
     let mut charts = Vec::with_capacity(results.len() * 3);
     for result in results {
-        let action = result["action"].as_str().unwrap_or("?");
-        let pair = |name: &str, pick: &dyn Fn(&Value) -> Vec<(f64, f64)>| {
+        let action = result.action;
+        let pair = |name: &str, pick: &dyn Fn(&ActionScores) -> Vec<(f64, f64)>| {
             vec![
-                Series::new(name, pick(&result["model"])),
-                Series::new("zero-velocity", pick(&result["zero_velocity"])).dashed(),
+                Series::new(name, pick(&result.model)),
+                Series::new("zero-velocity", pick(&result.zero_velocity)).dashed(),
             ]
         };
         charts.push(Chart {
@@ -37,33 +36,55 @@ pub fn charts(results: &[Value]) -> Vec<Chart> {
     charts
 }
 
-fn euler_points(scores: &Value) -> Vec<(f64, f64)> {
-    per_frame_points(&scores["euler_error_per_frame"])
+fn euler_points(scores: &ActionScores) -> Vec<(f64, f64)> {
+    per_frame_points(&scores.euler_error_per_frame)
 }
 
-fn npss_window_points(scores: &Value) -> Vec<(f64, f64)> {
-    window_points(&scores["npss_reference"]["windows"])
+fn npss_window_points(scores: &ActionScores) -> Vec<(f64, f64)> {
+    window_points(
+        scores
+            .npss_reference
+            .windows
+            .iter()
+            .map(|(label, v)| (label.as_str(), *v)),
+    )
 }
 
-fn ndms_bin_points(scores: &Value) -> Vec<(f64, f64)> {
-    bin_points(&scores["ndms"]["bins"])
+fn ndms_bin_points(scores: &ActionScores) -> Vec<(f64, f64)> {
+    bin_points(&scores.ndms.bins)
 }
 
 #[cfg(test)]
 mod tests {
+    use super::super::published;
+    use super::super::report::{fixtures, CoverageReport, GroundTruth};
     use super::*;
-    use serde_json::json;
 
     #[test]
     fn charts_per_action_with_baseline_dashed() {
-        let scores = json!({
-            "euler_error_per_frame": [0.1, 0.2],
-            "npss_reference": { "windows": { "1-2 s": 0.3, "0-1 s": 0.2 } },
-            "ndms": { "bins": [0.9, 0.8] },
-        });
-        let results = vec![json!({
-            "action": "walking", "model": scores, "zero_velocity": scores,
-        })];
+        let scores = fixtures::scores(&[0.1, 0.2], &[("1-2 s", 0.3), ("0-1 s", 0.2)], &[0.9, 0.8]);
+        let results = vec![ActionResult {
+            action: "walking",
+            label: None,
+            windows: 8,
+            samples: 1,
+            horizon: 2,
+            ground_truth_coverage: CoverageReport {
+                frames_per_window: vec![2; 8],
+                windows_per_second: vec![8],
+                npss_whole_frames: 2,
+                npss_windows: Default::default(),
+            },
+            ndms_database_words: 1,
+            model: scores.clone(),
+            zero_velocity: scores.clone(),
+            ground_truth: GroundTruth {
+                mean_joint_speed_last_1s: None,
+                plausibility: scores.plausibility.clone(),
+                classifier: None,
+            },
+            published: published::for_action("walking"),
+        }];
         let charts = charts(&results);
         assert_eq!(charts.len(), 3);
         assert_eq!(charts[0].series[0].points, vec![(40.0, 0.1), (80.0, 0.2)]);

@@ -10,7 +10,9 @@
 // Table cells such as 0.318 are published numbers, not approximations of 1/π.
 #![allow(clippy::approx_constant)]
 
-use serde_json::{json, Map, Value};
+use std::collections::BTreeMap;
+
+use serde::Serialize;
 
 /// The actions of paper 000's tables, in column order.
 pub const PAPER000_ACTIONS: [&str; 4] = ["walking", "eating", "smoking", "discussion"];
@@ -205,24 +207,63 @@ fn column(columns: &[&str], action: &str) -> Option<usize> {
     columns.iter().position(|a| *a == action)
 }
 
+/// `{model: value}`: one column of a table.
+pub type ByModel = BTreeMap<String, f64>;
+/// `{horizon_ms: value}`.
+pub type ByHorizon = BTreeMap<String, f64>;
+
+/// Every published number for one action, keyed by table (a table without the action is left
+/// out).
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct ForAction {
+    /// Paper 000 Table 4: NPSS (reference variant) over 0-4 s, per model.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub paper000_table4_npss_reference_0_4s: Option<ByModel>,
+    /// Paper 000 Table 5: NPSS (reference variant) per window label, per model.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub paper000_table5_npss_reference_windows: Option<BTreeMap<String, ByModel>>,
+    /// Paper 000 Table 6: the zero-velocity Euler error per horizon.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub paper000_table6_zero_velocity_euler: Option<ByHorizon>,
+    /// Paper 000 Table 7: the Euler error per model and horizon.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub paper000_table7_euler: Option<BTreeMap<String, ByHorizon>>,
+    /// Paper 002 Table 2: the error per model and horizon.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub paper002_table2_l2: Option<BTreeMap<String, ByHorizon>>,
+    /// Paper 003 Table 1: NPSS (reference variant) over 2-4 s, per method.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub paper003_table1_npss_reference_2_4s: Option<ByModel>,
+    /// Paper 003 Table 2: NDMS per 0.4 s bin, per method (`null` where the paper has none).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub paper003_table2_ndms_bins: Option<BTreeMap<String, Vec<Option<f64>>>>,
+}
+
+/// The published averages over actions.
+#[derive(Debug, Clone, Serialize)]
+pub struct Averages {
+    /// Paper 003 Table 1's NPSS average over its four actions, per method.
+    pub paper003_table1_npss_reference_2_4s_average_of_4_actions: ByModel,
+    /// Paper 003 Table 2's NDMS bins averaged over all 15 actions, per method.
+    pub paper003_table2_ndms_bins_average_of_15_actions: BTreeMap<String, Vec<Option<f64>>>,
+    /// Paper 003 Table 5: APD on Human3.6M, per method.
+    pub paper003_table5_apd_h36m: ByModel,
+}
+
 /// `{model: value}` of one column of a table.
-fn column_object<const N: usize>(rows: &[ModelRow<N>], col: usize) -> Value {
-    Value::Object(
-        rows.iter()
-            .map(|r| (r.model.to_string(), json!(r.values[col])))
-            .collect(),
-    )
+fn column_object<const N: usize>(rows: &[ModelRow<N>], col: usize) -> ByModel {
+    rows.iter()
+        .map(|r| (r.model.to_string(), r.values[col]))
+        .collect()
 }
 
 /// `{horizon_ms: value}`.
-fn horizons_object(horizons: &[u32], values: &[f64]) -> Value {
-    Value::Object(
-        horizons
-            .iter()
-            .zip(values)
-            .map(|(ms, v)| (ms.to_string(), json!(v)))
-            .collect(),
-    )
+fn horizons_object(horizons: &[u32], values: &[f64]) -> ByHorizon {
+    horizons
+        .iter()
+        .zip(values)
+        .map(|(ms, v)| (ms.to_string(), *v))
+        .collect()
 }
 
 /// `{model: {horizon_ms: value}}` of one action column of an error table.
@@ -230,17 +271,22 @@ fn models_by_horizon<const H: usize>(
     rows: &[EulerRow<H>],
     horizons: &[u32; H],
     col: usize,
-) -> Value {
-    Value::Object(
-        rows.iter()
-            .map(|r| {
-                (
-                    r.model.to_string(),
-                    horizons_object(horizons, &r.values[col]),
-                )
-            })
-            .collect(),
-    )
+) -> BTreeMap<String, ByHorizon> {
+    rows.iter()
+        .map(|r| {
+            (
+                r.model.to_string(),
+                horizons_object(horizons, &r.values[col]),
+            )
+        })
+        .collect()
+}
+
+/// `{method: bins}` of paper 003 Table 2's rows for `action` (`average`: over 15 actions).
+fn ndms_bins_by_method(action: &str) -> BTreeMap<String, Vec<Option<f64>>> {
+    ndms_rows(action)
+        .map(|r| (r.method.to_string(), r.bins.to_vec()))
+        .collect()
 }
 
 /// Paper 003 Table 5: diversity (APD) on Human3.6M, per method as the paper names it. The paper
@@ -309,68 +355,66 @@ pub fn table2_p002(model: &str, action: &str, ms: u32) -> Option<f64> {
         .map(|r| r.values[col][h])
 }
 
-/// Every published number for `action`, keyed by table (empty object if no table has it).
-pub fn for_action(action: &str) -> Value {
-    let mut out = Map::new();
+/// Every published number for `action`, keyed by table (empty if no table has it).
+pub fn for_action(action: &str) -> ForAction {
+    let mut out = ForAction::default();
     if let Some(col) = column(&PAPER000_ACTIONS, action) {
-        out.insert(
-            "paper000_table4_npss_reference_0_4s".into(),
-            column_object(&P000_TABLE4_NPSS, col),
+        out.paper000_table4_npss_reference_0_4s = Some(column_object(&P000_TABLE4_NPSS, col));
+        out.paper000_table5_npss_reference_windows = Some(
+            [
+                ("0-1 s", column_object(&P000_TABLE5_NPSS_SHORT, col)),
+                ("1-2 s", column_object(&P000_TABLE5_NPSS_MEDIUM, col)),
+                ("2-4 s", column_object(&P000_TABLE5_NPSS_LONG, col)),
+            ]
+            .into_iter()
+            .map(|(label, values)| (label.to_string(), values))
+            .collect(),
         );
-        out.insert(
-            "paper000_table5_npss_reference_windows".into(),
-            json!({
-                "0-1 s": column_object(&P000_TABLE5_NPSS_SHORT, col),
-                "1-2 s": column_object(&P000_TABLE5_NPSS_MEDIUM, col),
-                "2-4 s": column_object(&P000_TABLE5_NPSS_LONG, col),
-            }),
-        );
-        out.insert(
-            "paper000_table6_zero_velocity_euler".into(),
-            horizons_object(&TABLE6_HORIZONS_MS, &P000_TABLE6_ZERO_VELOCITY[col]),
-        );
-        out.insert(
-            "paper000_table7_euler".into(),
-            models_by_horizon(&P000_TABLE7_EULER, &TABLE7_HORIZONS_MS, col),
-        );
-        out.insert(
-            "paper002_table2_l2".into(),
-            models_by_horizon(&P002_TABLE2_L2, &P002_TABLE2_HORIZONS_MS, col),
-        );
+        out.paper000_table6_zero_velocity_euler = Some(horizons_object(
+            &TABLE6_HORIZONS_MS,
+            &P000_TABLE6_ZERO_VELOCITY[col],
+        ));
+        out.paper000_table7_euler = Some(models_by_horizon(
+            &P000_TABLE7_EULER,
+            &TABLE7_HORIZONS_MS,
+            col,
+        ));
+        out.paper002_table2_l2 = Some(models_by_horizon(
+            &P002_TABLE2_L2,
+            &P002_TABLE2_HORIZONS_MS,
+            col,
+        ));
     }
     if let Some(col) = column(&PAPER003_TABLE1_COLUMNS, action) {
-        out.insert(
-            "paper003_table1_npss_reference_2_4s".into(),
-            column_object(&P003_TABLE1_NPSS_LONG, col),
-        );
+        out.paper003_table1_npss_reference_2_4s = Some(column_object(&P003_TABLE1_NPSS_LONG, col));
     }
-    let ndms: Map<String, Value> = ndms_rows(action)
-        .map(|r| (r.method.to_string(), json!(r.bins)))
-        .collect();
+    let ndms = ndms_bins_by_method(action);
     if !ndms.is_empty() {
-        out.insert("paper003_table2_ndms_bins".into(), Value::Object(ndms));
+        out.paper003_table2_ndms_bins = Some(ndms);
     }
-    Value::Object(out)
+    out
 }
 
 /// The published averages over actions: paper 003 Table 1's NPSS average over the four actions
 /// and Table 2's NDMS average over all 15 actions.
-pub fn averages() -> Value {
-    json!({
-        "paper003_table1_npss_reference_2_4s_average_of_4_actions":
-            column_object(&P003_TABLE1_NPSS_LONG, 4),
-        "paper003_table2_ndms_bins_average_of_15_actions": Value::Object(
-            ndms_rows("average").map(|r| (r.method.to_string(), json!(r.bins))).collect()
+pub fn averages() -> Averages {
+    Averages {
+        paper003_table1_npss_reference_2_4s_average_of_4_actions: column_object(
+            &P003_TABLE1_NPSS_LONG,
+            4,
         ),
-        "paper003_table5_apd_h36m": Value::Object(
-            P003_TABLE5_APD_H36M.iter().map(|(m, v)| (m.to_string(), json!(v))).collect()
-        ),
-    })
+        paper003_table2_ndms_bins_average_of_15_actions: ndms_bins_by_method("average"),
+        paper003_table5_apd_h36m: P003_TABLE5_APD_H36M
+            .iter()
+            .map(|(m, v)| (m.to_string(), *v))
+            .collect(),
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use serde_json::{json, Value};
 
     #[test]
     fn lookups_match_the_papers() {
@@ -386,6 +430,7 @@ mod tests {
         assert_eq!(table2_p002("DAE-LSTM", "smoking", 1000), Some(1.77));
         assert_eq!(table2_p002("LSTM3LR", "discussion", 80), Some(2.25));
         assert_eq!(table2_p002("DAE-LSTM", "walking", 400), None);
+        let for_action = |action: &str| serde_json::to_value(for_action(action)).unwrap();
         assert_eq!(
             for_action("eating")["paper002_table2_l2"]["DAE-LSTM"]["560"],
             json!(1.76)

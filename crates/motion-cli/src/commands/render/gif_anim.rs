@@ -4,9 +4,9 @@
 use std::collections::HashMap;
 
 use super::paint::Picture;
-use super::raster::{Anchor, Canvas, Rgb};
 use super::scene::{bounds, Viewport};
 use super::style::{all_colours, track_colour, BACKGROUND, BOUNDARY, SEED_BAR, TEXT};
+use crate::raster::{Anchor, Canvas, Rgb};
 
 /// Height of the progress bar strip at the bottom.
 const STRIP: usize = 18;

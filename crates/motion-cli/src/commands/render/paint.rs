@@ -1,8 +1,8 @@
 //! Painting one moment of the scene onto a raster canvas (used by the GIF and the contact
 //! sheet): floor grid, then every motion's bones, far ones first.
-use super::raster::Canvas;
 use super::scene::{Camera, Track, Viewport};
 use super::style::{bone_colour, GRID};
+use crate::raster::Canvas;
 
 /// What a picture shows: the motions, the camera and the seed length.
 pub struct Picture<'a> {

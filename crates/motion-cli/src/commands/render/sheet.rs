@@ -3,9 +3,9 @@
 //! with its time; seed cells have a grey bar, prediction cells a coloured one, and a red line
 //! marks where the prediction starts.
 use super::paint::Picture;
-use super::raster::{Anchor, Canvas};
 use super::scene::Viewport;
 use super::style::{track_colour, BACKGROUND, BOUNDARY, SEED_BAR, TEXT};
+use crate::raster::{Anchor, Canvas};
 
 /// Cell size in pixels.
 const CELL_W: usize = 180;
@@ -32,7 +32,7 @@ pub fn contact_sheet(picture: &Picture<'_>, times: &[f64], cells: usize, columns
         };
         canvas.fill_rect(x, 11.0, 14.0, 8.0, track_colour(k));
         canvas.text(x + 20.0, 8.0, &label, 2, Anchor::Start, TEXT);
-        x += 20.0 + (super::font::text_width(&label) * 2) as f64 + 24.0;
+        x += 20.0 + (crate::raster::text_width(&label) * 2) as f64 + 24.0;
     }
 
     // One scale for every cell: the body's extent around the root over the whole motion.

@@ -1,7 +1,7 @@
 //! Colours of the drawings: one hue per motion (blue, then orange), darker for the character's
 //! left and lighter for its right; greys for seed frames; the seed/prediction boundary in red.
-use super::raster::Rgb;
 use super::scene::Side;
+use crate::raster::Rgb;
 
 /// Background.
 pub const BACKGROUND: Rgb = Rgb::WHITE;

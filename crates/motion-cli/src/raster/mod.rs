@@ -2,7 +2,10 @@
 //! rectangles, bitmap text; PNG encoding. Enough for skeletons and charts
 //! without a graphics dependency.
 
-use super::font::{glyph, text_width, ADVANCE, GLYPH_HEIGHT};
+mod font;
+
+pub(crate) use font::text_width;
+use font::{glyph, ADVANCE, GLYPH_HEIGHT};
 
 /// An RGB colour, components 0..=255.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

@@ -1,0 +1,320 @@
+//! `motion-cli score`: NPSS (paper definition and the published code's variant), the protocol's
+//! Euler error, NDMS and APD of predictions, from `.npy` arrays, exp-map text files or BVH files
+//! (or folders of them).
+//!
+//! The run is load ([`load`]: read and classify the inputs) → compute ([`compute`]: the metrics
+//! into one typed [`report::ScoreReport`]) → report ([`report`]: the JSON, the table and the plots all
+//! read that report).
+//!
+//! Inputs are read into `sequences x samples x frames x width` (samples = 1 for plain
+//! sequences). In the exp-map space (the default for 99- and 117-dim data) NPSS and the Euler
+//! error use the protocol's Euler sequences and NDMS/APD use FK positions; in the raw space the
+//! numbers are used as given (positions `N x T x J x 3` for NDMS).
+mod compute;
+mod load;
+pub mod report;
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+use motion_metrics::MetricError;
+use serde::Serialize;
+
+use super::UsageError;
+
+/// How the numbers of the inputs are read.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum InputSpace {
+    /// Exp-map frames: Euler conversion for NPSS/Euler, FK positions for NDMS/APD.
+    Expmap,
+    /// As given: NPSS/Euler on the numbers, NDMS on positions `N x T x J x 3`.
+    Raw,
+}
+
+impl InputSpace {
+    /// The name in reports: `expmap` or `raw`.
+    pub fn name(self) -> &'static str {
+        match self {
+            InputSpace::Expmap => "expmap",
+            InputSpace::Raw => "raw",
+        }
+    }
+}
+
+/// The exact nearest-neighbour strategy of NDMS.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NnChoice {
+    /// Blocked brute force as matrix products, exact re-checks.
+    BruteForce,
+    /// kd-tree over a PCA projection, exact re-ranking.
+    PcaKdTree,
+    /// Scan of mean-pose lower bounds, exact re-ranking.
+    PoseBound,
+}
+
+/// The long help after the options.
+const LONG_HELP: &str = "\
+The action-classifier protocol of paper 002 (--metric classifier --action NAME; definition in \
+motion_metrics::classifier): a recurrent classifier of 2 s windows (the built-in \
+action_classifier.safetensors, or --classifier FILE) slides over each prediction, windows ending \
+every second after the seed (the first windows take the seed's last frames when --seed is given, \
+else the first window ends at 2 s); per window end it reports the mean probability of NAME and the \
+fraction of predictions classified as NAME (top-1). Real motion keeps it high; motion that \
+freezes or degrades loses it. Frames: H3.6M 99-dim exp-map at 25 Hz.
+
+Plausibility without ground truth (--action NAME, --seed, H3.6M 99-dim exp-map frames at 25 Hz; \
+definitions in motion_metrics::plausibility), per window 0-2, 2-4, 4-8, 8-12 s after the seed \
+(cut at the horizon):
+  speed_ratio   mean joint speed in the root frame / the action's mean over its S5 files;
+  drift         largest hip height change (mm) and torso lean change (Hips->Neck, degrees from \
+vertical) since the seed's last frame, root integrated over seed + prediction; beside it the 95th \
+percentile over real 12 s windows of the action (every subject) and the fraction of sequences \
+within it;
+  foot_contact  fraction of frames with both feet (ankle and toe joints) more than 100 mm above \
+the seed's lowest foot joint.
+The reference statistics are read from the H3.6M data (--data, $MOTION_DATA_DIR, ../shared/data). \
+The seed gives the drift's starting frame and the floor of foot_contact: --seed holds one \
+sequence (N x T_s x 99) per --pred sequence, e.g. the 50 frames `predict` was seeded with.
+
+Examples:
+  motion-cli score --gt gt.npy --pred pred.npy --metric npss,euler --json
+  motion-cli score --pred pred.npy --seed seed.npy --action walking --metric classifier --plot walking.svg
+  motion-cli score --pred pred.npy --seed seed.npy --action walking --metric speed_ratio,drift,foot_contact
+  motion-cli score --pred pred.npy --seed seed.npy --db S5/walking_1.txt.gz --action walking   # all
+
+Exit status 2 for bad input (unreadable file, shapes, unknown action or metric, missing data).";
+
+/// Arguments of `motion-cli score`.
+#[derive(clap::Args, Debug)]
+#[command(after_long_help = LONG_HELP)]
+pub struct Args {
+    /// Ground truth: .npy (N x T x D), exp-map text (.txt/.txt.gz) or BVH files, or folders of them.
+    #[arg(long, num_args = 1..)]
+    pub gt: Vec<PathBuf>,
+    /// Predictions, as --gt; for APD samples N x S x T x D (.npy). Used at their own frame rate:
+    /// NDMS words are κ = 8 frames at 25 Hz, so give 25 Hz frames.
+    #[arg(long, required = true, num_args = 1..)]
+    pub pred: Vec<PathBuf>,
+    /// Comma list of npss, npss-reference, euler, ndms, apd, classifier, speed_ratio, drift,
+    /// foot_contact, or all (= every metric the inputs allow; classifier when --action is given,
+    /// the last three when --action and --seed are given).
+    #[arg(
+        long,
+        value_enum,
+        default_value = "all",
+        value_delimiter = ',',
+        ignore_case = true
+    )]
+    pub metric: Vec<Metric>,
+    /// NDMS reference sequences (the word database). Exp-map text files are taken as the dataset's
+    /// 50 Hz files and downsampled to the protocol's 25 Hz; .npy and BVH are used at their rate.
+    #[arg(long, num_args = 1..)]
+    pub db: Vec<PathBuf>,
+    /// Observed frames before each prediction (N x T_s x D): NDMS then prepends their last κ-1
+    /// frames so that the first word straddles the seam; drift starts from their last frame and
+    /// foot_contact's floor is their lowest foot joint (both need it).
+    #[arg(long, num_args = 1..)]
+    pub seed: Vec<PathBuf>,
+    /// The action the predictions should show (H3.6M name): speed_ratio and drift compare them
+    /// with that action's real data.
+    #[arg(long, value_name = "NAME")]
+    pub action: Option<String>,
+    /// Action classifier weights for --metric classifier (default: the built-in
+    /// action_classifier.safetensors, paper 002's protocol).
+    #[arg(long, value_name = "FILE")]
+    pub classifier: Option<PathBuf>,
+    /// H3.6M data root (holding h3.6m/dataset) for the reference statistics of --action.
+    /// Default: $MOTION_DATA_DIR, then ../shared/data.
+    #[arg(long, value_name = "DIR")]
+    pub data: Option<PathBuf>,
+    /// How to read the numbers (default: expmap for 99- and 117-dim data, raw otherwise). NDMS
+    /// words of H3.6M exp-maps use a rigid body frame (FK of integrated root deltas is tilted);
+    /// raw positions (4-D, N x T x J x 3) are taken as gravity-aligned, y up (metrics.md's recipe).
+    #[arg(long, value_enum)]
+    pub input_space: Option<InputSpace>,
+    /// NDMS nearest-neighbour search (all exact; the pose-bound scan is fastest on motion words).
+    #[arg(long, value_enum, default_value = "pose-bound")]
+    pub nn: NnChoice,
+    /// A BVH whose hierarchy names the joints of raw positions (N x T x J x 3) that are not on the
+    /// 32-joint H3.6M skeleton: NDMS finds its joints by the H3.6M names (LeftHand, RightHand,
+    /// LeftForeArm, ..., LeftUpLeg, RightUpLeg, LeftLeg, RightLeg, LeftFoot, RightFoot).
+    #[arg(long, value_name = "FILE.bvh")]
+    pub skeleton: Option<PathBuf>,
+    #[command(flatten)]
+    pub reporting: super::output::Output,
+    /// Also draw the per-horizon results (Euler error per frame, NPSS windows, NDMS 0.4 s bins;
+    /// 25 Hz time axis) to FILE.svg or FILE.png.
+    #[arg(long, value_name = "FILE.svg|FILE.png")]
+    pub plot: Option<PathBuf>,
+}
+
+/// A metric of `--metric` (a clap value enum: the names below, `-` or `_` alike).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Metric {
+    /// NPSS with the paper's |DFT|² power.
+    Npss,
+    /// NPSS with the published code's Re(DFT)².
+    #[value(name = "npss-reference", alias = "npss_reference")]
+    NpssReference,
+    /// The H3.6M protocol's Euler-angle error.
+    Euler,
+    /// NDMS against --db.
+    Ndms,
+    /// Average pairwise distance of samples.
+    Apd,
+    /// Paper 002's action-classifier probability.
+    Classifier,
+    /// Joint speed against the action's real data.
+    #[value(name = "speed_ratio", alias = "speed-ratio")]
+    SpeedRatio,
+    /// Hip height and torso lean change since the seed.
+    Drift,
+    /// Fraction of frames with both feet off the floor.
+    #[value(name = "foot_contact", alias = "foot-contact")]
+    FootContact,
+    /// Every metric the inputs allow.
+    All,
+}
+
+const ALL_METRICS: [Metric; 9] = [
+    Metric::Npss,
+    Metric::NpssReference,
+    Metric::Euler,
+    Metric::Ndms,
+    Metric::Apd,
+    Metric::Classifier,
+    Metric::SpeedRatio,
+    Metric::Drift,
+    Metric::FootContact,
+];
+
+impl Metric {
+    fn name(self) -> &'static str {
+        match self {
+            Metric::Npss => "npss",
+            Metric::NpssReference => "npss-reference",
+            Metric::Euler => "euler",
+            Metric::Ndms => "ndms",
+            Metric::Apd => "apd",
+            Metric::Classifier => "classifier",
+            Metric::SpeedRatio => "speed_ratio",
+            Metric::Drift => "drift",
+            Metric::FootContact => "foot_contact",
+            Metric::All => "all",
+        }
+    }
+
+    /// Measured against the action's real data from the seed (no ground truth).
+    fn is_plausibility(self) -> bool {
+        matches!(
+            self,
+            Metric::SpeedRatio | Metric::Drift | Metric::FootContact
+        )
+    }
+}
+
+fn usage(message: impl Into<String>) -> anyhow::Error {
+    UsageError(message.into()).into()
+}
+
+fn metric_error(what: &str, err: MetricError) -> anyhow::Error {
+    usage(format!("{what}: {err}"))
+}
+
+/// Runs the command: load → compute → report.
+pub fn run(args: Args) -> Result<()> {
+    if let Some(plot) = &args.plot {
+        crate::plot::check_extension(plot)?;
+    }
+    let requested = parse_metrics(&args.metric)?;
+    let action = args
+        .action
+        .as_deref()
+        .map(super::plausibility::known_action)
+        .transpose()?;
+    let inputs = load::inputs(&args)?;
+    let metrics = chosen_metrics(&args, requested, action, &inputs)?;
+    let report = compute::compute(&args, &metrics, action, &inputs)?;
+    drop(inputs);
+
+    if let Some(plot) = &args.plot {
+        let charts = report::charts(&report);
+        if charts.is_empty() {
+            return Err(UsageError(format!(
+                "{}: nothing to plot (--plot draws euler, npss, classifier and ndms results)",
+                plot.display()
+            ))
+            .into());
+        }
+        crate::plot::write_charts(plot, &charts, 3)?;
+    }
+    if args.reporting.json {
+        args.reporting.print_json(&report)?;
+    } else {
+        print!("{}", report::human_table(&report));
+    }
+    Ok(())
+}
+
+/// The metrics to score: those asked for (each must be available for the inputs), or with `all`
+/// every metric the inputs allow.
+fn chosen_metrics(
+    args: &Args,
+    requested: Option<Vec<Metric>>,
+    action: Option<&str>,
+    inputs: &load::Inputs,
+) -> Result<Vec<Metric>> {
+    let (pred, gt, seed) = (&inputs.pred, &inputs.gt, &inputs.seed);
+    let available = |m: Metric| match m {
+        Metric::Npss | Metric::NpssReference | Metric::Euler => gt.is_some(),
+        Metric::Ndms => !args.db.is_empty(),
+        Metric::Apd => pred.has_samples,
+        Metric::Classifier => action.is_some(),
+        m if m.is_plausibility() => action.is_some() && seed.is_some(),
+        _ => unreachable!("every metric is listed"),
+    };
+    let metrics: Vec<Metric> = match requested {
+        None => ALL_METRICS.into_iter().filter(|&m| available(m)).collect(),
+        Some(list) => {
+            for &m in &list {
+                if !available(m) {
+                    let need = match m {
+                        Metric::Ndms => "--db reference sequences",
+                        Metric::Apd => "samples in --pred (N x S x T x D)",
+                        Metric::Classifier => "--action NAME (the action whose probability is reported)",
+                        m if m.is_plausibility() && action.is_none() => {
+                            "--action NAME (the action whose real data is the reference)"
+                        }
+                        m if m.is_plausibility() => {
+                            "--seed (the frames before each prediction: drift's start, the floor of foot_contact)"
+                        }
+                        _ => "--gt",
+                    };
+                    return Err(usage(format!("metric {} needs {need}", m.name())));
+                }
+            }
+            list
+        }
+    };
+    if metrics.is_empty() {
+        return Err(usage(
+            "nothing to score: give --gt (NPSS, Euler error), --db (NDMS), samples in --pred (APD) or --action with --seed (speed_ratio, drift, foot_contact)",
+        ));
+    }
+    Ok(metrics)
+}
+
+/// `None` for `all` (every metric the inputs allow), else the metrics asked for, once each.
+fn parse_metrics(list: &[Metric]) -> Result<Option<Vec<Metric>>> {
+    if list.contains(&Metric::All) {
+        return Ok(None);
+    }
+    let mut out: Vec<Metric> = Vec::new();
+    for &m in list {
+        if !out.contains(&m) {
+            out.push(m);
+        }
+    }
+    Ok(Some(out))
+}
