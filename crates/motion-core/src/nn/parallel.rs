@@ -18,7 +18,9 @@ thread_local! {
 /// The thread pool the crate splits work over: rayon with the `parallel` feature.
 #[cfg(feature = "parallel")]
 pub(crate) mod pool {
-    pub(crate) use rayon::{current_num_threads, current_thread_index, join, prelude, scope};
+    pub(crate) use rayon::{
+        current_num_threads, current_thread_index, in_place_scope, join, prelude, scope,
+    };
 }
 
 /// The thread pool the crate splits work over: without the `parallel` feature, the calling
@@ -66,21 +68,25 @@ pub(crate) mod pool {
         op(&Scope(PhantomData))
     }
 
+    /// Runs `op` with a serial [`Scope`] (rayon's runs `op` on the calling thread).
+    pub(crate) fn in_place_scope<'scope, OP, R>(op: OP) -> R
+    where
+        OP: FnOnce(&Scope<'scope>) -> R,
+    {
+        op(&Scope(PhantomData))
+    }
+
     /// Rayon's slice iterator names, as std's sequential iterators.
     pub(crate) mod prelude {
-        /// `par_iter`, `par_iter_mut` and `par_chunks_mut` on slices, sequentially.
+        /// `par_iter` and `par_chunks_mut` on slices, sequentially.
         pub(crate) trait SerialSlice<T> {
             fn par_iter(&self) -> std::slice::Iter<'_, T>;
-            fn par_iter_mut(&mut self) -> std::slice::IterMut<'_, T>;
             fn par_chunks_mut(&mut self, size: usize) -> std::slice::ChunksMut<'_, T>;
         }
 
         impl<T> SerialSlice<T> for [T] {
             fn par_iter(&self) -> std::slice::Iter<'_, T> {
                 self.iter()
-            }
-            fn par_iter_mut(&mut self) -> std::slice::IterMut<'_, T> {
-                self.iter_mut()
             }
             fn par_chunks_mut(&mut self, size: usize) -> std::slice::ChunksMut<'_, T> {
                 self.chunks_mut(size)
