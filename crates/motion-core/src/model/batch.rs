@@ -32,7 +32,7 @@ use std::sync::Arc;
 /// Fewest rows per shard: batches smaller than twice this run as one shard. Measured on a 2-core
 /// AMD EPYC (`motion-cli bench --shards 1|2`, alternating runs, every SIMD path, the shipped
 /// VGRU-d and random GRU-d 2x512 / VGRU-d 512 with f16 weights): at batch 16 a step is
-/// compute-bound (the AVX2 row kernel runs at about 90 % of one core's FMA peak) and two shards
+/// compute-bound (the AVX2 row kernel does 98 GFLOP/s on one core, near its FMA peak) and two shards
 /// of 8 rows take 0.53-0.64x the time of one (GRU-d, AVX2: 885 → 512 µs); at batch 8 two shards
 /// win on the portable path and tie or lose on AVX2 and AVX-512, where the second shard's
 /// reading of the weights again costs as much as it saves.
