@@ -5,7 +5,9 @@
 //! A group is (re)started when characters join or leave it: every row is re-seeded from its
 //! last `seed_frames` frames (its own seed at first, its generated frames later), so the motion
 //! goes on from where it was; each row draws noise from its character's `rng_seed`. Between
-//! membership changes a tick allocates nothing.
+//! membership changes a tick allocates nothing of its own (a group of 16 or more characters
+//! steps in shards over the rayon pool, which allocates one small job record per extra shard; see
+//! `motion_core::model::BatchGenerator`).
 use std::collections::VecDeque;
 use std::path::Path;
 use std::sync::Arc;

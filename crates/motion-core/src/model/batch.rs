@@ -6,15 +6,19 @@
 //! prediction before the last seed frame, see [`super::intention`].) The per-step work
 //! is matrix-matrix products over the batch (see [`crate::nn::gemm`]); all buffers are sized in
 //! [`BatchGenerator::new`], so a step allocates nothing of its own. At batch 1 the products are
-//! GEMVs and a step touches no heap at all (tested); at larger batches rayon may allocate its task
-//! records (and `matrixmultiply`, on CPUs without AVX-512, its packing buffers).
+//! GEMVs and a step touches no heap at all (tested). Below twice [`SHARD_MIN_ROWS`] rows a step
+//! stays on the calling thread; from there on every shard but the first is handed to the rayon
+//! pool each step, and rayon allocates one small job record per handed shard (and
+//! `matrixmultiply`, which the portable path uses above batch 16, its packing buffers).
 //!
 //! Large batches are cut into **shards** of consecutive rows, one per rayon thread, each with its
 //! own recurrent state and buffers: a step is then one fork-join for the whole step instead of
 //! one per product and gate update, and every thread runs its rows' products on its own
 //! ([`crate::nn::parallel::serial`]). Rows never interact, so results do not depend on the split.
 //! Small batches (below twice [`SHARD_MIN_ROWS`] rows) stay in one shard: they are bound by
-//! reading the weights, which every shard would read again.
+//! reading the weights, which every shard would read again. A sharded step waits for the slowest
+//! shard, so its worst case includes waking a pool thread (see the README's stall figures);
+//! [`BatchGenerator::with_shards`] with 1 keeps a batch on the calling thread.
 //!
 //! The fed-back frame is the model's normalized output itself (as in `training/models.py`), not
 //! a re-normalized copy of the full frame it returns.
