@@ -81,6 +81,37 @@ fn model_file_and_replanning_run() {
 }
 
 #[test]
+fn shards_are_reported_and_chosen() {
+    // The default rule: one shard below 16 rows; `--shards` overrides it (at most one per row).
+    let shards_of = |extra: &[&str]| -> Vec<(u64, u64)> {
+        let mut args = vec![
+            "--arch", "gru-d", "--hidden", "8", "--batch", "4,16", "--steps", "2",
+        ];
+        args.extend_from_slice(extra);
+        args.push("--json");
+        let (code, out, err) = bench(&args);
+        assert_eq!(code, 0, "{err}");
+        let report: serde_json::Value = serde_json::from_str(&out).expect("stdout is JSON");
+        report["results"]
+            .as_array()
+            .expect("results is an array")
+            .iter()
+            .map(|row| {
+                (
+                    row["batch"].as_u64().expect("batch"),
+                    row["shards"].as_u64().expect("shards is an integer"),
+                )
+            })
+            .collect()
+    };
+    assert_eq!(shards_of(&["--shards", "1"]), [(4, 1), (16, 1)]);
+    assert_eq!(shards_of(&["--shards", "3"]), [(4, 2), (16, 3)]);
+    let default = shards_of(&[]);
+    assert_eq!(default[0], (4, 1));
+    assert!(default[1].1 >= 1, "{default:?}");
+}
+
+#[test]
 fn text_table_names_the_columns() {
     let (code, out, err) = bench(&[
         "--arch", "gru-d", "--hidden", "8", "--batch", "1", "--steps", "1",
@@ -101,6 +132,7 @@ fn bad_input_exits_2() {
         &["--arch", "lstm"][..],
         &["--model", "/nonexistent/w.safetensors", "--steps", "1"][..],
         &["--npss", "/nonexistent/gt.npy", "/nonexistent/pred.npy"][..],
+        &["--shards", "0", "--steps", "1"][..],
     ] {
         let (code, _, err) = bench(args);
         assert_eq!(code, 2, "{args:?}: {err}");
