@@ -16,6 +16,7 @@ pub struct MotionWeights {
 
 /// Why a weights file did not load.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum MotionAssetError {
     /// The bytes could not be read.
     #[error("{path}: {source}")]

@@ -21,6 +21,7 @@ use crate::skeleton::{Skeleton, CMU_FRAME_DIMS, H36M_FRAME_DIMS};
 
 /// Why a motion file could not be read, converted or written.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum AnyMotionError {
     /// Reading or writing failed.
     #[error(transparent)]

@@ -20,6 +20,7 @@ use crate::retarget::Retargeter;
 
 /// Why a clip could not be written.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum ClipError {
     /// Writing failed (or the extension names no format).
     #[error(transparent)]

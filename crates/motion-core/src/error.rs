@@ -62,6 +62,7 @@ pub enum FormatError {
 
 /// An invalid skeleton description (from code or from a BVH hierarchy).
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
 pub enum SkeletonError {
     /// The skeleton has no joints.
     #[error("skeleton has no joints")]
@@ -132,6 +133,7 @@ pub enum SkeletonError {
 
 /// A motion whose data does not fit its layout, or a window out of range.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
 pub enum MotionError {
     /// The number of channels does not match the layout.
     #[error("motion has {found} channels but its layout needs {expected}")]

@@ -110,6 +110,7 @@ pub const RESAMPLER_CAPACITY: usize = 4;
 
 /// Why a [`PoseResampler`] could not do what was asked.
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum ResampleError {
     /// `advance` would go past the newest source pose: push more first ([`PoseResampler::needs`]).
     #[error("the output time {time} s is past the newest source pose ({available} s): push the next model frame first")]

@@ -168,6 +168,7 @@ const PRESETS: [(&str, [&str; 21]); 4] = [
 
 /// Why a rig cannot be retargeted.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum RetargetError {
     /// No built-in map fits and no joint map was given: names the first H3.6M joint without a
     /// match under the closest map.

@@ -22,6 +22,7 @@ use crate::skeleton::{Skeleton, H36M_SOURCE_FPS};
 
 /// Why a seed could not be loaded.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum SeedError {
     /// The file could not be read or parsed.
     #[error(transparent)]

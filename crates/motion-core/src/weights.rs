@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 
 /// An error loading weights: every variant names the file, and the tensor or metadata key at fault.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum WeightsError {
     /// The file could not be read.
     #[error("{}: {source}", path.display())]

@@ -2,6 +2,7 @@
 
 /// An input the metrics cannot score, or a score that is undefined for the input.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum MetricError {
     /// Ground truth and prediction (or two inputs that must agree) have different shapes.
     #[error("shape mismatch: {what} has shape {found:?} but {expected:?} was expected")]

@@ -1,8 +1,8 @@
 //! # motion-metrics
 //!
 //! NPSS (paper 000), the Euler-angle error of the standard H3.6M protocol, NDMS (paper 003),
-//! APD, the action-classifier protocol of paper 002 and plausibility measures without ground
-//! truth, in `f64`, exact to their definitions (`metrics.md`, `h36m.md`).
+//! APD, the action-classifier protocol of paper 002, plausibility measures without ground
+//! truth and the whole H3.6M test protocol of one action ([`protocol::ActionTruth`]), in `f64`, exact to their definitions (`metrics.md`, `h36m.md`).
 //!
 //! Every metric takes ndarray views of the caller's data, checks shapes and finiteness (typed
 //! [`MetricError`]s, never a panic), and parallelizes over sequences with rayon.
@@ -28,6 +28,7 @@ pub mod euler_error;
 pub mod ndms;
 pub mod npss;
 pub mod plausibility;
+pub mod protocol;
 pub mod reference;
 
 pub use apd::{apd, apd_batch};

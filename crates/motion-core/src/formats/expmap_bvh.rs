@@ -47,6 +47,7 @@ use super::bvh::Bvh;
 
 /// Why a motion could not be converted between exp-map and BVH.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum ConvertError {
     /// The motion is not in the exp-map layout.
     #[error("expected an exp-map motion, got BVH channels")]

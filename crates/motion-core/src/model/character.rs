@@ -20,6 +20,7 @@ use crate::skeleton::{Skeleton, H36M_SOURCE_FPS};
 
 /// Why a [`Character`] could not start or advance.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum CharacterError {
     /// The generator refused the seed, action or noise, or was not started.
     #[error(transparent)]

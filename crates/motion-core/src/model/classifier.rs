@@ -139,6 +139,7 @@ impl ClassifierConfig {
 
 /// Windows handed to the classifier were not usable.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum ClassifyError {
     /// The frames are not `frame_dims` wide.
     #[error("windows have {found} values per frame, the classifier reads {expected}")]

@@ -2,6 +2,7 @@
 
 /// Bad input to [`Generator`](super::Generator) or [`BatchGenerator`](super::BatchGenerator).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum GenerateError {
     /// The predictions asked for would not fit in memory (see
     /// [`crate::model::samples::MAX_SAMPLE_VALUES`]).

@@ -38,6 +38,7 @@ pub enum SimdPath {
 
 /// Why a path cannot be selected.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
 pub enum SimdError {
     /// The name is not one of `avx512`, `avx2`, `neon`, `portable`.
     #[error("unknown SIMD path {0:?}: expected avx512, avx2, neon or portable")]

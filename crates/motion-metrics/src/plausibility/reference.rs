@@ -31,6 +31,7 @@ pub const DRIFT_WINDOW_HOP: usize = 25;
 
 /// Why the reference statistics of an action cannot be made.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum ReferenceError {
     /// Not one of the 15 H3.6M actions.
     #[error("unknown action `{action}`; valid actions: {}", ACTIONS.join(", "))]

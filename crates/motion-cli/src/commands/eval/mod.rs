@@ -12,7 +12,6 @@
 mod plots;
 pub mod published;
 pub mod report;
-pub mod scoring;
 pub mod selection;
 
 use std::path::PathBuf;
@@ -24,8 +23,8 @@ use ndarray::{s, Array3, Array4};
 
 use motion_core::model::{ActionClassifier, BatchGenerator, MotionModel, Network, Noise};
 use motion_core::protocol::{
-    load_action_windows_covered, load_subject_sequences, zero_velocity_held_root, ACTIONS,
-    LONG_TERM_HORIZON, SEED_FRAMES, TEST_SUBJECT,
+    load_action_windows_covered, load_subject_sequences, ACTIONS, LONG_TERM_HORIZON, SEED_FRAMES,
+    TEST_SUBJECT,
 };
 use motion_core::skeleton::{H36M_FRAME_DIMS, H36M_PROTOCOL_FPS};
 use motion_metrics::euler_error_at_horizons;
@@ -36,12 +35,12 @@ use super::plausibility;
 use super::UsageError;
 use crate::model_source;
 use motion_core::formats::npy_stream::NpyStream;
+use motion_metrics::protocol::{ActionTruth, Coverage, NpssScores, Scores, Speed};
 use report::{
     ActionResult, ActionScores, CoverageReport, EvalReport, GroundTruth, Means, MeansOverActions,
     Method, ModelInfo, NdmsScores, NpssReport, PlausibilityKeys, Protocol, SavedPredictions,
     Skipped, SpeedReport,
 };
-use scoring::{ActionTruth, Coverage, NpssScores, Scores, Speed};
 use selection::{Planned, Selection};
 
 /// Test windows per action in the protocol.
@@ -217,7 +216,7 @@ pub fn run(args: Args) -> Result<()> {
         }
         progress.set_message(format!("{}: scoring", planned.action));
         let model_scores = truth.score(predictions.view(), || progress.inc(1))?;
-        let baseline = zero_velocity_predictions(&truth, horizon);
+        let baseline = truth.zero_velocity();
         let baseline_scores = truth.score(baseline.view(), || {})?;
         // The real continuation of each window after its seed (files may end before the horizon).
         let real_pairs: Vec<_> = truth
@@ -453,19 +452,6 @@ fn coverage_report(coverage: Coverage) -> CoverageReport {
         npss_whole_frames: coverage.npss_whole_frames,
         npss_windows: coverage.npss_windows.into_iter().collect(),
     }
-}
-
-/// The zero-velocity baseline of every window, root held
-/// ([`motion_core::protocol::zero_velocity_held_root`]): `8 x 1 x horizon x 99`. Its angles are
-/// the protocol's repeated last frame, so its Euler error and NPSS are paper 000 Table 6's baseline.
-fn zero_velocity_predictions(truth: &ActionTruth, horizon: usize) -> Array4<f64> {
-    let windows = truth.windows();
-    let mut out = Array4::zeros((windows.len(), 1, horizon, H36M_FRAME_DIMS));
-    for (w, window) in windows.iter().enumerate() {
-        out.slice_mut(s![w, 0, .., ..])
-            .assign(&zero_velocity_held_root(window.seed.view(), horizon));
-    }
-    out
 }
 
 fn npss_report(scores: &NpssScores) -> NpssReport {

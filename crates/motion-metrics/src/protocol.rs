@@ -1,14 +1,16 @@
-//! Scores of one action: the model's (or the zero-velocity baseline's) predictions of the 8 test
-//! windows, `K` samples each, against the ground truth, with every metric of `eval`.
+//! The H3.6M test protocol scored for one action: a model's (or the zero-velocity baseline's)
+//! predictions of the 8 test windows, `K` samples each, against the ground truth, with every
+//! metric of `motion-cli eval` ([`ActionTruth::score`]).
 //!
-//! How `K` samples enter each metric (also stated in the output):
+//! How `K` samples enter each metric:
 //! - Euler error: every sample is scored against its window's ground truth; the mean over all
 //!   `8 x K` sequences (= the mean over samples of the per-sample means over windows).
 //! - NPSS: sample index `k` of the 8 windows is one set of 8 sequences, scored as the metric
 //!   defines (power-weighted over sequences and dims); the mean over `k`.
 //! - NDMS: f_sim over all words of all `8 x K` forecasts (paper 003 eq. 9).
 //! - APD: per window over its `K` samples, then the mean over windows.
-//! - Joint speed: the mean over all `8 x K` forecasts.
+//! - Joint speed (mm per frame of the 12 NDMS joints over the last second): the mean over all
+//!   `8 x K` forecasts.
 //!
 //! Horizons past the test windows' guaranteed 100 frames (up to 300, 12 s): a window's ground
 //! truth ends where its S5 file does. The Euler error of frame `t` is the mean over the windows
@@ -19,17 +21,77 @@
 //! before.
 use std::sync::Arc;
 
-use anyhow::Result;
-use ndarray::{concatenate, s, Array2, Array3, ArrayView2, ArrayView4, Axis};
+use ndarray::{concatenate, s, Array2, Array3, Array4, ArrayView2, ArrayView3, ArrayView4, Axis};
 
-use motion_core::protocol::{expmap_batch_to_euler_protocol, protocol_positions, WindowData};
+use motion_core::error::MotionError;
+use motion_core::protocol::{
+    expmap_batch_to_euler_protocol, protocol_positions, zero_velocity_held_root, WindowData,
+};
 use motion_core::skeleton::H36M_NDMS_JOINTS;
 use motion_core::Skeleton;
-use motion_metrics::ndms::{NdmsConfig, NdmsDatabase, NdmsReport};
-use motion_metrics::npss::{
-    Npss, NpssWindow, SpectrumPower, NPSS_LONG_WINDOWS_25HZ, NPSS_WINDOWS_25HZ,
-};
-use motion_metrics::{apd, euler_error};
+
+use crate::ndms::{NdmsConfig, NdmsDatabase, NdmsReport};
+use crate::npss::{Npss, NpssWindow, SpectrumPower, NPSS_LONG_WINDOWS_25HZ, NPSS_WINDOWS_25HZ};
+use crate::{apd, euler_error, MetricError};
+
+/// Why one action's protocol could not be scored.
+#[non_exhaustive]
+#[derive(Debug, thiserror::Error)]
+pub enum ProtocolError {
+    /// A metric refused the arrays (non-finite predictions, too few frames, ...).
+    #[error("{what}: {source}")]
+    Metric {
+        /// What was being scored.
+        what: &'static str,
+        /// The metric's error.
+        source: MetricError,
+    },
+    /// Forward kinematics refused a frame (positions of a window or a prediction).
+    #[error("{what}: {source}")]
+    Kinematics {
+        /// Whose positions.
+        what: &'static str,
+        /// The kinematics error.
+        source: MotionError,
+    },
+    /// The predictions do not have the windows' shape.
+    #[error(
+        "predictions have shape {found:?}; expected [{windows}, samples >= 1, {horizon}, {width}]"
+    )]
+    Shape {
+        /// The shape given.
+        found: Vec<usize>,
+        /// Test windows of the action.
+        windows: usize,
+        /// Predicted frames.
+        horizon: usize,
+        /// Dims per frame.
+        width: usize,
+    },
+    /// No test windows, or a horizon of 0 frames.
+    #[error("nothing to score: {windows} test windows, horizon {horizon} frames")]
+    NoWindows {
+        /// Test windows given.
+        windows: usize,
+        /// Predicted frames asked for.
+        horizon: usize,
+    },
+}
+
+fn metric(what: &'static str) -> impl FnOnce(MetricError) -> ProtocolError {
+    move |source| ProtocolError::Metric { what, source }
+}
+
+fn kinematics(what: &'static str) -> impl FnOnce(MotionError) -> ProtocolError {
+    move |source| ProtocolError::Kinematics { what, source }
+}
+
+/// Shape errors of `concatenate` / `stack` here come from arrays this module sized itself.
+fn joined<A: Clone, D: ndarray::RemoveAxis>(
+    result: Result<ndarray::Array<A, D>, ndarray::ShapeError>,
+) -> ndarray::Array<A, D> {
+    result.expect("arrays sized by this module")
+}
 
 /// Frames of the last second at 25 Hz (joint-speed check).
 const LAST_SECOND_FRAMES: usize = 25;
@@ -114,7 +176,13 @@ impl ActionTruth {
         windows: Vec<WindowData>,
         reference_sequences: &[Array2<f64>],
         horizon: usize,
-    ) -> Result<Self> {
+    ) -> Result<Self, ProtocolError> {
+        if windows.is_empty() || horizon == 0 {
+            return Err(ProtocolError::NoWindows {
+                windows: windows.len(),
+                horizon,
+            });
+        }
         let skeleton = Arc::new(Skeleton::h36m());
         let gt_euler: Vec<Array2<f64>> = windows
             .iter()
@@ -128,14 +196,18 @@ impl ActionTruth {
             .min(horizon);
         let mut positions = Vec::with_capacity(reference_sequences.len());
         for sequence in reference_sequences {
-            positions.push(protocol_positions(&skeleton, sequence.view())?);
+            positions.push(
+                protocol_positions(&skeleton, sequence.view())
+                    .map_err(kinematics("the NDMS reference sequences"))?,
+            );
         }
         let position_views: Vec<_> = positions.iter().map(|p| p.view()).collect();
         let database = NdmsDatabase::from_sequences(
             NdmsConfig::h36m_body_frame(),
             &position_views,
-            motion_metrics::NnMethod::default(),
-        )?;
+            crate::NnMethod::default(),
+        )
+        .map_err(metric("the NDMS database"))?;
         let mut speeds = Vec::new();
         for w in windows.iter().filter(|w| w.ground_truth.nrows() >= horizon) {
             speeds.push(joined_speed(&skeleton, &w.seed, w.ground_truth.view())?);
@@ -192,6 +264,20 @@ impl ActionTruth {
         &self.windows
     }
 
+    /// The zero-velocity baseline of every window, root held
+    /// ([`motion_core::protocol::zero_velocity_held_root`]): `windows x 1 x horizon x 99`. Its
+    /// angles are the protocol's repeated last frame, so its Euler error and NPSS are paper 000
+    /// Table 6's baseline.
+    pub fn zero_velocity(&self) -> Array4<f64> {
+        let width = self.skeleton.expmap_width();
+        let mut out = Array4::zeros((self.windows.len(), 1, self.horizon, width));
+        for (w, window) in self.windows.iter().enumerate() {
+            out.slice_mut(s![w, 0, .., ..])
+                .assign(&zero_velocity_held_root(window.seed.view(), self.horizon));
+        }
+        out
+    }
+
     /// Words in the NDMS database.
     pub fn database_words(&self) -> usize {
         self.database.len()
@@ -203,12 +289,22 @@ impl ActionTruth {
         &self,
         predictions: ArrayView4<'_, f64>,
         mut on_window: impl FnMut(),
-    ) -> Result<Scores> {
+    ) -> Result<Scores, ProtocolError> {
         let (windows, samples, horizon, width) = predictions.dim();
-        debug_assert_eq!(windows, self.windows.len());
+        if windows != self.windows.len()
+            || samples == 0
+            || horizon != self.horizon
+            || width != self.skeleton.expmap_width()
+        {
+            return Err(ProtocolError::Shape {
+                found: predictions.shape().to_vec(),
+                windows: self.windows.len(),
+                horizon: self.horizon,
+                width: self.skeleton.expmap_width(),
+            });
+        }
 
         // Euler error and NPSS: one set of 8 windows per sample index.
-        debug_assert_eq!(horizon, self.horizon);
         let covered = self
             .gt_euler
             .iter()
@@ -226,13 +322,14 @@ impl ActionTruth {
             .iter()
             .map(|g| g.slice(s![..self.common, ..]))
             .collect();
-        let common_gt = ndarray::stack(Axis(0), &common_gt)?;
+        let common_gt = joined(ndarray::stack(Axis(0), &common_gt));
         for k in 0..samples {
             let set = predictions.slice(s![.., k, .., ..]);
             let euler = expmap_batch_to_euler_protocol(set);
             if self.fully_covered() {
                 // The protocol: all 8 windows over the whole horizon.
-                let per_frame = euler_error(common_gt.view(), euler.view())?;
+                let per_frame =
+                    euler_error(common_gt.view(), euler.view()).map_err(metric("Euler error"))?;
                 euler_sum
                     .iter_mut()
                     .zip(&per_frame)
@@ -244,7 +341,8 @@ impl ActionTruth {
                     let per_frame = euler_error(
                         gt.slice(s![..n, ..]).insert_axis(Axis(0)),
                         euler.slice(s![w..w + 1, ..n, ..]),
-                    )?;
+                    )
+                    .map_err(metric("Euler error"))?;
                     for (t, e) in per_frame.iter().enumerate() {
                         euler_sum[t] += e;
                         euler_count[t] += 1;
@@ -276,8 +374,9 @@ impl ActionTruth {
             let mut flattened = Array2::zeros((samples, horizon * self.skeleton.len() * 3));
             for k in 0..samples {
                 let forecast = predictions.slice(s![w, k, .., ..]);
-                let joined = concatenate(Axis(0), &[window.seed.view(), forecast])?;
-                let positions = protocol_positions(&self.skeleton, joined.view())?;
+                let joined = joined(concatenate(Axis(0), &[window.seed.view(), forecast]));
+                let positions = protocol_positions(&self.skeleton, joined.view())
+                    .map_err(kinematics("the predictions"))?;
                 let split = window.seed.nrows();
                 let future = positions.slice(s![split.., .., ..]);
                 flattened
@@ -287,7 +386,8 @@ impl ActionTruth {
                     .for_each(|(d, v)| *d = *v);
                 speeds.push(Speed {
                     world: last_second_speed(positions.view(), split),
-                    pose: pose_speed(&self.skeleton, joined.view(), split)?,
+                    pose: pose_speed(&self.skeleton, joined.view(), split)
+                        .map_err(kinematics("the predictions"))?,
                 });
                 seeds.push(
                     positions
@@ -297,16 +397,16 @@ impl ActionTruth {
                 forecasts.push(future.to_owned());
             }
             if samples > 1 {
-                apd_sum += apd(flattened.view())?;
+                apd_sum += apd(flattened.view()).map_err(metric("APD"))?;
             }
             on_window();
         }
-        debug_assert_eq!(width, self.skeleton.expmap_width());
         let forecast_views: Vec<_> = forecasts.iter().map(|f| f.view()).collect();
         let seed_views: Vec<_> = seeds.iter().map(|f| f.view()).collect();
         let ndms = self
             .database
-            .score_forecasts(&forecast_views, Some(&seed_views))?;
+            .score_forecasts(&forecast_views, Some(&seed_views))
+            .map_err(metric("NDMS"))?;
         Ok(Scores {
             euler_per_frame,
             npss: mean_npss(&npss_sets),
@@ -328,10 +428,12 @@ impl ActionTruth {
         common_gt: &Array3<f64>,
         pred: &Array3<f64>,
         power: SpectrumPower,
-    ) -> Result<NpssScores> {
+    ) -> Result<NpssScores, ProtocolError> {
         let common = self.common;
         let pred_common = pred.slice(s![.., ..common, ..]);
-        let whole = npss.score(common_gt.view(), pred_common, power)?;
+        let whole = npss
+            .score(common_gt.view(), pred_common, power)
+            .map_err(metric("NPSS"))?;
         let mut windows = Vec::new();
         for window in npss_windows(self.horizon) {
             let range = window.start..window.end;
@@ -340,7 +442,8 @@ impl ActionTruth {
                     common_gt.slice(s![.., range.clone(), ..]),
                     pred.slice(s![.., range, ..]),
                     power,
-                )?
+                )
+                .map_err(metric("NPSS"))?
             } else {
                 let covering: Vec<usize> = (0..self.gt_euler.len())
                     .filter(|&w| self.gt_euler[w].nrows() >= window.end)
@@ -357,10 +460,11 @@ impl ActionTruth {
                     .map(|&w| pred.slice(s![w, range.clone(), ..]))
                     .collect();
                 npss.score(
-                    ndarray::stack(Axis(0), &gt)?.view(),
-                    ndarray::stack(Axis(0), &p)?.view(),
+                    joined(ndarray::stack(Axis(0), &gt)).view(),
+                    joined(ndarray::stack(Axis(0), &p)).view(),
                     power,
-                )?
+                )
+                .map_err(metric("NPSS"))?
             };
             windows.push((window.label, value));
         }
@@ -392,7 +496,7 @@ fn mean_speed(speeds: &[Speed]) -> Speed {
 /// Mean displacement per frame of the 12 NDMS joints over the last second of `positions`
 /// (`T x J x 3`, the forecast starting at `split`): the last `min(25, T - split)` frame-to-frame
 /// steps, the first of which may start at the last seed frame.
-fn last_second_speed(positions: ndarray::ArrayView3<'_, f64>, split: usize) -> f64 {
+fn last_second_speed(positions: ArrayView3<'_, f64>, split: usize) -> f64 {
     let frames = positions.dim().0;
     let steps = LAST_SECOND_FRAMES.min(frames - split);
     let mut sum = 0.0;
@@ -409,7 +513,11 @@ fn last_second_speed(positions: ndarray::ArrayView3<'_, f64>, split: usize) -> f
 }
 
 /// [`last_second_speed`] of the body alone: FK of `frames` with the root-delta dims 0..5 zeroed.
-fn pose_speed(skeleton: &Skeleton, frames: ArrayView2<'_, f64>, split: usize) -> Result<f64> {
+fn pose_speed(
+    skeleton: &Skeleton,
+    frames: ArrayView2<'_, f64>,
+    split: usize,
+) -> Result<f64, MotionError> {
     let mut still = frames.to_owned();
     still.slice_mut(s![.., ..6]).fill(0.0);
     let positions = protocol_positions(skeleton, still.view())?;
@@ -421,11 +529,169 @@ fn joined_speed(
     skeleton: &Skeleton,
     seed: &Array2<f64>,
     future: ArrayView2<'_, f64>,
-) -> Result<Speed> {
-    let joined = concatenate(Axis(0), &[seed.view(), future])?;
-    let positions = protocol_positions(skeleton, joined.view())?;
+) -> Result<Speed, ProtocolError> {
+    let joined = joined(concatenate(Axis(0), &[seed.view(), future]));
+    let positions =
+        protocol_positions(skeleton, joined.view()).map_err(kinematics("the ground truth"))?;
     Ok(Speed {
         world: last_second_speed(positions.view(), seed.nrows()),
-        pose: pose_speed(skeleton, joined.view(), seed.nrows())?,
+        pose: pose_speed(skeleton, joined.view(), seed.nrows())
+            .map_err(kinematics("the ground truth"))?,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use motion_core::protocol::TestWindow;
+
+    const WIDTH: usize = 99;
+
+    /// Smooth exp-map frames: small joint-angle sines, a root moving `root_step` per frame.
+    fn frames(n: usize, phase: f64, root_step: f64) -> Array2<f64> {
+        Array2::from_shape_fn((n, WIDTH), |(t, d)| match d {
+            0 => root_step,
+            1..=5 => 0.0,
+            _ => 0.3 * (0.2 * t as f64 + 0.7 * d as f64 + phase).sin(),
+        })
+    }
+
+    fn window(sample: usize, ground_truth: usize) -> WindowData {
+        let all = frames(50 + ground_truth, sample as f64, 0.0);
+        WindowData {
+            window: TestWindow {
+                action: "walking",
+                sample,
+                subaction: 1,
+                seed_start: 0,
+                predict_start: 50,
+                even_frames_in_file: 50 + ground_truth,
+            },
+            seed: all.slice(s![..50, ..]).to_owned(),
+            ground_truth: all.slice(s![50.., ..]).to_owned(),
+        }
+    }
+
+    fn truth(ground_truth: &[usize], horizon: usize) -> ActionTruth {
+        let windows = ground_truth
+            .iter()
+            .enumerate()
+            .map(|(i, &n)| window(i, n))
+            .collect();
+        let references = [frames(120, 0.3, 0.0), frames(90, 1.1, 0.0)];
+        ActionTruth::new(windows, &references, horizon).unwrap()
+    }
+
+    /// The ground truth itself as `windows x 1 x horizon x 99` predictions.
+    fn perfect(truth: &ActionTruth) -> Array4<f64> {
+        let mut out = Array4::zeros((truth.windows().len(), 1, truth.horizon, WIDTH));
+        for (w, window) in truth.windows().iter().enumerate() {
+            out.slice_mut(s![w, 0, .., ..])
+                .assign(&window.ground_truth.slice(s![..truth.horizon, ..]));
+        }
+        out
+    }
+
+    #[test]
+    fn the_ground_truth_scores_zero_error_and_its_own_speed() {
+        let truth = truth(&[40; 4], 40);
+        let scores = truth.score(perfect(&truth).view(), || {}).unwrap();
+        assert!(scores.euler_per_frame.iter().all(|e| e.abs() < 1e-12));
+        assert!(scores.npss.whole.abs() < 1e-12 && scores.npss_reference.whole.abs() < 1e-12);
+        let real = truth.speed_last_second.unwrap();
+        assert!(real.pose > 1.0, "the sines move the joints: {real:?}");
+        assert!((scores.speed_last_second.pose - real.pose).abs() < 1e-9);
+        assert!((scores.speed_last_second.world - real.world).abs() < 1e-9);
+        assert_eq!(scores.apd, None, "one sample: no APD");
+    }
+
+    #[test]
+    fn zero_velocity_holds_the_last_pose_and_the_root() {
+        let truth = truth(&[30; 3], 30);
+        let baseline = truth.zero_velocity();
+        assert_eq!(baseline.shape(), &[3, 1, 30, WIDTH]);
+        for (w, window) in truth.windows().iter().enumerate() {
+            let last = window.seed.row(49);
+            for t in 0..30 {
+                for d in 0..WIDTH {
+                    let expected = if d < 6 { 0.0 } else { last[d] };
+                    assert_eq!(baseline[[w, 0, t, d]], expected);
+                }
+            }
+        }
+        let scores = truth.score(baseline.view(), || {}).unwrap();
+        assert!(scores.speed_last_second.pose < 1e-9 && scores.speed_last_second.world < 1e-9);
+        assert!(scores.euler_per_frame[29] > scores.euler_per_frame[0]);
+    }
+
+    #[test]
+    fn pose_speed_ignores_the_root_and_world_speed_does_not() {
+        // A frozen body carried along by the root: world speed > 0, pose speed 0.
+        let truth = truth(&[30; 2], 30);
+        let mut gliding = truth.zero_velocity();
+        gliding.slice_mut(s![.., .., .., 0]).fill(5.0);
+        let scores = truth.score(gliding.view(), || {}).unwrap();
+        assert!(scores.speed_last_second.pose < 1e-9);
+        assert!(scores.speed_last_second.world > 1.0);
+    }
+
+    #[test]
+    fn windows_that_end_early_only_count_where_they_cover() {
+        // Window 1's file ends 20 frames into a 40-frame horizon.
+        let truth = truth(&[40, 20, 40], 40);
+        let coverage = truth.coverage();
+        assert_eq!(coverage.frames_per_window, vec![40, 20, 40]);
+        assert_eq!(coverage.npss_whole_frames, 20);
+        assert_eq!(coverage.windows_per_second, vec![2, 2]);
+        assert!(truth.speed_last_second.is_some());
+        // Predictions: perfect where there is truth, anything past it (zeros).
+        let mut predictions = Array4::zeros((3, 2, 40, WIDTH));
+        for (w, window) in truth.windows().iter().enumerate() {
+            let n = window.ground_truth.nrows();
+            for k in 0..2 {
+                predictions
+                    .slice_mut(s![w, k, ..n, ..])
+                    .assign(&window.ground_truth);
+            }
+        }
+        let scores = truth.score(predictions.view(), || {}).unwrap();
+        assert_eq!(scores.euler_per_frame.len(), 40);
+        assert!(scores.euler_per_frame.iter().all(|e| e.abs() < 1e-12));
+        assert_eq!(scores.apd, Some(0.0), "two identical samples");
+    }
+
+    #[test]
+    fn bad_shapes_and_empty_input_are_typed_errors() {
+        let truth = truth(&[30; 2], 30);
+        for shape in [
+            (3, 1, 30, WIDTH),
+            (2, 0, 30, WIDTH),
+            (2, 1, 29, WIDTH),
+            (2, 1, 30, 54),
+        ] {
+            let err = truth.score(Array4::zeros(shape).view(), || {}).unwrap_err();
+            assert!(
+                matches!(err, ProtocolError::Shape { .. }),
+                "{shape:?}: {err}"
+            );
+        }
+        let mut nan = perfect(&truth);
+        nan[[1, 0, 3, 7]] = f64::NAN;
+        let err = truth.score(nan.view(), || {}).unwrap_err();
+        assert!(err.to_string().contains("non-finite"), "{err}");
+        let err = ActionTruth::new(Vec::new(), &[frames(40, 0.0, 0.0)], 10)
+            .err()
+            .unwrap();
+        assert!(
+            matches!(err, ProtocolError::NoWindows { windows: 0, .. }),
+            "{err}"
+        );
+        let err = ActionTruth::new(vec![window(0, 10)], &[frames(40, 0.0, 0.0)], 0)
+            .err()
+            .unwrap();
+        assert!(
+            matches!(err, ProtocolError::NoWindows { horizon: 0, .. }),
+            "{err}"
+        );
+    }
 }
