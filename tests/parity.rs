@@ -238,6 +238,46 @@ fn vgru_d() {
     check_model("vgru_d");
 }
 
+/// Past its plan horizon the VGRU-d streams plan blocks (`model/vgru.rs`, "Streaming beyond the
+/// planned horizon"); `training/models.py` (`VGRUD.plan_guides`) follows the same rule, so a closed
+/// loop through three blocks matches PyTorch's.
+fn check_streamed_plan(name: &str) {
+    let model = Arc::new(MotionModel::load(fixture(&format!("{name}.safetensors"))).unwrap());
+    let expected = WeightStore::open(fixture(&format!("{name}.expected.safetensors"))).unwrap();
+    let (ss, seed) = get(&expected, "seed");
+    let (ls, long) = get(&expected, "closed_loop_long");
+    let (_, eps) = get(&expected, "eps");
+    let horizon: usize = expected.metadata("horizon").unwrap().parse().unwrap();
+    let long_horizon: usize = expected.metadata("long_horizon").unwrap().parse().unwrap();
+    assert_eq!(ls[0], long_horizon);
+    assert!(
+        long_horizon > 3 * horizon,
+        "the fixture must cross three block boundaries"
+    );
+    let width = ss[1];
+    let seed = ArrayView2::from_shape((ss[0], width), &seed).unwrap();
+    let mut generator = Generator::new(model);
+    generator.set_plan_horizon(horizon).unwrap();
+    generator
+        .start(seed, expected.metadata("action"), Noise::Explicit(&eps))
+        .unwrap();
+    for k in 0..long_horizon {
+        let frame = generator.step().unwrap();
+        assert_close(
+            &format!("{name} closed_loop_long[{k}]"),
+            frame,
+            &long[k * width..(k + 1) * width],
+        );
+    }
+}
+
+#[test]
+fn vgru_d_streamed_plan_blocks() {
+    check_streamed_plan("vgru_d");
+    check_streamed_plan("vgru_d_residual");
+    check_streamed_plan("vgru_d_f16");
+}
+
 #[test]
 fn vgru_d_residual() {
     check_model("vgru_d_residual");

@@ -47,6 +47,7 @@ MLP_SIZES = [7, 6, 5]
 
 # Model fixture sizes.
 MODEL_HIDDEN, MODEL_PLAN, SEED_FRAMES, HORIZON = 16, 8, 10, 30
+LONG_HORIZON = 3 * HORIZON + 5  # VGRU-d closed loops through three streamed plan blocks
 
 # Action classifier fixture sizes: hidden, layers, window frames, windows.
 CLASSIFIER_HIDDEN, CLASSIFIER_LAYERS, CLASSIFIER_WINDOW, CLASSIFIER_WINDOWS = 16, 2, 12, 3
@@ -252,6 +253,12 @@ def model_fixture(stem: str, gen: torch.Generator) -> tuple[Fixture, Fixture]:
     if eps is not None:
         expected["eps"] = eps
     meta = {"action": action, "horizon": str(HORIZON), "seed_frames": str(SEED_FRAMES), "weights": f"{stem}.safetensors"}
+    if architecture == "vgru-d":
+        # Past the plan: the engine's streamed plan blocks (models.VGRUD.plan_guides), eps reused by every block.
+        expected["closed_loop_long"] = _f32(
+            ref.predict(seed.double(), action=action or None, horizon=LONG_HORIZON, eps=eps.double())
+        )
+        meta["long_horizon"] = str(LONG_HORIZON)
     return weights, (expected, meta)
 
 

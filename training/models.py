@@ -124,8 +124,9 @@ class MotionModel(nn.Module):
         self.output_dropout = nn.Dropout(dropout)
 
     # ---- subclass interface -------------------------------------------------------------------
-    def _begin(self, batch: int, steps: int, action, eps, like: torch.Tensor) -> dict:
-        """Per-sequence context (hidden state, guides) for a run of ``steps`` body steps."""
+    def _begin(self, batch: int, steps: int, action, eps, like: torch.Tensor, seed_len: int | None = None) -> dict:
+        """Per-sequence context (hidden state, guides) for a run of ``steps`` body steps (``seed_len`` of them
+        teacher-forced seed frames, when known: the VGRU plan streams in blocks after it)."""
         raise NotImplementedError
 
     def _run(self, ctx: dict, features: torch.Tensor, t0: int) -> torch.Tensor:
@@ -179,27 +180,32 @@ class MotionModel(nn.Module):
         action=None,
         eps=None,
         return_seed_outputs: bool = False,
+        feed_noise: float = 0.0,
     ):
         """Teacher-force ``seed [B, S, O]``, then feed own outputs back for ``horizon`` predictions.
 
         Returns ``[B, horizon, O]`` (frames S .. S+horizon-1); with ``return_seed_outputs`` also the
         seed-phase outputs ``[B, S, O]`` first. The last seed output is the first prediction. The
-        VGRU plan covers ``S + horizon`` steps. Derivative features of fed-back frames come from
-        the history including the seed frames.
+        VGRU plan covers ``S + horizon`` steps (streamed in blocks past the config's, as the engine
+        does). Derivative features of fed-back frames come from the history including the seed
+        frames. ``feed_noise`` (training only): Gaussian noise of that standard deviation (normalized
+        units) added to every fed-back frame, which is then both the input and the residual base of
+        the next prediction (the model learns to pull a disturbed pose back).
         """
         batch, seed_len, _ = seed.shape
         if seed_len < 1 or horizon < 1:
             raise ValueError(f"need at least 1 seed frame and horizon >= 1, got {seed_len}, {horizon}")
-        ctx = self._begin(batch, seed_len + horizon, action, eps, seed)
+        ctx = self._begin(batch, seed_len + horizon, action, eps, seed, seed_len=seed_len)
         history = DerivativeHistory(self.derivative_order)
         seed_features = torch.stack([history.push(seed[:, t]) for t in range(seed_len)], dim=1)
         seed_out = self._decode(self._run(ctx, self.input_dropout(seed_features), 0), seed)
         frame = seed_out[:, -1:]
         outputs = [frame]
         for k in range(1, horizon):
-            features = history.push(frame[:, 0]).unsqueeze(1)
+            fed = frame + feed_noise * torch.randn_like(frame) if feed_noise > 0 else frame
+            features = history.push(fed[:, 0]).unsqueeze(1)
             hidden = self._run(ctx, self.input_dropout(features), seed_len + k - 1)
-            frame = self._decode(hidden, frame)
+            frame = self._decode(hidden, fed)
             outputs.append(frame)
         generated = torch.cat(outputs, dim=1)
         return (seed_out, generated) if return_seed_outputs else generated
@@ -268,15 +274,33 @@ class VGRUD(MotionModel):
         self.plan = PlanRNN(len(self.actions), self.plan_size, self.convention)
         self.body = BodyGRUCell(self.input_size, self.hidden_size, self.plan_size, self.convention)
 
-    def _begin(self, batch, steps, action, eps, like):
+    def _begin(self, batch, steps, action, eps, like, seed_len=None):
         action = self.action_indices(action, batch, like.device)
-        guides = self.plan.guides(action, steps, eps, like)
+        guides = self.plan_guides(action, steps, eps, like, seed_len)
         h = torch.zeros(batch, self.hidden_size, dtype=like.dtype, device=like.device)
         # V p_t for every step at once: one matrix product instead of one per step.
         # Unbound into per-step views: indexing a tensor per step would make autograd allocate a full-size
         # zero gradient for every step (quadratic memory traffic); unbind's backward stacks once.
         guide_gates = F.linear(guides, self.body.weight_ph).unbind(0)
         return {"h": h, "guide_gates": guide_gates, "steps": steps}
+
+    def plan_guides(self, action: torch.Tensor, steps: int, eps, like: torch.Tensor, seed_len: int | None = None):
+        """Guides ``[steps, B, P]``. Up to ``S + T`` steps (``S`` = ``seed_len``, default the config's
+        ``seed_frames``; ``T`` = the config's ``horizon``) one plan of ``steps`` steps, as trained. Beyond that the
+        engine's streaming rule (motion-core ``model/vgru.rs``,
+        "Streaming beyond the planned horizon"): every further block of ``T`` steps reads the guides ``S .. S+T``
+        of a fresh ``S + T``-step plan (a new ``eps ~ N(0, I)`` when ``eps`` is None, else the same ``eps``), so
+        long closed loops here match the Rust generator's."""
+        block = int(self.config["horizon"])
+        span = (int(self.config.get("seed_frames", 50)) if seed_len is None else seed_len) + block
+        if steps <= span:
+            return self.plan.guides(action, steps, eps, like)
+        blocks = [self.plan.guides(action, span, eps, like)]
+        covered = span
+        while covered < steps:
+            blocks.append(self.plan.guides(action, span, eps, like)[span - block :])
+            covered += block
+        return torch.cat(blocks, dim=0)[:steps]
 
     def _run(self, ctx, features, t0):
         steps = features.shape[1]
@@ -306,7 +330,7 @@ class GRUD(MotionModel):
     def action_indices(self, action, batch, device):
         return None  # unconditioned: any action argument is ignored
 
-    def _begin(self, batch, steps, action, eps, like):
+    def _begin(self, batch, steps, action, eps, like, seed_len=None):
         h = [torch.zeros(batch, self.hidden_size, dtype=like.dtype, device=like.device) for _ in self.rnn]
         return {"h": h}
 
@@ -369,7 +393,7 @@ class DAELSTM(MotionModel):
             flat += [cell.weight_ih, cell.weight_hh, cell.bias_ih, cell.bias_hh]
         return flat
 
-    def _begin(self, batch, steps, action, eps, like):
+    def _begin(self, batch, steps, action, eps, like, seed_len=None):
         zeros = torch.zeros(self.num_layers, batch, self.hidden_size, dtype=like.dtype, device=like.device)
         onehot = None
         if self.actions:

@@ -45,6 +45,7 @@ from . import metrics_np
 from .checkpoint_io import BEST, CHECKPOINT, atomic_save, read_checkpoint
 from .features import DerivativeHistory
 from .models import build_model, make_config, parameter_count
+from .long_horizon import MOTION_LOSS, accel_loss, choice_key, long_closed_loop, speed_loss, speed_ratios
 from .spectral import spectral_loss
 
 #: Iterations at which the published lambda schedule steps up, and the values from then on.
@@ -116,6 +117,14 @@ def build_parser() -> argparse.ArgumentParser:
                    help="instead of a fixed --spectral-weight: each iteration, scale the spectral term's gradient to "
                    "R x the norm of the squared-error terms' gradient (one more backward pass through the closed loop)")
     g.add_argument("--schedule-scale", type=float, default=1.0, help="scales the lambda and lr step iterations")
+    g.add_argument("--closed-loop-weight", type=float, default=None, metavar="LAMBDA",
+                   help="a constant closed-loop weight instead of the lambda schedule (fine-tunes)")
+    g.add_argument("--feed-noise", type=float, default=0.0, metavar="SIGMA",
+                   help="Gaussian noise (normalized units) added to every fed-back frame of the training closed loop")
+    g.add_argument("--speed-weight", type=float, default=0.0, metavar="W",
+                   help="adds W x the closed loop's joint speed + acceleration penalty (long_horizon.speed_loss)")
+    g.add_argument("--motion-loss", default="hinge", choices=["hinge", "log"],
+                   help="form of the --speed-weight terms (long_horizon.ratio_loss)")
     g.add_argument("--lr", type=float, default=2e-4)
     g.add_argument("--lr-decay", type=float, default=0.6)
     g.add_argument("--lr-every", type=int, default=2000, help="decay period (before --schedule-scale)")
@@ -132,9 +141,15 @@ def build_parser() -> argparse.ArgumentParser:
                    help="with --ema: before this iteration the average just follows the weights (a fresh run's first "
                    "iterations would otherwise stay in the average for thousands of iterations)")
     g.add_argument("--seed", type=int, default=1234)
+    g.add_argument("--choose", default="npss", choices=["npss", "long"],
+                   help="best.pt rule: npss = lowest validation NPSS; long = every action's 12 s speed ratio >= 0.5 "
+                        "first, then NPSS, else the highest smallest ratio (long_horizon.choice_key)")
     g = p.add_argument_group("run")
     g.add_argument("--run-dir", default=None)
     g.add_argument("--resume", action="store_true", help="continue from RUN_DIR/last.pt")
+    g.add_argument("--init-weights", default=None, metavar="FILE.safetensors",
+                   help="a new run whose model starts from an exported weights file (its config; fresh optimizer, "
+                        "iteration 0); the size flags do not apply")
     g.add_argument("--branch-from", default=None, metavar="CHECKPOINT",
                    help="start this new run from another run's checkpoint (model config, weights, optimizer state and "
                    "iteration from it; every other setting, and the RNG seed, from this command line)")
@@ -212,9 +227,12 @@ def sample_eps(model, batch: int) -> torch.Tensor | None:
 
 
 def multi_objective_terms(model, frames: torch.Tensor, actions: torch.Tensor, seed_frames: int, horizon: int,
-                          spectral: bool = False):
+                          spectral: bool = False, feed_noise: float = 0.0, motion: bool = False):
     """Open-loop mean squared error over all steps and closed-loop mean squared error over the horizon; with
-    `spectral`, also the closed loop's NPSS (reference variant, `training/spectral.py`), else None.
+    `spectral`, also the closed loop's NPSS (reference variant, `training/spectral.py`), else None; with `motion`,
+    also the closed loop's joint speed and acceleration against the truth's (`long_horizon.speed_loss` +
+    `accel_loss`, the last seed frame prepended to both), else None. `feed_noise`: the closed loop's fed-back
+    frames get that much Gaussian noise (`MotionModel.closed_loop`).
 
     frames [B, seed+horizon+1, O]: open loop reads frames 0..S+T-1 and predicts 1..S+T; the closed loop is
     seeded with 0..S-1 and predicts S..S+T-1 from its own outputs. The plan covers S+T steps in both."""
@@ -222,10 +240,15 @@ def multi_objective_terms(model, frames: torch.Tensor, actions: torch.Tensor, se
     eps = sample_eps(model, frames.shape[0])
     ol = model.open_loop(frames[:, :steps], actions, eps)
     ol_loss = ((ol - frames[:, 1 : steps + 1]) ** 2).mean()
-    cl = model.closed_loop(frames[:, :seed_frames], horizon, actions, eps)
+    cl = model.closed_loop(frames[:, :seed_frames], horizon, actions, eps, feed_noise=feed_noise)
     cl_loss = ((cl - frames[:, seed_frames:steps]) ** 2).mean()
     spec = spectral_loss(model, cl, frames[:, seed_frames:steps]) if spectral else None
-    return ol_loss, cl_loss, spec
+    moving = None
+    if motion:
+        truth = frames[:, seed_frames - 1 : steps]
+        pred = torch.cat([truth[:, :1], cl], dim=1)
+        moving = speed_loss(model, pred, truth) + accel_loss(model, pred, truth)
+    return ol_loss, cl_loss, spec, moving
 
 
 def auto_conditioning_loss(model, frames: torch.Tensor, actions: torch.Tensor, seed_frames: int, horizon: int, length: int):
@@ -435,6 +458,7 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
         except ValueError as e:
             raise SystemExit(f"error: --branch-from {e}") from None
     torch.set_num_threads(args.threads)
+    MOTION_LOSS[0] = getattr(args, "motion_loss", "hinge")
     log = Logger(run_dir, quiet)
     command = resume_state["command"] if resume_state else "python -m training.train " + shlex.join(argv)
     log(("resuming: " if resume_state else "starting: ") + command)
@@ -450,7 +474,21 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
         validator = Validator(val_windows, dataset.stats, actions, args.seed_frames, args.horizon)
     except ValueError as e:
         raise SystemExit(f"error: {e}") from None
-    if branch_state is not None:
+    init_model = None
+    if args.init_weights and resume_state is None:
+        if branch_state is not None:
+            raise SystemExit("error: give --init-weights or --branch-from, not both")
+        if ckpt_path.exists():
+            raise SystemExit(f"error: {ckpt_path} exists: --resume it, or start into a new --run-dir")
+        from .export import load_weights
+
+        try:
+            init_model = load_weights(args.init_weights)
+        except (OSError, ValueError, KeyError) as e:
+            raise SystemExit(f"error: --init-weights {args.init_weights}: {e}") from None
+        config = init_model.config
+        log(f"initial weights from {args.init_weights}")
+    elif branch_state is not None:
         config = branch_state["config"]  # the model is the parent's; its size flags do not apply
         missing = [a for a in actions if config.get("actions") is not None and a not in config["actions"]]
         if missing:
@@ -477,6 +515,9 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
 
     state = {"iteration": 0, "lr_scale": 1.0, "cl_history": [], "best": None, "best_iteration": None, "rollbacks": 0}
     parent = None
+    if init_model is not None:
+        model.load_state_dict(init_model.state_dict())
+        parent = {"weights": str(args.init_weights), "provenance": getattr(init_model, "provenance", None)}
     if branch_state is not None:
         model.load_state_dict(checkpoint_weights(branch_state))  # the parent's average if it kept one
         opt.load_state_dict(branch_state["optimizer"])
@@ -536,7 +577,7 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
     last_ol = last_cl = float("nan")
     while state["iteration"] < args.iterations:
         it = state["iteration"] + 1
-        lam = lambda_at(it, args.schedule_scale)
+        lam = lambda_at(it, args.schedule_scale) if args.closed_loop_weight is None else args.closed_loop_weight
         lr = lr_at(it, args.lr, args.lr_decay, lr_every) * state["lr_scale"]
         for g in opt.param_groups:
             g["lr"] = lr
@@ -551,8 +592,13 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
         elif lam > 0:
             w_spec = args.spectral_weight
             want_spec = w_spec > 0 or args.spectral_balance > 0
-            ol_loss, cl_loss, spec = multi_objective_terms(model, frames, acts, seed_frames, horizon, want_spec)
+            ol_loss, cl_loss, spec, moving = multi_objective_terms(
+                model, frames, acts, seed_frames, horizon, want_spec, args.feed_noise, args.speed_weight > 0
+            )
             total = ol_loss + lam * cl_loss
+            if moving is not None:
+                total = total + args.speed_weight * moving
+                acc["motion"] = acc.get("motion", 0.0) + moving.item()
             if spec is not None:
                 if args.spectral_balance <= 0:
                     total = total + w_spec * spec
@@ -618,9 +664,12 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
             mol = acc["ol"] / max(1, acc["n"])
             mcl = acc["cl"] / acc["ncl"] if acc["ncl"] else float("nan")
             extra, rec = "", {}
+            if "motion" in acc:
+                rec["motion"] = acc["motion"] / max(1, acc["ncl"])
+                extra += f" motion {rec['motion']:.4f}"
             if "spec" in acc:
                 rec["spectral"] = acc["spec"] / max(1, acc["ncl"])
-                extra = f" npss {rec['spectral']:.4f}"
+                extra += f" npss {rec['spectral']:.4f}"
                 if "w_spec" in acc:
                     rec["spectral_weight"] = acc["w_spec"] / max(1, acc["ncl"])
                     extra += f" (weight {rec['spectral_weight']:.3g})"
@@ -629,10 +678,18 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
             acc = {"ol": 0.0, "cl": 0.0, "n": 0, "ncl": 0}
         state["cl_history"] = list(history)
         if it % args.val_every == 0 or it == args.iterations:
-            val = validator(ema_model if ema_model is not None else model)
+            scored = ema_model if ema_model is not None else model
+            val = validator(scored)
             if ema_model is not None:
                 val["raw_npss_ref"] = validator(model)["npss_ref"]
-            is_best = better(val, state["best"])
+            if args.choose == "long":
+                plan_eps = torch.zeros(scored.plan_size) if hasattr(scored, "plan") else None
+                val["long_speed"] = speed_ratios(long_closed_loop(scored, validator, plan_eps), validator)
+                log("val it {:6d} 8-12 s speed ratio: {}".format(
+                    it, " ".join(f"{a} {r:.2f}" for a, r in val["long_speed"].items())))
+                is_best = state["best"] is None or choice_key(val) < choice_key(state["best"])
+            else:
+                is_best = better(val, state["best"])
             if is_best:
                 state["best"] = {k: v for k, v in val.items()}
                 state["best_iteration"] = it

@@ -54,6 +54,10 @@ import torch
 from . import data as h36m
 from .export import save_weights
 from .models import DAELSTM, H36M_ACTIONS, make_config, parameter_count
+from .long_horizon import (  # noqa: F401 (re-exported: tests and callers use train_dae.X)
+    ACCEL_FLOOR, ELIGIBLE_RATIO, HINGE_BAND, LONG_HORIZON, LONG_WINDOW, MOTION_LOSS, SPEED_FLOOR, accel_loss, choice_key,
+    long_closed_loop, ratio_loss, speed_loss, speed_ratios,
+)
 from .checkpoint_io import BEST, CHECKPOINT, add_run_arguments, atomic_save, begin_run, read_checkpoint
 from .train import RESUME_OVERRIDABLE, Logger, Validator, explicit_args
 
@@ -61,9 +65,6 @@ CHECKPOINT_KEYS = ("stage", "config", "args", "model", "optimizer", "iteration",
 STAGES = ("dae", "lstm", "finetune")
 DROP_SCHEDULE = (0.01, 0.02, 0.04, 0.08, 0.1)
 NOISE_SCHEDULE = (0.01, 0.05, 0.1)
-LONG_HORIZON = 300  # 12 s at 25 Hz: the closed-loop length of the checkpoint choice
-LONG_WINDOW = (200, 300)  # predicted frames 8-12 s
-ELIGIBLE_RATIO = 0.5
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -176,50 +177,6 @@ def closed_loop_loss(model: DAELSTM, frames: torch.Tensor, actions: torch.Tensor
     return error, speed_loss(model, torch.cat([truth[:, :1], pred], dim=1), truth)
 
 
-SPEED_FLOOR = 1e-3  # radians per frame added to both speeds: sequences that stand still do not dominate
-HINGE_BAND = (0.8, 1.5)  # the hinge form: no penalty while prediction / truth is inside this band
-MOTION_LOSS = ["log"]  # the form of the speed and acceleration terms (set from --motion-loss by `train`)
-
-
-def ratio_loss(pred: torch.Tensor, truth: torch.Tensor, kind: str) -> torch.Tensor:
-    """Per-sequence penalty of a predicted motion magnitude against the truth's, averaged: ``log`` is the squared
-    log ratio; ``hinge`` is the squared shortfall below ``HINGE_BAND[0]`` plus the squared excess over
-    ``HINGE_BAND[1]``, both as fractions of the truth (a gradient bounded by ~2 / truth, zero inside the band)."""
-    if kind == "log":
-        return ((pred.log() - truth.log()) ** 2).mean()
-    ratio = pred / truth
-    low, high = HINGE_BAND
-    return (torch.relu(low - ratio) ** 2 + torch.relu(ratio - high) ** 2).mean()
-ACCEL_FLOOR = 1e-4  # radians per frame² added to both accelerations, likewise
-
-
-def speed_loss(model: DAELSTM, pred: torch.Tensor, truth: torch.Tensor) -> torch.Tensor:
-    """Squared log ratio of the mean absolute frame-to-frame change of the joint angles (not the root's 6 dims)
-    of ``pred`` and ``truth`` ``[B, T, O]`` (normalized), per sequence, in radians: the training counterpart of
-    the speed ratio that the checkpoint choice and the 12 s evaluation measure. It penalises a prediction
-    that slows to a stop (the MSE optimum far from the seed) as much as one that moves too fast."""
-    joints = torch.tensor([d >= 6 for d in model.dims_used], device=pred.device)
-    scale = model.norm.std[model.norm.dims_used][joints]
-
-    def speed(x):
-        return (x[:, 1:, joints] - x[:, :-1, joints]).abs().mul(scale).mean(dim=(1, 2)) + SPEED_FLOOR
-
-    return ratio_loss(speed(pred), speed(truth), MOTION_LOSS[0])
-
-
-def accel_loss(model: DAELSTM, pred: torch.Tensor, truth: torch.Tensor) -> torch.Tensor:
-    """As ``speed_loss`` for the mean absolute second difference of the joint angles: matching it too keeps the
-    speed term from being met by jitter (fast, rough motion has a far larger acceleration than real motion)."""
-    joints = torch.tensor([d >= 6 for d in model.dims_used], device=pred.device)
-    scale = model.norm.std[model.norm.dims_used][joints]
-
-    def accel(x):
-        x = x[..., joints]
-        return (x[:, 2:] - 2 * x[:, 1:-1] + x[:, :-2]).abs().mul(scale).mean(dim=(1, 2)) + ACCEL_FLOOR
-
-    return ratio_loss(accel(pred), accel(truth), MOTION_LOSS[0])
-
-
 def long_motion_loss(model: DAELSTM, frames: torch.Tensor, actions, seed: int, burn_in: int, length: int):
     """The long-horizon term (truncated back-propagation through the closed loop): after ``seed`` true frames the
     stacked model runs ``burn_in`` frames on its own output without gradient, then ``length`` frames with it;
@@ -247,34 +204,9 @@ def long_motion_loss(model: DAELSTM, frames: torch.Tensor, actions, seed: int, b
 # ---------------------------------------------------------------- validation
 
 
-@torch.no_grad()
 def long_speed_ratios(model: DAELSTM, validator: Validator) -> dict[str, float]:
-    """Per validation action: mean |frame-to-frame change| of the joint angles (exp-map dims 6..) over predicted
-    frames 200-300 of a 12 s closed loop, divided by the ground truth's over the window's 100 frames."""
-    was_training = model.training
-    model.eval()
-    try:
-        acts = torch.tensor([model.actions.index(a) for a in validator.window_actions]) if model.actions else None
-        pred = model.closed_loop(validator.seed_norm, LONG_HORIZON, acts).double().numpy()
-    finally:
-        model.train(was_training)
-    full = validator.stats.unnormalize(pred)
-    out = {}
-    for a in validator.actions:
-        idx = [i for i, wa in enumerate(validator.window_actions) if wa == a]
-        lo, hi = LONG_WINDOW
-        p = np.abs(np.diff(full[idx, lo - 1 : hi, 6:], axis=1)).mean()
-        g = np.abs(np.diff(validator.gt_full[idx][:, :, 6:], axis=1)).mean()
-        out[a] = float(p / g) if g > 0 else float("nan")
-    return out
-
-
-def choice_key(val: dict) -> tuple:
-    """Sort key of the checkpoint choice (smaller is better): eligible first, then NPSS; else the smallest ratio."""
-    smallest = min(val["long_speed"].values())
-    if smallest >= ELIGIBLE_RATIO:
-        return (0, val["npss_ref"])
-    return (1, -smallest)
+    """Per validation action: the 12 s speed ratio (``long_horizon``) of the model's closed loop."""
+    return speed_ratios(long_closed_loop(model, validator), validator)
 
 
 # ---------------------------------------------------------------- training

@@ -29,7 +29,7 @@ sizes).
 
 **Checkpoint choice (fixed before any score was seen).** Every ``--val-every`` iterations the model runs 12 s
 (300 frames) from each S5 validation window's seed with one fixed ``z`` per window (seeded); per action, the speed
-ratio at 8-12 s (predicted frames 200-300 against the window's truth, as ``train_dae.long_speed_ratios``). A
+ratio at 8-12 s (predicted frames 200-300 against the window's truth, ``long_horizon.speed_ratios``). A
 checkpoint is eligible when every action's ratio is >= 0.5 *and* <= 2; ``best.pt`` is the eligible one with the
 lowest validation NPSS (reference variant, 4 s, same z); while none is eligible, the one whose worst ratio (the
 ratio farthest from [0.5, 2] in log terms) is best.
@@ -58,14 +58,13 @@ from . import data as h36m
 from . import intention_labels
 from .export import save_weights
 from .layers import MLP
+from .long_horizon import LONG_HORIZON, speed_ratios
 from .models import IntentionModel, joint_groups, make_config, parameter_count
 from .checkpoint_io import BEST, CHECKPOINT, add_run_arguments, atomic_save, begin_run, read_checkpoint
 from .train import RESUME_OVERRIDABLE, Logger, Validator, explicit_args
 
 CHECKPOINT_KEYS = ("config", "args", "model", "d_pose", "d_label", "opt_g", "opt_f", "opt_dp", "opt_dl",
                    "iteration", "numpy_rng", "torch_rng")
-LONG_HORIZON = 300  # 12 s at 25 Hz
-LONG_WINDOW = (200, 300)  # predicted frames 8-12 s
 RATIO_BAND = (0.5, 2.0)
 VAL_NOISE_SEED = 20261202
 
@@ -208,14 +207,7 @@ def validate(model: IntentionModel, validator: Validator) -> dict:
     full = validator.stats.unnormalize(pred)
     horizon = validator.gt_full.shape[1]
     val = validator.score(full[:, :horizon])
-    ratios = {}
-    lo, hi = LONG_WINDOW
-    for a in validator.actions:
-        idx = [i for i, wa in enumerate(validator.window_actions) if wa == a]
-        p = np.abs(np.diff(full[idx, lo - 1 : hi, 6:], axis=1)).mean()
-        g = np.abs(np.diff(validator.gt_full[idx][:, :, 6:], axis=1)).mean()
-        ratios[a] = float(p / g) if g > 0 else float("nan")
-    val["long_speed"] = ratios
+    val["long_speed"] = speed_ratios(full, validator)
     return val
 
 

@@ -268,3 +268,39 @@ def test_export_of_several_checkpoints_writes_the_mean_of_their_weights(tmp_path
     junk.write_bytes(b"junk")
     assert train.main(["--export", str(tmp_path / "bad.safetensors"), "--from", files[0], str(junk)]) == 2
     assert not (tmp_path / "bad.safetensors").exists()
+
+
+def test_init_weights_fine_tune_with_the_long_horizon_options(tmp_path):
+    """--init-weights starts from an exported file (lr 0: the weights stay the file's); the closed-loop weight,
+    fed-back noise, speed term and the long checkpoint choice run and are logged."""
+    ds = synthetic_dataset()
+    run(tmp_path / "parent", ["--iterations", "2"], ds)
+    weights = tmp_path / "parent.safetensors"
+    argv = ["--export", str(weights), "--from", str(tmp_path / "parent" / "last.pt"), "--dtype", "float32"]
+    assert train.main(argv) == 0
+    extra = ["--init-weights", str(weights), "--iterations", "2", "--lr", "0", "--closed-loop-weight", "1",
+             "--feed-noise", "0.05", "--speed-weight", "0.5", "--choose", "long"]
+    out = run(tmp_path / "child", extra, ds)
+    assert out["iteration"] == 2 and np.isfinite(out["cl"])
+    start = load_weights(weights).state_dict()
+    end = torch.load(tmp_path / "child" / "last.pt", weights_only=False)["model"]
+    for k in start:
+        assert torch.equal(start[k], end[k]), k
+    records = [__import__("json").loads(line) for line in open(tmp_path / "child" / "metrics.jsonl")]
+    assert any("motion" in r for r in records if r.get("kind") == "train")
+    vals = [r for r in records if r.get("kind") == "val"]
+    assert vals and all(set(r["long_speed"]) == {w.action for w in ds[1]} for r in vals)
+    with pytest.raises(SystemExit, match="init-weights"):
+        run(tmp_path / "bad", ["--init-weights", str(tmp_path / "missing.safetensors")], ds)
+
+
+def test_feed_noise_changes_only_the_training_closed_loop():
+    torch.manual_seed(0)
+    config = train.model_config(train.build_parser().parse_args(SMALL + ["--model", "gru-d"]), list(range(54)))
+    model = train.build_model(config, dropout=0.0).eval()
+    seed = torch.randn(2, 6, 54)
+    clean = model.closed_loop(seed, 5)
+    assert torch.equal(clean, model.closed_loop(seed, 5, feed_noise=0.0))
+    noisy = model.closed_loop(seed, 5, feed_noise=0.5)
+    assert torch.equal(clean[:, 0], noisy[:, 0])  # the first prediction reads only the seed
+    assert not torch.allclose(clean[:, 1:], noisy[:, 1:])
