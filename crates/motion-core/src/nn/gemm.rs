@@ -96,25 +96,19 @@ impl MatMul {
     ) {
         match path {
             #[cfg(target_arch = "x86_64")]
-            SimdPath::Avx512 => {
+            SimdPath::Avx512 | SimdPath::Avx2 => {
                 let parts = self.row_split_parts(w);
                 if parts > 1 {
-                    self.rows_split(SimdPath::Avx512, x, w, y, accumulate, parts);
-                } else {
-                    // SAFETY: the path is selected only on a CPU that has its features,
-                    // `inputs > 0` and `check` asserted the slice lengths.
-                    unsafe { super::rows_avx512::product(self, x, w.rows(), y, accumulate) };
+                    self.rows_split(path, x, w, y, accumulate, parts);
+                    return;
                 }
-            }
-            #[cfg(target_arch = "x86_64")]
-            SimdPath::Avx2 => {
-                let parts = self.row_split_parts(w);
-                if parts > 1 {
-                    self.rows_split(SimdPath::Avx2, x, w, y, accumulate, parts);
-                } else {
-                    // SAFETY: as above (AVX2, FMA and F16C).
-                    unsafe { super::rows_avx2::product(self, x, w.rows(), y, accumulate) };
-                }
+                let product = match path {
+                    SimdPath::Avx512 => super::rows_avx512::product,
+                    _ => super::rows_avx2::product,
+                };
+                // SAFETY: the path is selected only on a CPU that has its features (AVX-512 F;
+                // or AVX2, FMA and F16C), `inputs > 0` and `check` asserted the slice lengths.
+                unsafe { product(self, x, w.rows(), y, accumulate) };
             }
             #[cfg(target_arch = "aarch64")]
             SimdPath::Neon => {
