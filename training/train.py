@@ -45,7 +45,9 @@ from . import metrics_np
 from .checkpoint_io import BEST, CHECKPOINT, atomic_save, read_checkpoint
 from .features import DerivativeHistory
 from .models import build_model, make_config, parameter_count
-from .long_horizon import MOTION_LOSS, accel_loss, choice_key, long_closed_loop, speed_loss, speed_ratios
+from .long_horizon import (
+    MOTION_LOSS, accel_loss, choice_key, long_closed_loop, long_motion_loss, speed_loss, speed_ratios,
+)
 from .spectral import spectral_loss
 
 #: Iterations at which the published lambda schedule steps up, and the values from then on.
@@ -124,7 +126,14 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--speed-weight", type=float, default=0.0, metavar="W",
                    help="adds W x the closed loop's joint speed + acceleration penalty (long_horizon.speed_loss)")
     g.add_argument("--motion-loss", default="hinge", choices=["hinge", "log"],
-                   help="form of the --speed-weight terms (long_horizon.ratio_loss)")
+                   help="form of the --speed-weight and --long-weight terms (long_horizon.ratio_loss)")
+    g.add_argument("--long-weight", type=float, default=0.0, metavar="W",
+                   help="adds W x the long-horizon term (long_horizon.long_motion_loss): the closed loop run on "
+                        "without gradient for 0..--long-burn-in frames, then --long-frames with it, joint speed and "
+                        "acceleration matched to the truth's")
+    g.add_argument("--long-burn-in", type=int, default=250, metavar="FRAMES")
+    g.add_argument("--long-frames", type=int, default=50, metavar="FRAMES")
+    g.add_argument("--long-batch", type=int, default=8, help="sequences of the long-horizon term per iteration")
     g.add_argument("--lr", type=float, default=2e-4)
     g.add_argument("--lr-decay", type=float, default=0.6)
     g.add_argument("--lr-every", type=int, default=2000, help="decay period (before --schedule-scale)")
@@ -596,6 +605,17 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
                 model, frames, acts, seed_frames, horizon, want_spec, args.feed_noise, args.speed_weight > 0
             )
             total = ol_loss + lam * cl_loss
+            if args.long_weight > 0:
+                burn = int(rng.integers(0, args.long_burn_in + 1))
+                long_np, long_acts = dataset.sample_batch(
+                    rng, args.long_batch, seed_frames + args.long_burn_in + args.long_frames + 1
+                )
+                long_term = long_motion_loss(
+                    model, torch.from_numpy(long_np), torch.from_numpy(label_map[long_acts]), seed_frames, burn,
+                    args.long_frames, sample_eps(model, args.long_batch), args.feed_noise,
+                )
+                total = total + args.long_weight * long_term
+                acc["long"] = acc.get("long", 0.0) + long_term.item()
             if moving is not None:
                 total = total + args.speed_weight * moving
                 acc["motion"] = acc.get("motion", 0.0) + moving.item()
@@ -664,6 +684,9 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
             mol = acc["ol"] / max(1, acc["n"])
             mcl = acc["cl"] / acc["ncl"] if acc["ncl"] else float("nan")
             extra, rec = "", {}
+            if "long" in acc:
+                rec["long"] = acc["long"] / max(1, acc["ncl"])
+                extra += f" long {rec['long']:.4f}"
             if "motion" in acc:
                 rec["motion"] = acc["motion"] / max(1, acc["ncl"])
                 extra += f" motion {rec['motion']:.4f}"

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import torch
 
-from training import data, train
+from training import data, long_horizon, train
 from training.export import load_weights
 
 from .helpers import synthetic_dataset
@@ -279,7 +279,8 @@ def test_init_weights_fine_tune_with_the_long_horizon_options(tmp_path):
     argv = ["--export", str(weights), "--from", str(tmp_path / "parent" / "last.pt"), "--dtype", "float32"]
     assert train.main(argv) == 0
     extra = ["--init-weights", str(weights), "--iterations", "2", "--lr", "0", "--closed-loop-weight", "1",
-             "--feed-noise", "0.05", "--speed-weight", "0.5", "--choose", "long"]
+             "--feed-noise", "0.05", "--speed-weight", "0.5", "--choose", "long",
+             "--long-weight", "0.5", "--long-burn-in", "3", "--long-frames", "4", "--long-batch", "2"]
     out = run(tmp_path / "child", extra, ds)
     assert out["iteration"] == 2 and np.isfinite(out["cl"])
     start = load_weights(weights).state_dict()
@@ -287,7 +288,7 @@ def test_init_weights_fine_tune_with_the_long_horizon_options(tmp_path):
     for k in start:
         assert torch.equal(start[k], end[k]), k
     records = [__import__("json").loads(line) for line in open(tmp_path / "child" / "metrics.jsonl")]
-    assert any("motion" in r for r in records if r.get("kind") == "train")
+    assert any("motion" in r and "long" in r for r in records if r.get("kind") == "train")
     vals = [r for r in records if r.get("kind") == "val"]
     assert vals and all(set(r["long_speed"]) == {w.action for w in ds[1]} for r in vals)
     with pytest.raises(SystemExit, match="init-weights"):
@@ -304,3 +305,18 @@ def test_feed_noise_changes_only_the_training_closed_loop():
     noisy = model.closed_loop(seed, 5, feed_noise=0.5)
     assert torch.equal(clean[:, 0], noisy[:, 0])  # the first prediction reads only the seed
     assert not torch.allclose(clean[:, 1:], noisy[:, 1:])
+
+
+def test_long_motion_loss_is_zero_for_the_truth_and_reaches_the_weights():
+    """The long term compares speed and acceleration only: a model whose closed loop reproduces the truth scores
+    0; its gradient reaches the decoder through the frames after the burn-in."""
+    torch.manual_seed(1)
+    config = train.model_config(train.build_parser().parse_args(SMALL + ["--model", "vgru-d"]), list(range(54)))
+    config["actions"] = ["walking"]
+    model = train.build_model(config, dropout=0.0)
+    model.norm.set_stats(torch.zeros(99), torch.ones(99))
+    frames = torch.cumsum(0.05 * torch.randn(2, 6 + 20 + 5 + 1, 54), dim=1)
+    loss = long_horizon.long_motion_loss(model, frames, torch.zeros(2, dtype=torch.long), 6, 20, 5)
+    loss.backward()
+    assert loss.item() > 0 and model.decoder.weight.grad.abs().sum() > 0
+    assert long_horizon.speed_loss(model, frames, frames).item() == 0.0
