@@ -684,18 +684,13 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
             mol = acc["ol"] / max(1, acc["n"])
             mcl = acc["cl"] / acc["ncl"] if acc["ncl"] else float("nan")
             extra, rec = "", {}
-            if "long" in acc:
-                rec["long"] = acc["long"] / max(1, acc["ncl"])
-                extra += f" long {rec['long']:.4f}"
-            if "motion" in acc:
-                rec["motion"] = acc["motion"] / max(1, acc["ncl"])
-                extra += f" motion {rec['motion']:.4f}"
-            if "spec" in acc:
-                rec["spectral"] = acc["spec"] / max(1, acc["ncl"])
-                extra += f" npss {rec['spectral']:.4f}"
-                if "w_spec" in acc:
-                    rec["spectral_weight"] = acc["w_spec"] / max(1, acc["ncl"])
-                    extra += f" (weight {rec['spectral_weight']:.3g})"
+            for key, name, label in (("long", "long", "long"), ("motion", "motion", "motion"), ("spec", "spectral", "npss")):
+                if key in acc:
+                    rec[name] = acc[key] / max(1, acc["ncl"])
+                    extra += f" {label} {rec[name]:.4f}"
+            if "w_spec" in acc:
+                rec["spectral_weight"] = acc["w_spec"] / max(1, acc["ncl"])
+                extra += f" (weight {rec['spectral_weight']:.3g})"
             log(f"it {it:6d} open-loop {mol:.5f} closed-loop {mcl:.5f}{extra} lambda {lam:.1f} lr {lr:.3g} |g| {gnorm:.3g} {spi:.2f} s/it")
             log.record(kind="train", iteration=it, ol=mol, cl=mcl, lam=lam, lr=lr, grad_norm=gnorm, s_per_it=spi, **rec)
             acc = {"ol": 0.0, "cl": 0.0, "n": 0, "ncl": 0}
