@@ -56,7 +56,7 @@ LAMBDA_STEPS = ((500, 0.2), (1000, 0.4), (2000, 0.6), (4000, 0.8), (7000, 1.0))
 #: which only extends or shortens the run).
 #: Closed-loop losses (lambda > 0) needed before the blow-up guard compares against their median.
 MIN_HISTORY = 20
-RESUME_OVERRIDABLE = ("iterations", "run_dir", "data_dir", "log_every", "val_every", "checkpoint_every", "threads")
+RESUME_OVERRIDABLE = ("iterations", "run_dir", "data_dir", "log_every", "val_every", "checkpoint_every", "threads", "device")
 
 
 # ------------------------------------------------------------------------------------------ schedules
@@ -166,6 +166,7 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--val-every", type=int, default=100)
     g.add_argument("--checkpoint-every", type=int, default=100)
     g.add_argument("--threads", type=int, default=1, help="torch threads (1: OpenMP barriers stall badly on a shared CPU)")
+    g.add_argument("--device", default="cpu", help="cpu or cuda (validation runs on the CPU either way)")
     g = p.add_argument_group("export")
     g.add_argument("--export", default=None, metavar="OUT.safetensors")
     g.add_argument("--from", dest="from_ckpt", default=None, nargs="+", metavar="CHECKPOINT",
@@ -231,7 +232,7 @@ def init_residual_decoder(model) -> None:
 def sample_eps(model, batch: int) -> torch.Tensor | None:
     """One plan noise vector per sequence (shared by the open- and closed-loop passes of a batch)."""
     if hasattr(model, "plan"):
-        return torch.randn(batch, model.plan_size)
+        return torch.randn(batch, model.plan_size, device=model.plan.mu.device)
     return None
 
 
@@ -513,6 +514,8 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
         init_residual_decoder(model)
     model.norm.set_stats(torch.from_numpy(dataset.stats.mean).float(), torch.from_numpy(dataset.stats.std).float())
     model.train()
+    device = torch.device(args.device)
+    model.to(device)  # before the optimizer; checkpoints load into it wherever they were saved (read as CPU tensors)
     opt = make_optimizer(model, args)
     rng = np.random.default_rng(args.seed)
     # Batch action indices index dataset.actions; the model's one-hot indexes config["actions"]. They are the same
@@ -591,8 +594,8 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
         for g in opt.param_groups:
             g["lr"] = lr
         frames_np, acts_np = dataset.sample_batch(rng, args.batch, seed_frames + horizon + 1)
-        frames = torch.from_numpy(frames_np)
-        acts = torch.from_numpy(label_map[acts_np])
+        frames = torch.from_numpy(frames_np).to(device)
+        acts = torch.from_numpy(label_map[acts_np]).to(device)
         spec = None
         if args.loss == "auto-conditioning":
             ol_loss = auto_conditioning_loss(model, frames, acts, seed_frames, horizon, args.ac_length)
@@ -611,7 +614,7 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
                     rng, args.long_batch, seed_frames + args.long_burn_in + args.long_frames + 1
                 )
                 long_term = long_motion_loss(
-                    model, torch.from_numpy(long_np), torch.from_numpy(label_map[long_acts]), seed_frames, burn,
+                    model, torch.from_numpy(long_np).to(device), torch.from_numpy(label_map[long_acts]).to(device), seed_frames, burn,
                     args.long_frames, sample_eps(model, args.long_batch), args.feed_noise,
                 )
                 total = total + args.long_weight * long_term
@@ -696,6 +699,9 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
             acc = {"ol": 0.0, "cl": 0.0, "n": 0, "ncl": 0}
         state["cl_history"] = list(history)
         if it % args.val_every == 0 or it == args.iterations:
+            model.cpu()  # validation runs on the CPU (its windows and numpy metrics live there)
+            if ema_model is not None:
+                ema_model.cpu()
             scored = ema_model if ema_model is not None else model
             val = validator(scored)
             if ema_model is not None:
@@ -708,6 +714,9 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
                 is_best = state["best"] is None or choice_key(val) < choice_key(state["best"])
             else:
                 is_best = better(val, state["best"])
+            model.to(device)
+            if ema_model is not None:
+                ema_model.to(device)
             if is_best:
                 state["best"] = {k: v for k, v in val.items()}
                 state["best_iteration"] = it

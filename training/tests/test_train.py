@@ -280,7 +280,7 @@ def test_init_weights_fine_tune_with_the_long_horizon_options(tmp_path):
     assert train.main(argv) == 0
     extra = ["--init-weights", str(weights), "--iterations", "2", "--lr", "0", "--closed-loop-weight", "1",
              "--feed-noise", "0.05", "--speed-weight", "0.5", "--choose", "long",
-             "--long-weight", "0.5", "--long-burn-in", "3", "--long-frames", "4", "--long-batch", "2"]
+             "--long-weight", "0.5", "--long-burn-in", "3", "--long-frames", "4", "--long-batch", "2", "--device", "cpu"]
     out = run(tmp_path / "child", extra, ds)
     assert out["iteration"] == 2 and np.isfinite(out["cl"])
     start = load_weights(weights).state_dict()
