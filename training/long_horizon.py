@@ -12,6 +12,8 @@ from __future__ import annotations
 import numpy as np
 import torch
 
+from .features import DerivativeHistory
+
 LONG_HORIZON = 300  # 12 s at 25 Hz: the closed-loop length of the long checkpoint choices
 LONG_WINDOW = (200, 300)  # predicted frames 8-12 s
 ELIGIBLE_RATIO = 0.5  # the issue's target: every window's speed ratio >= 0.5
@@ -99,42 +101,25 @@ def choice_key(val: dict) -> tuple:
     return (1, -smallest)
 
 
-def _detach_state(ctx: dict) -> None:
-    """Cut the graph of a model context's recurrent state (``h`` or ``state``: a tensor or a tuple of them)."""
-    for key in ("h", "state"):
-        value = ctx.get(key)
-        if isinstance(value, torch.Tensor):
-            ctx[key] = value.detach()
-        elif isinstance(value, (tuple, list)):
-            ctx[key] = type(value)(v.detach() for v in value)
-
-
 def long_motion_loss(model, frames: torch.Tensor, actions, seed: int, burn_in: int, length: int, eps=None,
-                     feed_noise: float = 0.0) -> torch.Tensor:
+                     feed_noise: float = 0.0, dropout: bool = True) -> torch.Tensor:
     """The long-horizon term (truncated back-propagation through the closed loop), for any ``MotionModel``:
     after ``seed`` true frames the model runs ``burn_in`` frames on its own output without gradient, then
     ``length`` frames with it; ``speed_loss + accel_loss`` of those frames (with the last burn-in frame before
     them) against the truth's over the same frames ``frames[:, seed + burn_in : seed + burn_in + length + 1]``.
-    Positions are not compared: ``burn_in`` frames in, the truth is one of many right answers. The VGRU plan
-    streams past its horizon as in ``closed_loop``; ``feed_noise`` as there (the frames with gradient only)."""
-    from .features import DerivativeHistory
-
-    batch = frames.shape[0]
-    ctx = model._begin(batch, seed + burn_in + length, actions, eps, frames, seed_len=seed)
+    Positions are not compared: ``burn_in`` frames in, the truth is one of many right answers. The steps are
+    ``closed_loop``'s (the VGRU plan streams past its horizon); ``feed_noise`` as there (the frames with gradient
+    only); ``dropout=False`` leaves out the input dropout (``train_dae``'s term)."""
+    ctx = model._begin(frames.shape[0], seed + burn_in + length, actions, eps, frames, seed_len=seed)
     history = DerivativeHistory(model.derivative_order)
     with torch.no_grad():
-        features = torch.stack([history.push(frames[:, t]) for t in range(seed)], dim=1)
-        frame = model._decode(model._run(ctx, model.input_dropout(features), 0), frames[:, :seed])[:, -1:]
+        frame = model._teacher_force(ctx, history, frames[:, :seed], dropout)[:, -1:]
         for k in range(burn_in):
-            features = history.push(frame[:, 0]).unsqueeze(1)
-            frame = model._decode(model._run(ctx, model.input_dropout(features), seed + k), frame)
-    _detach_state(ctx)
-    history.previous = [p.detach() for p in history.previous]
+            frame = model._feed_back(ctx, history, frame, seed + k, dropout=dropout)
+    model._cut_graph(ctx, history)
     outputs = [frame.detach()]
     for k in range(length):
-        fed = outputs[-1] + feed_noise * torch.randn_like(outputs[-1]) if feed_noise > 0 else outputs[-1]
-        features = history.push(fed[:, 0]).unsqueeze(1)
-        outputs.append(model._decode(model._run(ctx, model.input_dropout(features), seed + burn_in + k), fed))
+        outputs.append(model._feed_back(ctx, history, outputs[-1], seed + burn_in + k, feed_noise, dropout))
     pred = torch.cat(outputs, dim=1)
     truth = frames[:, seed + burn_in : seed + burn_in + length + 1]
     return speed_loss(model, pred, truth) + accel_loss(model, pred, truth)

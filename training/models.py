@@ -197,18 +197,38 @@ class MotionModel(nn.Module):
             raise ValueError(f"need at least 1 seed frame and horizon >= 1, got {seed_len}, {horizon}")
         ctx = self._begin(batch, seed_len + horizon, action, eps, seed, seed_len=seed_len)
         history = DerivativeHistory(self.derivative_order)
-        seed_features = torch.stack([history.push(seed[:, t]) for t in range(seed_len)], dim=1)
-        seed_out = self._decode(self._run(ctx, self.input_dropout(seed_features), 0), seed)
-        frame = seed_out[:, -1:]
-        outputs = [frame]
+        seed_out = self._teacher_force(ctx, history, seed)
+        outputs = [seed_out[:, -1:]]
         for k in range(1, horizon):
-            fed = frame + feed_noise * torch.randn_like(frame) if feed_noise > 0 else frame
-            features = history.push(fed[:, 0]).unsqueeze(1)
-            hidden = self._run(ctx, self.input_dropout(features), seed_len + k - 1)
-            frame = self._decode(hidden, fed)
-            outputs.append(frame)
+            outputs.append(self._feed_back(ctx, history, outputs[-1], seed_len + k - 1, feed_noise))
         generated = torch.cat(outputs, dim=1)
         return (seed_out, generated) if return_seed_outputs else generated
+
+    def _teacher_force(self, ctx: dict, history: DerivativeHistory, seed: torch.Tensor, dropout: bool = True):
+        """Body steps ``0 .. S-1`` read ``seed [B, S, O]`` (``history`` filled with it); returns their outputs
+        ``[B, S, O]``, the last being the first prediction. ``dropout``: the input dropout applies (training mode)."""
+        features = torch.stack([history.push(seed[:, t]) for t in range(seed.shape[1])], dim=1)
+        return self._decode(self._run(ctx, self.input_dropout(features) if dropout else features, 0), seed)
+
+    def _feed_back(self, ctx: dict, history: DerivativeHistory, frame: torch.Tensor, t: int, feed_noise: float = 0.0,
+                   dropout: bool = True) -> torch.Tensor:
+        """One closed-loop step: ``frame [B, 1, O]`` (plus ``N(0, feed_noise²)`` noise, which then is also the
+        residual base) read as body step ``t``; returns the next frame ``[B, 1, O]``."""
+        fed = frame + feed_noise * torch.randn_like(frame) if feed_noise > 0 else frame
+        features = history.push(fed[:, 0]).unsqueeze(1)
+        return self._decode(self._run(ctx, self.input_dropout(features) if dropout else features, t), fed)
+
+    @staticmethod
+    def _cut_graph(ctx: dict, history: DerivativeHistory) -> None:
+        """Detach a context's recurrent state (``h`` or ``state``: a tensor or a sequence of them) and the
+        derivative history, so back-propagation stops here (truncated BPTT)."""
+        for key in ("h", "state"):
+            value = ctx.get(key)
+            if isinstance(value, torch.Tensor):
+                ctx[key] = value.detach()
+            elif isinstance(value, (tuple, list)):
+                ctx[key] = type(value)(v.detach() for v in value)
+        history.previous = [p.detach() for p in history.previous]
 
     @torch.no_grad()
     def predict(self, seed_full: torch.Tensor, action=None, horizon: int = 100, eps=None, with_seed_outputs=False):

@@ -54,6 +54,7 @@ import torch
 from . import data as h36m
 from .export import save_weights
 from .models import DAELSTM, H36M_ACTIONS, make_config, parameter_count
+from . import long_horizon
 from .long_horizon import (  # noqa: F401 (re-exported: tests and callers use train_dae.X)
     ACCEL_FLOOR, ELIGIBLE_RATIO, HINGE_BAND, LONG_HORIZON, LONG_WINDOW, MOTION_LOSS, SPEED_FLOOR, accel_loss, choice_key,
     long_closed_loop, ratio_loss, speed_loss, speed_ratios,
@@ -178,27 +179,9 @@ def closed_loop_loss(model: DAELSTM, frames: torch.Tensor, actions: torch.Tensor
 
 
 def long_motion_loss(model: DAELSTM, frames: torch.Tensor, actions, seed: int, burn_in: int, length: int):
-    """The long-horizon term (truncated back-propagation through the closed loop): after ``seed`` true frames the
-    stacked model runs ``burn_in`` frames on its own output without gradient, then ``length`` frames with it;
-    speed and acceleration of those frames (with the last burn-in frame before them) against the truth's over the
-    same frames. Positions are not compared: ``burn_in`` frames in, the truth is one of many right answers."""
-    if model.derivative_order != 0:
-        raise ValueError("the long-horizon term feeds poses back directly: derivative_order must be 0")
-    batch = frames.shape[0]
-    ctx = model._begin(batch, seed + burn_in + length, actions, None, frames)
-    with torch.no_grad():
-        out = model._decode(model._run(ctx, frames[:, :seed], 0), frames[:, :seed])
-        frame = out[:, -1:]
-        for t in range(burn_in):
-            frame = model._decode(model._run(ctx, frame, seed + t), frame)
-    ctx["state"] = tuple(s.detach() for s in ctx["state"])
-    outputs = [frame.detach()]
-    for t in range(length):
-        frame = model._decode(model._run(ctx, outputs[-1], seed + burn_in + t), outputs[-1])
-        outputs.append(frame)
-    pred = torch.cat(outputs, dim=1)
-    truth = frames[:, seed + burn_in : seed + burn_in + length + 1]
-    return speed_loss(model, pred, truth) + accel_loss(model, pred, truth)
+    """The long-horizon term of the finetune stage: ``long_horizon.long_motion_loss`` without input dropout (the
+    stacked model feeds its filtered poses straight back)."""
+    return long_horizon.long_motion_loss(model, frames, actions, seed, burn_in, length, dropout=False)
 
 
 # ---------------------------------------------------------------- validation
