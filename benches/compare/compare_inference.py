@@ -11,6 +11,9 @@ columns compare each engine at its better thread count (ours too: RAYON_NUM_THRE
 by one (outputs fed back as inputs) and keeps the median step; the table shows the median over
 repetitions.
 
+`--simd avx512,avx2,portable` also times ours on each SIMD path; `--ort-avx2` adds ONNX Runtime
+held to its AVX2 kernels (ort_avx2.py), against which the `avx2` path is then compared.
+
 Run from the repository root (release binary built first):
 
     cargo build --release -p motion-cli
@@ -33,11 +36,22 @@ import onnxruntime as ort
 import torch
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from step_graph import REPO, ClosedLoopStep, export_onnx, paper_model  # noqa: E402
+from ort_avx2 import Worker, make_avx2_copy  # noqa: E402
+from step_graph import (  # noqa: E402
+    REPO,
+    ClosedLoopStep,
+    export_onnx,
+    fed_back,
+    median_step_us,
+    paper_model,
+    run_closed_loop,
+    session_for,
+)
 
 from training.export import load_weights, save_weights  # noqa: E402
 
 ARCHES = ("gru-d", "vgru-d")
+SETTLE_S = 0.2  # idle seconds before each timed repetition
 DTYPES = {"float32": torch.float32, "float16": torch.float16, "bfloat16": torch.bfloat16}
 
 
@@ -68,23 +82,6 @@ def step_cost(model, weights: str) -> tuple[int, int]:
     return flops, nbytes
 
 
-def median_step_us(step_fn, state: dict, steps: int) -> float:
-    """Runs ``steps`` closed-loop steps from ``state`` (feeding outputs back); median µs per step."""
-    times = []
-    for _ in range(steps):
-        start = time.perf_counter()
-        state = step_fn(state)
-        times.append((time.perf_counter() - start) * 1e6)
-    return statistics.median(times)
-
-
-def fed_back(state: dict, outputs) -> dict:
-    """The next step's inputs: ``state`` with the step's outputs in place (frame, history, state,
-    and the VGRU-d plan GRU's state)."""
-    nxt = dict(state, x=outputs[0], history=outputs[2], h=outputs[3])
-    if len(outputs) > 4:
-        nxt["plan_h"] = outputs[4]
-    return nxt
 
 
 def torch_runner(step: ClosedLoopStep, inputs: dict[str, torch.Tensor], threads: int):
@@ -106,15 +103,24 @@ def torch_runner(step: ClosedLoopStep, inputs: dict[str, torch.Tensor], threads:
 def ort_runner(session: ort.InferenceSession, inputs: dict[str, np.ndarray]):
     """A closure that times ONNX Runtime, outputs fed back as numpy inputs."""
 
-    def one(state):
-        return fed_back(state, session.run(None, state))
-
     def run(steps: int) -> float:
-        one(inputs)
-        one(inputs)
-        return median_step_us(one, dict(inputs), steps)
+        return run_closed_loop(lambda state: session.run(None, state), inputs, steps)
 
     return run
+
+
+def ort_avx2_runner(worker: Worker, onnx_path: str, threads: int, feeds_npz: str):
+    """A closure that times ONNX Runtime held to AVX2 (``ort_avx2``), in its worker process."""
+
+    def run(steps: int) -> float:
+        return worker.time(onnx_path, threads, feeds_npz, steps)
+
+    return run
+
+
+def best_on(med: dict[str, float], path: str) -> float:
+    """Ours on one SIMD path: the default step, or the opt-in row split where it was timed."""
+    return min(v for n, v in med.items() if n in (f"simd-{path}", f"simd-{path}-split"))
 
 
 def ours_runner(cli: str, weights: str, batch: int, threads: int, extra: tuple[str, ...] = ()):
@@ -133,14 +139,6 @@ def ours_runner(cli: str, weights: str, batch: int, threads: int, extra: tuple[s
 
     return run
 
-
-def session_for(onnx_path: str, threads: int) -> ort.InferenceSession:
-    """A CPU session with ``threads`` intra-op threads and every graph optimization."""
-    options = ort.SessionOptions()
-    options.intra_op_num_threads = threads
-    options.inter_op_num_threads = 1
-    options.graph_optimization_level = ort.GraphOptimizationLevel.ORT_ENABLE_ALL
-    return ort.InferenceSession(onnx_path, options, providers=["CPUExecutionProvider"])
 
 
 def parity(step: ClosedLoopStep, session: ort.InferenceSession, batch: int) -> float:
@@ -182,6 +180,12 @@ def main() -> int:
         help="also time ours on each of these SIMD paths (comma-separated: avx512, avx2, neon, portable; "
         "`motion-cli bench --simd`), each against ORT in the same run",
     )
+    parser.add_argument(
+        "--ort-avx2",
+        action="store_true",
+        help="also time ONNX Runtime held to its AVX2 kernels (ort_avx2.py: a patched private copy, run in "
+        "a worker process); the `avx2` path's ratio is then taken against it, every other against stock ORT",
+    )
     parser.add_argument("--json", help="also write the results to this JSON file")
     args = parser.parse_args()
     simd_paths = [p for p in args.simd.split(",") if p]
@@ -194,6 +198,7 @@ def main() -> int:
 
     rows = []
     with tempfile.TemporaryDirectory(prefix="motion-compare-") as tmp:
+        worker = Worker(make_avx2_copy(os.path.join(tmp, "ort-avx2"))) if args.ort_avx2 else None
         models = []
         for path in args.model:
             models.append((load_weights(path), path))
@@ -234,11 +239,21 @@ def main() -> int:
                 }
                 if args.baseline_cli:
                     engines["baseline"] = ours_runner(args.baseline_cli, weights, batch, args.threads)
+                if worker is not None:
+                    feeds_npz = os.path.join(tmp, f"{arch}-{batch}.npz")
+                    np.savez(feeds_npz, **feeds)
+                    for n in sorted({args.threads, 1}, reverse=True):
+                        name = "onnxruntime-avx2" + ("" if n == args.threads else "-1t")
+                        engines[name] = ort_avx2_runner(worker, onnx_path, n, feeds_npz)
                 if args.threads != 1 and batch <= 4:
                     # Opt-in: products split over threads by output rows (`bench --row-split`).
                     engines["split"] = ours_runner(args.cli, weights, batch, args.threads, ("--row-split",))
                 for path in simd_paths:
                     engines[f"simd-{path}"] = ours_runner(args.cli, weights, batch, args.threads, ("--simd", path))
+                    if args.threads != 1 and batch <= 4:
+                        engines[f"simd-{path}-split"] = ours_runner(
+                            args.cli, weights, batch, args.threads, ("--simd", path, "--row-split")
+                        )
                 if args.threads != 1:
                     engines["ours-1t"] = ours_runner(args.cli, weights, batch, 1)
                     if args.baseline_cli:
@@ -251,11 +266,16 @@ def main() -> int:
                 for rep in range(args.reps):
                     k = rep % len(order)
                     for name in order[k:] + order[:k]:
+                        # ORT's and torch's pool threads spin for a while after a call; let them
+                        # stop so they do not take the next engine's second core.
+                        time.sleep(SETTLE_S)
                         times[name].append(engines[name](steps))
                 med = {name: statistics.median(t) for name, t in times.items()}
                 # Each engine at its better thread count on this (shared) machine.
                 best_ours = min(v for n, v in med.items() if n.startswith("ours"))
-                best_ort = min(v for n, v in med.items() if n.startswith("onnxruntime"))
+                best_ort = min(v for n, v in med.items() if n.startswith("onnxruntime") and "avx2" not in n)
+                best_ort_avx2 = min((v for n, v in med.items() if n.startswith("onnxruntime-avx2")), default=None)
+                ort_for = {p: best_ort_avx2 if p == "avx2" and best_ort_avx2 else best_ort for p in simd_paths}
                 best_torch = min(v for n, v in med.items() if n.startswith("pytorch"))
                 best_base = min((v for n, v in med.items() if n.startswith("baseline")), default=float("nan"))
                 row = {
@@ -269,7 +289,8 @@ def main() -> int:
                     "split_over_ort": med.get("split", float("nan")) / best_ort,
                     "pytorch_over_split": best_torch / med.get("split", float("nan")),
                     "baseline_over_ort": best_base / best_ort,
-                    "ours_over_ort_by_simd": {p: med[f"simd-{p}"] / best_ort for p in simd_paths},
+                    "ours_over_ort_by_simd": {p: best_on(med, p) / ort_for[p] for p in simd_paths},
+                    "ort_avx2_over_ort": best_ort_avx2 / best_ort if best_ort_avx2 else None,
                     "ort_vs_pytorch_max_abs": err,
                     "flops_per_char_step": flops,
                     "weight_bytes_per_step": weight_bytes,
@@ -283,10 +304,25 @@ def main() -> int:
                 print_row(row, header=len(rows) == 1)
                 if simd_paths:
                     print(
-                        "    per SIMD path, ours µs (ours/ORT): "
-                        + "  ".join(f"{p} {med[f'simd-{p}']:.1f} ({row['ours_over_ort_by_simd'][p]:.2f}x)" for p in simd_paths),
+                        "    per SIMD path, ours µs (ours/ORT; at batch <= 4 the better of the default step and "
+                        "--row-split): "
+                        + "  ".join(
+                            f"{p} {med[f'simd-{p}']:.1f}"
+                            + (f" split {med[f'simd-{p}-split']:.1f}" if f"simd-{p}-split" in med else "")
+                            + f" ({row['ours_over_ort_by_simd'][p]:.2f}x)"
+                            for p in simd_paths
+                        ),
                         flush=True,
                     )
+                if best_ort_avx2:
+                    print(
+                        f"    ONNX Runtime held to AVX2: {best_ort_avx2:.1f} µs ({row['ort_avx2_over_ort']:.2f}x stock ORT)"
+                        + ("; the avx2 ratio above is against it" if "avx2" in simd_paths else ""),
+                        flush=True,
+                    )
+        if worker is not None:
+            print(f"ONNX Runtime held to AVX2 was imported from {worker.package}")
+            worker.close()
     if args.json:
         with open(args.json, "w") as f:
             json.dump({"threads": args.threads, "reps": args.reps, "dtype": args.dtype, "results": rows}, f, indent=1)

@@ -19,7 +19,9 @@ Outputs: ``y [B, O]`` (normalized prediction, fed back as the next ``x``), ``ful
 from __future__ import annotations
 
 import os
+import statistics
 import sys
+import time
 
 import torch
 from torch import nn
@@ -123,3 +125,46 @@ def export_onnx(step: ClosedLoopStep, path: str, batch: int) -> None:
             opset_version=17,
             dynamo=False,
         )
+
+
+def fed_back(state: dict, outputs) -> dict:
+    """The next step's inputs: ``state`` with the step's outputs in place (frame, history, state,
+    and the VGRU-d plan GRU's state)."""
+    nxt = dict(state, x=outputs[0], history=outputs[2], h=outputs[3])
+    if len(outputs) > 4:
+        nxt["plan_h"] = outputs[4]
+    return nxt
+
+
+def median_step_us(step_fn, state: dict, steps: int) -> float:
+    """Runs ``steps`` closed-loop steps from ``state`` (``step_fn`` maps inputs to the next
+    inputs); median µs per step."""
+    times = []
+    for _ in range(steps):
+        start = time.perf_counter()
+        state = step_fn(state)
+        times.append((time.perf_counter() - start) * 1e6)
+    return statistics.median(times)
+
+
+def run_closed_loop(call, inputs: dict, steps: int) -> float:
+    """Median µs per step of ``call`` (inputs -> the step's outputs, e.g. ``session.run(None, .)``)
+    in a closed loop from ``inputs``, outputs fed back; two untimed steps first."""
+
+    def one(state):
+        return fed_back(state, call(state))
+
+    one(inputs)
+    one(inputs)
+    return median_step_us(one, dict(inputs), steps)
+
+
+def session_for(onnx_path: str, threads: int):
+    """An ONNX Runtime CPU session with ``threads`` intra-op threads and every graph optimization."""
+    import onnxruntime as ort
+
+    options = ort.SessionOptions()
+    options.intra_op_num_threads = threads
+    options.inter_op_num_threads = 1
+    options.graph_optimization_level = ort.GraphOptimizationLevel.ORT_ENABLE_ALL
+    return ort.InferenceSession(onnx_path, options, providers=["CPUExecutionProvider"])

@@ -112,6 +112,49 @@ fn shards_are_reported_and_chosen() {
 }
 
 #[test]
+fn repeats_report_the_steady_slowest_step() {
+    // Per step index the fastest of the repeats, then the slowest index: never above the slowest
+    // step of all runs, and without --repeats it is that run's own slowest step.
+    let rows = |extra: &[&str]| -> Vec<serde_json::Value> {
+        let mut args = vec![
+            "--arch",
+            "vgru-d",
+            "--hidden",
+            "8",
+            "--batch",
+            "1,3",
+            "--steps",
+            "5",
+            "--with-plan",
+        ];
+        args.extend_from_slice(extra);
+        args.push("--json");
+        let (code, out, err) = bench(&args);
+        assert_eq!(code, 0, "{err}");
+        let report: serde_json::Value = serde_json::from_str(&out).expect("stdout is JSON");
+        report["results"].as_array().expect("results").clone()
+    };
+    for row in rows(&["--repeats", "3"]) {
+        assert_eq!(row["repeats"].as_u64(), Some(3), "{row}");
+        let steady = row["steady_max_us"].as_f64().expect("steady_max_us");
+        let steady_median = row["steady_median_us"].as_f64().expect("steady_median_us");
+        let max = row["max_us"].as_f64().expect("max_us");
+        assert!(
+            0.0 < steady_median && steady_median <= steady && steady <= max,
+            "{row}"
+        );
+    }
+    for row in rows(&[]) {
+        assert_eq!(row["repeats"].as_u64(), Some(1), "{row}");
+        assert_eq!(
+            row["steady_max_us"].as_f64(),
+            row["max_us"].as_f64(),
+            "{row}"
+        );
+    }
+}
+
+#[test]
 fn text_table_names_the_columns() {
     let (code, out, err) = bench(&[
         "--arch", "gru-d", "--hidden", "8", "--batch", "1", "--steps", "1",
@@ -133,6 +176,7 @@ fn bad_input_exits_2() {
         &["--model", "/nonexistent/w.safetensors", "--steps", "1"][..],
         &["--npss", "/nonexistent/gt.npy", "/nonexistent/pred.npy"][..],
         &["--shards", "0", "--steps", "1"][..],
+        &["--repeats", "0", "--steps", "1"][..],
     ] {
         let (code, _, err) = bench(args);
         assert_eq!(code, 2, "{args:?}: {err}");

@@ -10,7 +10,10 @@
 //!
 //! The reported time is the median over steps timed one by one (robust to a busy machine); the
 //! mean, the 99th percentile and the slowest step are reported too (a re-plan or any other stall
-//! shows in `max`). `--simd avx2,portable` times each SIMD path in turn (the model loaded again
+//! shows in `max`). `--repeats R` runs the same steps R times and adds the **steady** slowest
+//! step: per step index its fastest run, then the slowest index, i.e. the engine's own worst step
+//! with the host's one-off preemptions taken out (a stall of the engine recurs at its step in every
+//! run). `--simd avx2,portable` times each SIMD path in turn (the model loaded again
 //! under each, see `motion_core::nn::simd`), so every path the machine has can be measured.
 //!
 //! `--npss GT.npy PRED.npy` times NPSS instead (both spectra, files loaded outside the clock):
@@ -95,6 +98,12 @@ pub struct Args {
     /// rule for the selected SIMD path; 1 keeps a batch in one piece).
     #[arg(long, value_name = "N")]
     pub shards: Option<usize>,
+    /// Run the same timed steps this many times (each run seeded identically) and also report
+    /// `steady_max_us`: the slowest step index after taking, per index, its fastest run. A stall
+    /// of the engine (e.g. a re-plan) recurs at its step in every run and stays in it; a host's
+    /// preemption or a late wake-up rarely hits the same step twice and drops out.
+    #[arg(long, default_value_t = 1, value_name = "R")]
+    pub repeats: usize,
     /// SIMD paths to time, comma-separated (avx512, avx2, neon, portable; default: the one
     /// selected, i.e. $MOTION_SIMD or the best the CPU has). The model is loaded once per path,
     /// so each path also gets its own weight layout. A path the CPU lacks is refused.
@@ -129,6 +138,9 @@ struct Measurement {
     mean_us: f64,
     p99_us: f64,
     max_us: f64,
+    repeats: usize,
+    steady_max_us: f64,
+    steady_median_us: f64,
 }
 
 impl Measurement {
@@ -151,6 +163,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if args.hidden == 0 {
         return Err(UsageError("--hidden must be at least 1".into()).into());
     }
+    if args.repeats == 0 {
+        return Err(UsageError("--repeats must be at least 1".into()).into());
+    }
     if !args.npss.is_empty() {
         return run_npss(&args);
     }
@@ -170,14 +185,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         simd::set_simd_path(path)?;
         for model in &models(&args)? {
             for &batch in &args.batch {
-                results.push(measure(
-                    model,
+                let run = TimedRun {
                     batch,
-                    args.steps,
-                    args.with_plan,
-                    args.row_split,
-                    args.shards,
-                )?);
+                    steps: args.steps,
+                    with_plan: args.with_plan,
+                    row_split: args.row_split,
+                    shards: args.shards,
+                };
+                results.push(measure(model, &run, args.repeats)?);
             }
         }
     }
@@ -241,62 +256,93 @@ fn seeded(
     Ok(generator)
 }
 
-/// Times `steps` closed-loop steps at `batch`, each step on its own clock.
-fn measure(
-    model: &Arc<MotionModel>,
+/// What one timed run does: `steps` closed-loop steps at `batch`.
+struct TimedRun {
     batch: usize,
     steps: usize,
     with_plan: bool,
     row_split: bool,
     shards: Option<usize>,
+}
+
+/// The median of sorted `times`.
+fn median_sorted(times: &[f64]) -> f64 {
+    let mid = times.len() / 2;
+    if times.len() % 2 == 1 {
+        times[mid]
+    } else {
+        0.5 * (times[mid - 1] + times[mid])
+    }
+}
+
+/// Times `run` `repeats` times, each step on its own clock; statistics over every timed step,
+/// and per step index over the repeats (see `Args::repeats`).
+fn measure(
+    model: &Arc<MotionModel>,
+    run: &TimedRun,
+    repeats: usize,
 ) -> anyhow::Result<Measurement> {
+    let mut all = Vec::with_capacity(run.steps * repeats);
+    let mut fastest = vec![f64::INFINITY; run.steps];
+    let mut shard_count = 1;
+    for _ in 0..repeats {
+        let (times, shards) = time_steps(model, run)?;
+        shard_count = shards;
+        for (best, &t) in fastest.iter_mut().zip(&times) {
+            *best = best.min(t);
+        }
+        all.extend(times);
+    }
+    let mean_us = all.iter().sum::<f64>() / all.len() as f64;
+    all.sort_by(f64::total_cmp);
+    let p99_us = all[(all.len() * 99).div_ceil(100).saturating_sub(1)];
+    fastest.sort_by(f64::total_cmp);
+    let cfg = model.config();
+    Ok(Measurement {
+        simd: simd::active(),
+        arch: cfg.architecture.name(),
+        hidden: cfg.hidden,
+        batch: run.batch,
+        shards: shard_count,
+        steps: run.steps,
+        median_us: median_sorted(&all),
+        mean_us,
+        p99_us,
+        max_us: all[all.len() - 1],
+        repeats,
+        steady_max_us: fastest[fastest.len() - 1],
+        steady_median_us: median_sorted(&fastest),
+    })
+}
+
+/// One run: µs of each of `run.steps` steps (in order) and the generator's shard count.
+fn time_steps(model: &Arc<MotionModel>, run: &TimedRun) -> anyhow::Result<(Vec<f64>, usize)> {
     let cfg = model.config();
     // Within-plan segments: the plan computed at seeding covers seed + horizon steps; re-seed
     // (untimed) before it runs out. Plan buffers grow with the horizon, so keep it the model's.
     let horizon = cfg.horizon.max(WARM_UP_STEPS + 2);
-    let segment = if with_plan || cfg.architecture == Architecture::GruD {
-        steps
+    let segment = if run.with_plan || cfg.architecture == Architecture::GruD {
+        run.steps
     } else {
         horizon - WARM_UP_STEPS - 1
     };
-    let mut times = Vec::with_capacity(steps);
+    let mut times = Vec::with_capacity(run.steps);
     let mut shard_count = 1;
-    while times.len() < steps {
-        let mut generator = seeded(model, batch, horizon, shards)?;
-        generator.set_row_split(row_split);
+    while times.len() < run.steps {
+        let mut generator = seeded(model, run.batch, horizon, run.shards)?;
+        generator.set_row_split(run.row_split);
         shard_count = generator.shards();
         for _ in 0..WARM_UP_STEPS {
             std::hint::black_box(generator.step()?[[0, 0]]);
         }
-        let n = segment.min(steps - times.len());
+        let n = segment.min(run.steps - times.len());
         for _ in 0..n {
             let start = Instant::now();
             std::hint::black_box(generator.step()?[[0, 0]]);
             times.push(start.elapsed().as_secs_f64() * 1e6);
         }
     }
-    let mean_us = times.iter().sum::<f64>() / times.len() as f64;
-    times.sort_by(f64::total_cmp);
-    let mid = times.len() / 2;
-    let median_us = if times.len() % 2 == 1 {
-        times[mid]
-    } else {
-        0.5 * (times[mid - 1] + times[mid])
-    };
-    let p99_us = times[(times.len() * 99).div_ceil(100).saturating_sub(1)];
-    let max_us = times[times.len() - 1];
-    Ok(Measurement {
-        simd: simd::active(),
-        arch: cfg.architecture.name(),
-        hidden: cfg.hidden,
-        batch,
-        shards: shard_count,
-        steps,
-        median_us,
-        mean_us,
-        p99_us,
-        max_us,
-    })
+    Ok((times, shard_count))
 }
 
 /// `--npss GT PRED`: median seconds of `--reps` NPSS evaluations per spectrum.
@@ -568,6 +614,9 @@ fn json_report(results: &[Measurement], peak: Option<f64>) -> String {
                 "mean_us_per_step": m.mean_us,
                 "p99_us": m.p99_us,
                 "max_us": m.max_us,
+                "repeats": m.repeats,
+                "steady_median_us": m.steady_median_us,
+                "steady_max_us": m.steady_max_us,
                 "char_steps_per_s": m.char_steps_per_s(),
             })
         })
@@ -577,7 +626,7 @@ fn json_report(results: &[Measurement], peak: Option<f64>) -> String {
 
 fn text_report(results: &[Measurement], peak: Option<f64>) -> String {
     let mut s = format!(
-        "{:<8} {:<8} {:>6} {:>6} {:>6} {:>6} {:>12} {:>12} {:>10} {:>10} {:>16}\n",
+        "{:<8} {:<8} {:>6} {:>6} {:>6} {:>6} {:>12} {:>12} {:>10} {:>10} {:>16} {:>16}\n",
         "simd",
         "arch",
         "hidden",
@@ -588,11 +637,12 @@ fn text_report(results: &[Measurement], peak: Option<f64>) -> String {
         "mean µs",
         "p99 µs",
         "max µs",
-        "char-steps/s"
+        "char-steps/s",
+        "steady max µs"
     );
     for m in results {
         s.push_str(&format!(
-            "{:<8} {:<8} {:>6} {:>6} {:>6} {:>6} {:>12.1} {:>12.1} {:>10.1} {:>10.1} {:>16.0}\n",
+            "{:<8} {:<8} {:>6} {:>6} {:>6} {:>6} {:>12.1} {:>12.1} {:>10.1} {:>10.1} {:>16.0} {:>16}\n",
             m.simd.name(),
             m.arch,
             m.hidden,
@@ -603,7 +653,12 @@ fn text_report(results: &[Measurement], peak: Option<f64>) -> String {
             m.mean_us,
             m.p99_us,
             m.max_us,
-            m.char_steps_per_s()
+            m.char_steps_per_s(),
+            if m.repeats > 1 {
+                format!("{:.1}", m.steady_max_us)
+            } else {
+                "-".to_string()
+            }
         ));
     }
     match peak {
