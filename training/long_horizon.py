@@ -13,6 +13,7 @@ import numpy as np
 import torch
 
 from .features import DerivativeHistory
+from .root_drift import drift_loss, hip_and_lean, root_poses
 
 LONG_HORIZON = 300  # 12 s at 25 Hz: the closed-loop length of the long checkpoint choices
 LONG_WINDOW = (200, 300)  # predicted frames 8-12 s
@@ -101,25 +102,45 @@ def choice_key(val: dict) -> tuple:
     return (1, -smallest)
 
 
+def _root_mm(model, x: torch.Tensor) -> torch.Tensor:
+    """The root's 6 dims (mm and exp-map) of normalized frames ``[B, T, O]`` (dims_used starts with 0..5)."""
+    used = model.norm.dims_used[:6]
+    return x[..., :6] * model.norm.std[used] + model.norm.mean[used]
+
+
 def long_motion_loss(model, frames: torch.Tensor, actions, seed: int, burn_in: int, length: int, eps=None,
-                     feed_noise: float = 0.0, dropout: bool = True) -> torch.Tensor:
+                     feed_noise: float = 0.0, dropout: bool = True, drift_weight: float = 0.0) -> torch.Tensor:
     """The long-horizon term (truncated back-propagation through the closed loop), for any ``MotionModel``:
     after ``seed`` true frames the model runs ``burn_in`` frames on its own output without gradient, then
     ``length`` frames with it; ``speed_loss + accel_loss`` of those frames (with the last burn-in frame before
     them) against the truth's over the same frames ``frames[:, seed + burn_in : seed + burn_in + length + 1]``.
     Positions are not compared: ``burn_in`` frames in, the truth is one of many right answers. The steps are
     ``closed_loop``'s (the VGRU plan streams past its horizon); ``feed_noise`` as there (the frames with gradient
-    only); ``dropout=False`` leaves out the input dropout (``train_dae``'s term)."""
+    only); ``dropout=False`` leaves out the input dropout (``train_dae``'s term). ``drift_weight > 0`` adds that
+    times ``root_drift.drift_loss`` of the ``length`` frames: the root integrated from the first seed frame over
+    the seed and the burn-in (no gradient) and these frames, hip height and lean against the last seed frame's."""
     ctx = model._begin(frames.shape[0], seed + burn_in + length, actions, eps, frames, seed_len=seed)
     history = DerivativeHistory(model.derivative_order)
     with torch.no_grad():
         frame = model._teacher_force(ctx, history, frames[:, :seed], dropout)[:, -1:]
+        burned = [frame]  # predicted frames seed .. seed + burn_in (the last is pred[:, 0] below)
         for k in range(burn_in):
             frame = model._feed_back(ctx, history, frame, seed + k, dropout=dropout)
+            burned.append(frame)
     model._cut_graph(ctx, history)
     outputs = [frame.detach()]
     for k in range(length):
         outputs.append(model._feed_back(ctx, history, outputs[-1], seed + burn_in + k, feed_noise, dropout))
     pred = torch.cat(outputs, dim=1)
     truth = frames[:, seed + burn_in : seed + burn_in + length + 1]
-    return speed_loss(model, pred, truth) + accel_loss(model, pred, truth)
+    loss = speed_loss(model, pred, truth) + accel_loss(model, pred, truth)
+    if drift_weight > 0:
+        with torch.no_grad():
+            before = torch.cat([frames[:, :seed]] + burned, dim=1)
+            rot, trans = root_poses(_root_mm(model, before).double())
+            hip_s, lean_s = hip_and_lean(rot[:, seed - 1], trans[:, seed - 1])
+            start = (rot[:, -1], trans[:, -1])
+        rot, trans = root_poses(_root_mm(model, pred[:, 1:]).double(), start=start)
+        hip, lean = hip_and_lean(rot, trans)
+        loss = loss + drift_weight * drift_loss(hip, lean, hip_s, lean_s).to(loss.dtype)
+    return loss

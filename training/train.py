@@ -131,6 +131,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="adds W x the long-horizon term (long_horizon.long_motion_loss): the closed loop run on "
                         "without gradient for 0..--long-burn-in frames, then --long-frames with it, joint speed and "
                         "acceleration matched to the truth's")
+    g.add_argument("--drift-weight", type=float, default=0.0, metavar="W",
+                   help="with --long-weight: adds W x the root-drift penalty of the long term's frames "
+                        "(root_drift.drift_loss: hip height and lean of the integrated root held within 100 mm and "
+                        "10 degrees of the last seed frame's)")
     g.add_argument("--long-burn-in", type=int, default=250, metavar="FRAMES")
     g.add_argument("--long-frames", type=int, default=50, metavar="FRAMES")
     g.add_argument("--long-batch", type=int, default=8, help="sequences of the long-horizon term per iteration")
@@ -616,6 +620,7 @@ def train(args, argv: list[str] | None = None, dataset=None, val_windows=None, q
                 long_term = long_motion_loss(
                     model, torch.from_numpy(long_np).to(device), torch.from_numpy(label_map[long_acts]).to(device), seed_frames, burn,
                     args.long_frames, sample_eps(model, args.long_batch), args.feed_noise,
+                    drift_weight=args.drift_weight,
                 )
                 total = total + args.long_weight * long_term
                 acc["long"] = acc.get("long", 0.0) + long_term.item()
