@@ -13,7 +13,7 @@ import numpy as np
 import torch
 
 from .features import DerivativeHistory
-from .root_drift import drift_loss, hip_and_lean, root_poses
+from .root_drift import drift_penalty
 
 LONG_HORIZON = 300  # 12 s at 25 Hz: the closed-loop length of the long checkpoint choices
 LONG_WINDOW = (200, 300)  # predicted frames 8-12 s
@@ -102,12 +102,6 @@ def choice_key(val: dict) -> tuple:
     return (1, -smallest)
 
 
-def _root_mm(model, x: torch.Tensor) -> torch.Tensor:
-    """The root's 6 dims (mm and exp-map) of normalized frames ``[B, T, O]`` (dims_used starts with 0..5)."""
-    used = model.norm.dims_used[:6]
-    return x[..., :6] * model.norm.std[used] + model.norm.mean[used]
-
-
 def long_motion_loss(model, frames: torch.Tensor, actions, seed: int, burn_in: int, length: int, eps=None,
                      feed_noise: float = 0.0, dropout: bool = True, drift_weight: float = 0.0) -> torch.Tensor:
     """The long-horizon term (truncated back-propagation through the closed loop), for any ``MotionModel``:
@@ -135,12 +129,6 @@ def long_motion_loss(model, frames: torch.Tensor, actions, seed: int, burn_in: i
     truth = frames[:, seed + burn_in : seed + burn_in + length + 1]
     loss = speed_loss(model, pred, truth) + accel_loss(model, pred, truth)
     if drift_weight > 0:
-        with torch.no_grad():
-            before = torch.cat([frames[:, :seed]] + burned, dim=1)
-            rot, trans = root_poses(_root_mm(model, before).double())
-            hip_s, lean_s = hip_and_lean(rot[:, seed - 1], trans[:, seed - 1])
-            start = (rot[:, -1], trans[:, -1])
-        rot, trans = root_poses(_root_mm(model, pred[:, 1:]).double(), start=start)
-        hip, lean = hip_and_lean(rot, trans)
-        loss = loss + drift_weight * drift_loss(hip, lean, hip_s, lean_s).to(loss.dtype)
+        parts = [(torch.cat(burned, dim=1), False), (pred[:, 1:], True)]
+        loss = loss + drift_weight * drift_penalty(model, frames[:, :seed], parts).to(loss.dtype)
     return loss

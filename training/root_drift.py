@@ -83,3 +83,39 @@ def drift_loss(hip: torch.Tensor, lean: torch.Tensor, hip_ref: torch.Tensor, lea
     dh = torch.relu((hip - hip_ref[:, None]).abs() - DRIFT_HIP_MM) / DRIFT_HIP_MM
     dl = torch.relu((lean - lean_ref[:, None]).abs() - DRIFT_LEAN_RAD) / DRIFT_LEAN_RAD
     return (dh**2 + dl**2).mean()
+
+
+def root_mm(model, x: torch.Tensor) -> torch.Tensor:
+    """The root's 6 dims (mm and exp-map, f64) of ``model``'s normalized frames ``[B, T, O]`` (its dims_used
+    start with 0..5, as every H3.6M model's here)."""
+    used = model.norm.dims_used[:6]
+    if used.tolist() != list(range(6)):
+        raise ValueError(f"the model's first used dims are {used.tolist()}, not the root's 0..5")
+    return (x[..., :6] * model.norm.std[used] + model.norm.mean[used]).double()
+
+
+def drift_penalty(model, seed: torch.Tensor, parts: list[tuple[torch.Tensor, bool]]) -> torch.Tensor:
+    """``drift_loss`` of a closed loop: the root integrated from the first frame of ``seed [B, S, O]`` (normalized,
+    as the model reads it) through ``parts``, the generated frames after it in time order, each ``(frames [B, T,
+    O], scored)``. Hip height and lean are measured against the last seed frame's on the frames of the scored
+    parts (whose gradient flows back through the integration); unscored parts only carry the pose forward."""
+    with torch.no_grad():
+        rot, trans = root_poses(root_mm(model, seed))
+        hip_s, lean_s = hip_and_lean(rot[:, -1], trans[:, -1])
+    start = (rot[:, -1], trans[:, -1])
+    hips, leans = [], []
+    for frames, scored in parts:
+        if frames.shape[1] == 0:
+            continue
+        if scored:
+            rot, trans = root_poses(root_mm(model, frames), start=start)
+            hip, lean = hip_and_lean(rot, trans)
+            hips.append(hip)
+            leans.append(lean)
+        else:
+            with torch.no_grad():
+                rot, trans = root_poses(root_mm(model, frames), start=start)
+        start = (rot[:, -1].detach(), trans[:, -1].detach()) if not scored else (rot[:, -1], trans[:, -1])
+    if not hips:
+        raise ValueError("drift_penalty needs at least one scored part")
+    return drift_loss(torch.cat(hips, 1), torch.cat(leans, 1), hip_s, lean_s)

@@ -56,10 +56,11 @@ from torch.nn import functional as F
 
 from . import data as h36m
 from . import intention_labels
-from .export import save_weights
+from .export import load_weights, save_weights
 from .layers import MLP
 from .long_horizon import LONG_HORIZON, speed_ratios
 from .models import IntentionModel, joint_groups, make_config, parameter_count
+from .root_drift import drift_penalty
 from .checkpoint_io import BEST, CHECKPOINT, add_run_arguments, atomic_save, begin_run, read_checkpoint
 from .train import RESUME_OVERRIDABLE, Logger, Validator, explicit_args
 
@@ -101,6 +102,13 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--long-weight", type=float, default=1.0, help="weight of the long-horizon adversarial term")
     g.add_argument("--long-burn-in", type=int, default=200, help="most frames run without gradient")
     g.add_argument("--long-frames", type=int, default=40, help="frames with gradient after the burn-in")
+    g.add_argument("--drift-weight", type=float, default=0.0, metavar="W",
+                   help="adds W x the root-drift penalty (root_drift.drift_penalty: hip height and lean of the "
+                        "integrated root held within 100 mm and 10 degrees of the last seed frame's) of the generated "
+                        "frames with gradient (the 4 s and, with --long-weight, the long frames)")
+    g.add_argument("--init-weights", type=Path, metavar="FILE.safetensors",
+                   help="a new run whose model (and clustering) starts from an exported intention file; fresh "
+                        "discriminators and optimizers; the model size flags do not apply")
     g.add_argument("--clip", type=float, default=5.0, help="gradient-norm clipping")
     g.add_argument("--seed", type=int, default=1)
     add_run_arguments(p, log_every=25)
@@ -258,6 +266,13 @@ def train(args, argv: list[str]) -> None:
         config = resume["config"]
         model = IntentionModel(config)
         model.load_state_dict(resume["model"])
+    elif args.init_weights is not None:
+        model = load_weights(args.init_weights)
+        if not isinstance(model, IntentionModel):
+            raise SystemExit(f"error: {args.init_weights}: not an intention model ({model.config['architecture']})")
+        model = model.float()
+        config = model.config
+        log(f"initial weights (and clustering) from {args.init_weights}")
     else:
         config = build_config(args, stats.dims_used)
         model = IntentionModel(config)
@@ -350,6 +365,7 @@ def train(args, argv: list[str]) -> None:
         fake_p = windows_of(torch.cat([seed[:, -1:], pred], 1), args.pose_window, 3)
         real_p = windows_of(torch.cat([seed[:, -1:], truth], 1), args.pose_window, 3)
         long_fake = None
+        drift_parts = [(pred, True)]
         if long_total:
             with torch.no_grad():
                 x = pred[:, -1]
@@ -357,8 +373,10 @@ def train(args, argv: list[str]) -> None:
                 if burn:
                     burned, hs = model.rollout(x, hs, z, feats[:, future : future + burn])
                     x = burned[:, -1]
+                    drift_parts.append((burned, False))
             more, _ = model.rollout(x, hs, z, feats[:, future + burn :])
             long_fake = windows_of(torch.cat([x[:, None], more], 1), args.pose_window, 3)
+            drift_parts.append((more, True))
         fakes = fake_p if long_fake is None else torch.cat([fake_p, long_fake])
         dp = gan_d_loss(d_pose(real_p), d_pose(fakes.detach()))
         opt_dp.zero_grad(set_to_none=True)
@@ -371,6 +389,10 @@ def train(args, argv: list[str]) -> None:
             adv_long = gan_g_loss(d_pose(long_fake))
             lg = lg + args.long_weight * args.adv_weight * adv_long
             terms["adv_long"] = adv_long.item()
+        if args.drift_weight > 0:
+            drift = drift_penalty(model, seed, drift_parts).to(lg.dtype)
+            lg = lg + args.drift_weight * drift
+            terms["drift"] = drift.item()
         loss = lf + lg
         if not math.isfinite(loss.item()):
             raise SystemExit(f"error: loss became {loss.item()} at iteration {iteration + 1}; see {run_dir}")

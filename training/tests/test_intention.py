@@ -1,6 +1,8 @@
 """The intention-based model of paper 003: labels (k-means, cycle merging), the model's time indexing against a
 hand-written step loop, the losses, and a smoke run with exact resume and export."""
 
+import json
+from pathlib import Path
 import numpy as np
 import pytest
 import torch
@@ -238,3 +240,22 @@ def test_bad_arguments_are_refused(tmp_path, synthetic):
         train_intention.main(["--run-dir", str(tmp_path / "a")] + TINY + ["--future", "3"])
     with pytest.raises(SystemExit, match="resume"):
         train_intention.main(["--run-dir", str(tmp_path / "b"), "--resume"])
+
+
+def test_init_weights_and_drift_term(tmp_path, synthetic):
+    """A run from an exported file keeps its weights and clustering (lr 0 changes nothing) and logs the drift term."""
+    run(["--run-dir", str(tmp_path / "base"), "--iterations", "2"] + TINY)
+    out = tmp_path / "base.safetensors"
+    run(["--export", str(out), "--from", str(tmp_path / "base" / "last.pt"), "--dtype", "float32"])
+    run(["--run-dir", str(tmp_path / "ft"), "--iterations", "2", "--init-weights", str(out), "--lr", "0",
+         "--drift-weight", "1"] + TINY)
+    start = load_weights(out).state_dict()
+    after = torch.load(tmp_path / "ft" / "last.pt", weights_only=False)["model"]
+    for k, v in start.items():
+        torch.testing.assert_close(after[k], v, rtol=0, atol=0)
+    records = [json.loads(line) for line in (tmp_path / "ft" / "metrics.jsonl").read_text().splitlines()]
+    drifts = [r["drift"] for r in records if r.get("kind") == "train"]
+    assert drifts and all(d >= 0 for d in drifts)
+    with pytest.raises(SystemExit, match="not an intention model"):
+        gru_d = Path(__file__).resolve().parents[2] / "tests" / "fixtures" / "parity" / "gru_d.safetensors"
+        train_intention.main(["--run-dir", str(tmp_path / "bad"), "--init-weights", str(gru_d)] + TINY)
