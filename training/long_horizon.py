@@ -111,7 +111,7 @@ def long_motion_loss(model, frames: torch.Tensor, actions, seed: int, burn_in: i
     Positions are not compared: ``burn_in`` frames in, the truth is one of many right answers. The steps are
     ``closed_loop``'s (the VGRU plan streams past its horizon); ``feed_noise`` as there (the frames with gradient
     only); ``dropout=False`` leaves out the input dropout (``train_dae``'s term). ``drift_weight > 0`` adds that
-    times ``root_drift.drift_loss`` of the ``length`` frames: the root integrated from the first seed frame over
+    times ``root_drift.drift_penalty`` of the ``length`` frames: the root integrated from the first seed frame over
     the seed and the burn-in (no gradient) and these frames, hip height and lean against the last seed frame's."""
     ctx = model._begin(frames.shape[0], seed + burn_in + length, actions, eps, frames, seed_len=seed)
     history = DerivativeHistory(model.derivative_order)

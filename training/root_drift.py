@@ -10,7 +10,8 @@ bias in the predicted vertical translation or tilt accumulates over 12 s (the lo
 This module is the differentiable counterpart: ``root_poses`` integrates exactly as ``motion_core::root`` (row
 vectors, ``R(t) = Rd^s R(t-1)``, ``T(t) = T(t-1) + d (I + ... + Rd^(s-1)) R(t-1)``, the first frame applied once,
 ``s = ROOT_STEP`` at 25 Hz; checked against ``metrics_np.expmap2rotmat`` loops in the tests), and ``drift_loss``
-penalises ``|h_t − h_s|`` and the root's lean change beyond ``DRIFT_HIP_MM`` and ``DRIFT_LEAN_RAD``.
+(applied by ``drift_penalty`` to a closed loop's generated frames) penalises ``|h_t − h_s|`` and the root's lean
+change beyond ``DRIFT_HIP_MM`` and ``DRIFT_LEAN_RAD``.
 
 One approximation: the lean here is the angle of the root's own up axis (``+y · R_t``), i.e. the H3.6M rest pose's
 Hips -> Neck direction (Spine, Spine1 and Neck offsets all lie along +y) without the spine's joint rotations; the
@@ -115,7 +116,7 @@ def drift_penalty(model, seed: torch.Tensor, parts: list[tuple[torch.Tensor, boo
         else:
             with torch.no_grad():
                 rot, trans = root_poses(root_mm(model, frames), start=start)
-        start = (rot[:, -1].detach(), trans[:, -1].detach()) if not scored else (rot[:, -1], trans[:, -1])
+        start = (rot[:, -1], trans[:, -1])
     if not hips:
         raise ValueError("drift_penalty needs at least one scored part")
     return drift_loss(torch.cat(hips, 1), torch.cat(leans, 1), hip_s, lean_s)

@@ -133,7 +133,7 @@ def build_parser() -> argparse.ArgumentParser:
                         "acceleration matched to the truth's")
     g.add_argument("--drift-weight", type=float, default=0.0, metavar="W",
                    help="with --long-weight: adds W x the root-drift penalty of the long term's frames "
-                        "(root_drift.drift_loss: hip height and lean of the integrated root held within 100 mm and "
+                        "(root_drift.drift_penalty: hip height and lean of the integrated root held within 100 mm and "
                         "10 degrees of the last seed frame's)")
     g.add_argument("--long-burn-in", type=int, default=250, metavar="FRAMES")
     g.add_argument("--long-frames", type=int, default=50, metavar="FRAMES")

@@ -82,8 +82,6 @@ def step_cost(model, weights: str) -> tuple[int, int]:
     return flops, nbytes
 
 
-
-
 def torch_runner(step: ClosedLoopStep, inputs: dict[str, torch.Tensor], threads: int):
     """A closure that times PyTorch eager (no_grad) with ``threads`` intra-op threads."""
 
@@ -138,7 +136,6 @@ def ours_runner(cli: str, weights: str, batch: int, threads: int, extra: tuple[s
         return json.loads(out)["results"][0]["us_per_step"]
 
     return run
-
 
 
 def parity(step: ClosedLoopStep, session: ort.InferenceSession, batch: int) -> float:
