@@ -267,7 +267,10 @@ def train(args, argv: list[str]) -> None:
         model = IntentionModel(config)
         model.load_state_dict(resume["model"])
     elif args.init_weights is not None:
-        model = load_weights(args.init_weights)
+        try:
+            model = load_weights(args.init_weights)
+        except (OSError, ValueError, KeyError, RuntimeError) as e:
+            raise SystemExit(f"error: --init-weights {args.init_weights}: {e}") from e
         if not isinstance(model, IntentionModel):
             raise SystemExit(f"error: {args.init_weights}: not an intention model ({model.config['architecture']})")
         model = model.float()

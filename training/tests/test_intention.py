@@ -259,3 +259,6 @@ def test_init_weights_and_drift_term(tmp_path, synthetic):
     with pytest.raises(SystemExit, match="not an intention model"):
         gru_d = Path(__file__).resolve().parents[2] / "tests" / "fixtures" / "parity" / "gru_d.safetensors"
         train_intention.main(["--run-dir", str(tmp_path / "bad"), "--init-weights", str(gru_d)] + TINY)
+    with pytest.raises(SystemExit, match="--init-weights .*missing.safetensors"):
+        train_intention.main(["--run-dir", str(tmp_path / "bad2"), "--init-weights", str(tmp_path / "missing.safetensors")]
+                             + TINY)
