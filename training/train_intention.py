@@ -109,6 +109,9 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--init-weights", type=Path, metavar="FILE.safetensors",
                    help="a new run whose model (and clustering) starts from an exported intention file; fresh "
                         "discriminators and optimizers; the model size flags do not apply")
+    g.add_argument("--d-warmup", type=int, default=0, metavar="N",
+                   help="the first N iterations train only the discriminators (the model is not updated): fresh "
+                        "discriminators catch up with a model loaded by --init-weights before their gradients reach it")
     g.add_argument("--clip", type=float, default=5.0, help="gradient-norm clipping")
     g.add_argument("--seed", type=int, default=1)
     add_run_arguments(p, log_every=25)
@@ -399,13 +402,14 @@ def train(args, argv: list[str]) -> None:
         loss = lf + lg
         if not math.isfinite(loss.item()):
             raise SystemExit(f"error: loss became {loss.item()} at iteration {iteration + 1}; see {run_dir}")
-        opt_g.zero_grad(set_to_none=True)
-        opt_f.zero_grad(set_to_none=True)
-        loss.backward()
-        torch.nn.utils.clip_grad_norm_(generator, args.clip)
-        torch.nn.utils.clip_grad_norm_(forecaster, args.clip)
-        opt_g.step()
-        opt_f.step()
+        if iteration >= args.d_warmup:
+            opt_g.zero_grad(set_to_none=True)
+            opt_f.zero_grad(set_to_none=True)
+            loss.backward()
+            torch.nn.utils.clip_grad_norm_(generator, args.clip)
+            torch.nn.utils.clip_grad_norm_(forecaster, args.clip)
+            opt_g.step()
+            opt_f.step()
         iteration += 1
         for k, v in terms.items():
             acc[k] = acc.get(k, 0.0) + v

@@ -262,3 +262,22 @@ def test_init_weights_and_drift_term(tmp_path, synthetic):
     with pytest.raises(SystemExit, match="--init-weights .*missing.safetensors"):
         train_intention.main(["--run-dir", str(tmp_path / "bad2"), "--init-weights", str(tmp_path / "missing.safetensors")]
                              + TINY)
+
+
+def test_discriminator_warmup_leaves_the_model(tmp_path, synthetic):
+    """--d-warmup N: N iterations move the discriminators and not the model; the next one moves the model."""
+    run(["--run-dir", str(tmp_path / "base"), "--iterations", "2"] + TINY)
+    out = tmp_path / "base.safetensors"
+    run(["--export", str(out), "--from", str(tmp_path / "base" / "last.pt"), "--dtype", "float32"])
+    start = load_weights(out).state_dict()
+    common = ["--init-weights", str(out), "--lr", "1e-2", "--d-warmup", "2"] + TINY
+    warm = []
+    for n in (1, 2):
+        run(["--run-dir", str(tmp_path / f"warm{n}"), "--iterations", str(n)] + common)
+        warm.append(torch.load(tmp_path / f"warm{n}" / "last.pt", weights_only=False))
+        for k, v in start.items():
+            torch.testing.assert_close(warm[-1]["model"][k], v, rtol=0, atol=0)
+    assert any(not torch.equal(warm[1]["d_pose"][k], v) for k, v in warm[0]["d_pose"].items())
+    run(["--run-dir", str(tmp_path / "on"), "--iterations", "3"] + common)
+    moved = torch.load(tmp_path / "on" / "last.pt", weights_only=False)["model"]
+    assert any(not torch.equal(moved[k], v) for k, v in start.items() if v.is_floating_point())
