@@ -555,17 +555,21 @@ mod tests {
     fn a_row_sums_the_same_in_any_batch_or_tile() {
         // The row kernels give every (batch row, output) the same arithmetic, so a character's
         // step does not depend on the batch it runs in or the tile its output falls in (13
-        // outputs: 8-, 4- and 1-row tiles; 5 batch rows: pairs and a single).
+        // outputs: 8-, 4-, 3- and 1-row tiles; 2, 3, 5 and 11 batch rows: pairs, groups of four
+        // and their tails).
         let (inputs, outputs) = (216, 13);
         let values = data(outputs * inputs, 9);
         for path in SimdPath::available() {
-            for w in matrices(&values, outputs, inputs) {
-                let x = data(5 * inputs, 10);
-                let mut all = vec![0.0; 5 * outputs];
-                MatMul::dense(5, inputs, outputs)
+            for (w, batch) in matrices(&values, outputs, inputs)
+                .into_iter()
+                .flat_map(|w| [2, 3, 5, 11].map(|batch| (w.clone(), batch)))
+            {
+                let x = data(batch * inputs, 10);
+                let mut all = vec![0.0; batch * outputs];
+                MatMul::dense(batch, inputs, outputs)
                     .run_rows_on(path, &x, &w, &mut all, false)
                     .unwrap();
-                for b in 0..5 {
+                for b in 0..batch {
                     let mut one = vec![0.0; outputs];
                     MatMul::dense(1, inputs, outputs)
                         .run_rows_on(path, &x[b * inputs..], &w, &mut one, false)
