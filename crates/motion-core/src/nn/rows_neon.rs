@@ -4,8 +4,9 @@
 //!
 //! Weight rows stay in their stored dtype and are widened in registers: `fcvtl` for f16 (through
 //! `asm!`, as Rust's f16 NEON intrinsics are not stable), a 16-bit shift (`ushll`) for bf16; both
-//! are exact. A row's last `inputs % 4` elements are copied into a zeroed buffer first, so no
-//! element outside a row is read.
+//! are exact. A row's last `inputs % 4` elements are read as the row's last 4 with the lanes
+//! before them cleared (rows shorter than 4 are copied into a zeroed buffer), so no element
+//! outside a row is read.
 use super::layout::MatMul;
 use super::packed::Rows;
 use std::arch::aarch64::*;
@@ -159,7 +160,28 @@ unsafe fn tile<E: Elem, const R: usize, const B: usize>(
             }
             i += L;
         }
-        if i < k {
+        if i < k && full > 0 {
+            // The row's last 4 elements (all inside the row) with the lanes before `i` cleared,
+            // as in rows_avx2: no copy per row and tile.
+            let lanes: [u32; L] = [0, 1, 2, 3];
+            let keep = vcgtq_u32(
+                vld1q_u32(lanes.as_ptr()),
+                vdupq_n_u32((L - (k - i)) as u32 - 1),
+            );
+            let masked =
+                |v: float32x4_t| vreinterpretq_f32_u32(vandq_u32(vreinterpretq_u32_f32(v), keep));
+            let mut wv = [vdupq_n_f32(0.0); R];
+            for (r, v) in wv.iter_mut().enumerate() {
+                *v = masked(E::load(w.add(r * k + k - L)));
+            }
+            for (b, row) in acc.iter_mut().enumerate() {
+                let xv = masked(vld1q_f32(x.add(b * xs + k - L)));
+                for (a, v) in row.iter_mut().zip(&wv) {
+                    *a = vfmaq_f32(*a, *v, xv);
+                }
+            }
+        } else if i < k {
+            // Rows shorter than one vector: copied into zeroed buffers.
             let rest = k - i;
             let mut wv = [vdupq_n_f32(0.0); R];
             for (r, v) in wv.iter_mut().enumerate() {
