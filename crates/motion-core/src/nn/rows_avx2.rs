@@ -236,8 +236,9 @@ unsafe fn tile<E: Elem, const R: usize, const B: usize, const PREFETCH: bool>(
             for (r, v) in wv.iter_mut().enumerate() {
                 *v = E::load(w.add(r * k + i));
             }
-            if PREFETCH && R > 1 {
-                // Fetch the next tile's rows one tile ahead (see rows_avx512).
+            if PREFETCH && R > 1 && i % 32 == 0 {
+                // Fetch the next tile's rows one tile ahead (see rows_avx512), one prefetch per
+                // row and 32 inputs (a cache line of f16 weights).
                 for r in 0..R {
                     _mm_prefetch::<_MM_HINT_T0>(w.wrapping_add((R + r) * k + i).cast());
                 }
