@@ -5,6 +5,7 @@
 //! Its own test binary: the allocation counter is global (rayon's threads allocate on their own
 //! stacks of calls), so no other test may run beside it.
 use motion::core::model::{Architecture, BatchGenerator, ModelConfig, MotionModel, Noise};
+use motion::core::nn::simd::{set_simd_path, SimdPath};
 use ndarray::Array3;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -72,16 +73,22 @@ fn threaded_steps_allocate_nothing_and_shards_agree() {
             count, 0,
             "{arch:?} batch 1: {count} allocations in 200 steps"
         );
-        // With the row split the step runs on a pool thread and gives the same frames.
-        let (mut plain, mut split) = (started(&model, 1, 1), started(&model, 1, 1));
-        assert!(
-            split.set_row_split(true),
-            "{arch:?}: the row split applies at batch 1"
-        );
-        for _ in 0..30 {
-            let (a, b) = (plain.step().unwrap().to_owned(), split.step().unwrap());
-            assert_eq!(a, b, "{arch:?}: row split changes frames");
+        // With the row split the step runs on a pool thread and gives the same frames, on
+        // every SIMD path the machine has (each splits its batch-1 products by output rows).
+        for path in SimdPath::available() {
+            set_simd_path(path).unwrap();
+            let model = Arc::new(MotionModel::random(&ModelConfig::paper(arch), 3).unwrap());
+            let (mut plain, mut split) = (started(&model, 1, 1), started(&model, 1, 1));
+            assert!(
+                split.set_row_split(true),
+                "{arch:?} {path}: the row split applies at batch 1"
+            );
+            for _ in 0..30 {
+                let (a, b) = (plain.step().unwrap().to_owned(), split.step().unwrap());
+                assert_eq!(a, b, "{arch:?} {path}: row split changes frames");
+            }
         }
+        set_simd_path(SimdPath::best()).unwrap();
         // Rows are independent: 3 shards of a batch of 100 give the frames of one piece.
         let (mut one, mut three) = (started(&model, 100, 1), started(&model, 100, 3));
         for _ in 0..30 {

@@ -8,7 +8,7 @@
 //!   once, and half-size when the file is half-size, is what matters. The kernels of the
 //!   selected [`super::simd::SimdPath`]: `rows_avx512` (AVX-512), `rows_avx2` (AVX2 + FMA +
 //!   F16C), `rows_neon` (aarch64), or the portable loop. No heap memory. With
-//!   AVX-512 or AVX2 and a matrix of at least 256 KiB, a product called from a rayon pool thread splits
+//!   AVX-512 or AVX2 (portable: at batch 1) and a matrix of at least 256 KiB, a product called from a rayon pool thread splits
 //!   its output rows over the pool (`rayon::join`, no allocation): one core streams weights from
 //!   L3 at about 25 GB/s on the 2-core Intel Xeon we measure on, two cores together at about
 //!   32-43 GB/s. Called from elsewhere it stays on the calling thread (see
@@ -44,10 +44,8 @@ pub fn row_kernel_max_batch(w: &PackedMatrix) -> usize {
 
 /// Row-kernel products over fewer weight bytes than this stay on one thread (a fork-join costs
 /// a few µs; a 256 KiB matrix streams in about 10 µs at one core's L3 bandwidth).
-#[cfg(target_arch = "x86_64")]
 const ROW_SPLIT_MIN_BYTES: usize = 256 << 10;
 /// Fewest output rows per thread of a split row-kernel product.
-#[cfg(target_arch = "x86_64")]
 const ROW_SPLIT_MIN_OUTPUTS: usize = 64;
 
 /// Below this many multiply-adds a product is not split across threads.
@@ -115,8 +113,56 @@ impl MatMul {
                 // SAFETY: as above (NEON).
                 unsafe { super::rows_neon::product(self, x, w.rows(), y, accumulate) };
             }
-            _ => super::rows_portable::product(self, x, w, y, accumulate),
+            _ => {
+                // Batch 1 splits like the AVX kernels above (its output ranges are disjoint
+                // slices of `Y`); the portable kernel then streams weights on every core too.
+                let parts = if self.batch == 1 {
+                    self.row_split_parts(w)
+                } else {
+                    1
+                };
+                if parts > 1 {
+                    self.portable_split(x, w, &mut y[..self.outputs], accumulate, parts);
+                } else {
+                    super::rows_portable::product(self, x, w, y, accumulate);
+                }
+            }
         }
+    }
+
+    /// The portable row kernel at batch 1 over `parts` output ranges run by rayon (recursive
+    /// halving at multiples of 16 outputs, as [`MatMul::rows_split`]); `y` is the one output row.
+    fn portable_split(
+        &self,
+        x: &[f32],
+        w: &PackedMatrix,
+        y: &mut [f32],
+        accumulate: bool,
+        parts: usize,
+    ) {
+        fn split(
+            mm: &MatMul,
+            x: &[f32],
+            w: &PackedMatrix,
+            y: &mut [f32],
+            accumulate: bool,
+            outputs: std::ops::Range<usize>,
+            parts: usize,
+        ) {
+            if parts <= 1 {
+                super::rows_portable::product_outputs(mm, x, w, y, accumulate, outputs);
+                return;
+            }
+            let left = parts / 2;
+            let at = (outputs.start + outputs.len() * left / parts).next_multiple_of(16);
+            let at = at.min(outputs.end);
+            let (first, second) = y.split_at_mut(at - outputs.start);
+            super::parallel::pool::join(
+                || split(mm, x, w, first, accumulate, outputs.start..at, left),
+                || split(mm, x, w, second, accumulate, at..outputs.end, parts - left),
+            );
+        }
+        split(self, x, w, y, accumulate, 0..self.outputs, parts);
     }
 
     /// [`MatMul::run_rows`] on the kernels of `path` whatever the selected one (tests and
@@ -150,7 +196,6 @@ impl MatMul {
     /// Into how many output ranges the row kernels split this product over threads (see the
     /// module doc): 1 below [`ROW_SPLIT_MIN_BYTES`] of weights, inside [`super::parallel::serial`],
     /// on one thread, or when not called from a rayon pool thread.
-    #[cfg(target_arch = "x86_64")]
     fn row_split_parts(&self, w: &PackedMatrix) -> usize {
         let threads = super::parallel::threads();
         // Off a pool thread a join is a trip through rayon's injection queue (slow, and it

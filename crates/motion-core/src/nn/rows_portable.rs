@@ -32,18 +32,37 @@ const WIDEN_BUFFER: usize = 8192;
 /// `Y = X Wᵀ` (or `Y += X Wᵀ`) for the layout `mm` (operands checked by the caller, `inputs > 0`).
 #[inline(always)]
 pub(crate) fn product(mm: &MatMul, x: &[f32], w: &PackedMatrix, y: &mut [f32], accumulate: bool) {
+    product_outputs(mm, x, w, y, accumulate, 0..mm.outputs);
+}
+
+/// [`product`] for the outputs `outputs` only (weight rows `outputs`), written to `y` from its
+/// first element on: `y[b * mm.y_stride + j]` is output `outputs.start + j` of batch row `b`. At
+/// batch 1 disjoint ranges write disjoint slices, so they may run on different threads.
+pub(crate) fn product_outputs(
+    mm: &MatMul,
+    x: &[f32],
+    w: &PackedMatrix,
+    y: &mut [f32],
+    accumulate: bool,
+    outputs: std::ops::Range<usize>,
+) {
+    let part = MatMul {
+        outputs: outputs.len(),
+        ..*mm
+    };
+    let rows = outputs.start * mm.inputs..outputs.end * mm.inputs;
     if let Some(f32_rows) = w.f32_rows() {
-        tiles(mm, x, f32_rows, 0, y, accumulate);
+        tiles(&part, x, &f32_rows[rows], 0, y, accumulate);
         return;
     }
     match w.rows() {
-        Rows::F32(w) => tiles(mm, x, w, 0, y, accumulate),
-        Rows::F16(w) => widened(mm, x, w, f16_to_f32, y, accumulate),
+        Rows::F32(w) => tiles(&part, x, &w[rows], 0, y, accumulate),
+        Rows::F16(w) => widened(&part, x, &w[rows], f16_to_f32, y, accumulate),
         // bf16 is the upper half of an f32.
         Rows::Bf16(w) => widened(
-            mm,
+            &part,
             x,
-            w,
+            &w[rows],
             |v| f32::from_bits(u32::from(v) << 16),
             y,
             accumulate,
