@@ -16,8 +16,14 @@ What is trained (``models.IntentionModel`` holds the exported parts):
   λ(τ) falling linearly from 1 at the last seed frame to 0 ``--rec-frames`` frames later) plus the adversarial pose
   loss of eq. 7 (weight ``--adv-weight``) against ``D_pose``, an MLP with two hidden layers over windows of
   ``--pose-window`` generated frames (flattened poses and their frame-to-frame changes; real: training windows).
+  With ``--pose-context K`` every window D_pose judges comes with the seed's last K frames (real and fake alike):
+  the discriminator then judges a window as a continuation of *this* seed, so motion that is plausible for some
+  action but not for the seed's is caught (the paper's D_pose sees the whole sequence; a plain window does not).
   The generator reads the forecaster's probabilities without back-propagating into it (its losses are its own).
-  Non-saturating GAN losses; Adam with β = (0.5, 0.9) for all four nets.
+  Non-saturating GAN losses; Adam with β = (0.5, 0.9) for all four nets. ``--r1 γ`` adds the R1 penalty
+  (γ/2 · E‖∇D_pose(real)‖², Mescheder et al. 2018) to D_pose's loss; ``--ema D`` keeps a moving average of the
+  model's weights that validation, ``best.pt``'s choice and the export use (the GAN's weights oscillate; their
+  average moves less).
 - **Long horizon** (this project's addition, ``--long-weight``, 0 = the paper): after the ``--future`` frames the
   generator runs on without gradient for a random 0..``--long-burn-in`` frames, then ``--long-frames`` frames with
   gradient whose windows also go to ``D_pose`` (truncated back-propagation: what the 12 s measures ask for,
@@ -41,6 +47,7 @@ Checkpoints (``last.pt``: the four nets, optimizers and RNG states, iteration) a
 from __future__ import annotations
 
 import argparse
+import copy
 import datetime
 import json
 import math
@@ -99,6 +106,14 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--pose-window", type=int, default=10, help="frames per D_pose window")
     g.add_argument("--label-window", type=int, default=20, help="frames per D_label window")
     g.add_argument("--d-hidden", type=int, default=256, help="D_pose hidden units (D_label: a quarter)")
+    g.add_argument("--pose-context", type=int, default=0, metavar="K",
+                   help="seed frames given to D_pose with every window (0: windows alone)")
+    g.add_argument("--r1", type=float, default=0.0, metavar="GAMMA",
+                   help="R1 gradient penalty on D_pose's real windows (0: off)")
+    g.add_argument("--ema", type=float, default=0.0, metavar="D",
+                   help="weight moving-average decay per iteration (0: off); validation, best.pt and export use it")
+    g.add_argument("--ema-start", type=int, default=0, metavar="IT",
+                   help="with --ema: before this iteration the average just follows the weights")
     g.add_argument("--long-weight", type=float, default=1.0, help="weight of the long-horizon adversarial term")
     g.add_argument("--long-burn-in", type=int, default=200, help="most frames run without gradient")
     g.add_argument("--long-frames", type=int, default=40, help="frames with gradient after the burn-in")
@@ -127,16 +142,20 @@ def load_checkpoint(path: Path) -> dict:
 
 
 class PoseDiscriminator(nn.Module):
-    """D_pose: two hidden layers (ReLU) over a window of frames ``[..., W, O]`` and its frame-to-frame changes."""
+    """D_pose: two hidden layers (ReLU) over a window of frames ``[..., W, O]`` and its frame-to-frame changes,
+    with ``context`` seed frames ``[..., K, O]`` beside it when ``context > 0``."""
 
-    def __init__(self, window: int, dims: int, hidden: int):
+    def __init__(self, window: int, dims: int, hidden: int, context: int = 0):
         super().__init__()
-        self.window = window
-        self.net = MLP([window * dims + (window - 1) * dims, hidden, hidden, 1])
+        self.window, self.context = window, context
+        self.net = MLP([(window + context) * dims + (window - 1) * dims, hidden, hidden, 1])
 
-    def forward(self, windows: torch.Tensor) -> torch.Tensor:
+    def forward(self, windows: torch.Tensor, context: torch.Tensor | None = None) -> torch.Tensor:
         change = (windows[..., 1:, :] - windows[..., :-1, :]) * 5.0  # changes are ~0.2 of a pose's spread
-        return self.net(torch.cat([windows.flatten(-2), change.flatten(-2)], dim=-1)).squeeze(-1)
+        parts = [windows.flatten(-2), change.flatten(-2)]
+        if self.context:
+            parts.append(context.flatten(-2))
+        return self.net(torch.cat(parts, dim=-1)).squeeze(-1)
 
 
 class LabelDiscriminator(nn.Module):
@@ -154,6 +173,25 @@ def windows_of(x: torch.Tensor, length: int, stride: int) -> torch.Tensor:
     """All windows ``[B * n, length, D]`` of ``x [B, T, D]`` every ``stride`` frames."""
     w = x.unfold(1, length, stride)  # [B, n, D, length]
     return w.permute(0, 1, 3, 2).reshape(-1, length, x.shape[-1])
+
+
+def with_context(windows: torch.Tensor, seed: torch.Tensor, k: int) -> tuple[torch.Tensor, torch.Tensor | None]:
+    """``windows`` ``[B * n, W, O]`` (from ``windows_of``) and each one's seed context: the last ``k`` frames of
+    its row of ``seed`` ``[B, S, O]`` (None when ``k`` is 0)."""
+    if k == 0:
+        return windows, None
+    n = windows.shape[0] // seed.shape[0]
+    return windows, seed[:, -k:].repeat_interleave(n, dim=0)
+
+
+def r1_penalty(d: nn.Module, windows: torch.Tensor, context: torch.Tensor | None) -> torch.Tensor:
+    """E‖∇ D(real)‖² over the discriminator's inputs (the window and its context)."""
+    inputs = [windows.detach().requires_grad_(True)]
+    if context is not None:
+        inputs.append(context.detach().requires_grad_(True))
+    out = d(*inputs)
+    grads = torch.autograd.grad(out.sum(), inputs, create_graph=True)
+    return sum(g.pow(2).flatten(1).sum(1) for g in grads).mean()
 
 
 def rec_weights(frames: int, rec_frames: int, device) -> torch.Tensor:
@@ -298,7 +336,9 @@ def train(args, argv: list[str]) -> None:
     centroids = model.labels.centroids.double().numpy()
     merge = model.labels.merge.long().numpy()
     labelled = LabelledSet(dataset, centroids, merge)
-    d_pose = PoseDiscriminator(args.pose_window, model.output_size, args.d_hidden)
+    if args.pose_context > h36m.SEED_FRAMES:
+        raise SystemExit(f"error: --pose-context must be at most the {h36m.SEED_FRAMES} seed frames")
+    d_pose = PoseDiscriminator(args.pose_window, model.output_size, args.d_hidden, args.pose_context)
     d_label = LabelDiscriminator(args.label_window, model.intentions, max(8, args.d_hidden // 4))
     model.to(device).train()
     d_pose.to(device).train()
@@ -321,6 +361,13 @@ def train(args, argv: list[str]) -> None:
         torch.set_rng_state(resume["torch_rng"])
         iteration, best = resume["iteration"], resume.get("best")
         log(f"resumed at iteration {iteration}")
+    ema_model = None
+    if args.ema > 0:  # the average starts at the current weights (or the saved average on resume)
+        ema_model = copy.deepcopy(model).train()
+        for p_ in ema_model.parameters():
+            p_.requires_grad_(False)
+        if resume is not None and resume.get("ema") is not None:
+            ema_model.load_state_dict(resume["ema"])
     else:
         log(f"intention model: {parameter_count(model):,} parameters (D_pose {parameter_count(d_pose):,}, D_label "
             f"{parameter_count(d_label):,}); config {json.dumps({k: v for k, v in config.items() if k != 'dims_used'})}")
@@ -331,6 +378,7 @@ def train(args, argv: list[str]) -> None:
     def snapshot() -> dict:
         return {
             "config": config, "model": {k: v.cpu() for k, v in model.state_dict().items()},
+            "ema": None if ema_model is None else {k: v.cpu() for k, v in ema_model.state_dict().items()},
             "d_pose": d_pose.state_dict(), "d_label": d_label.state_dict(),
             "opt_g": opt_g.state_dict(), "opt_f": opt_f.state_dict(), "opt_dp": opt_dp.state_dict(),
             "opt_dl": opt_dl.state_dict(), "iteration": iteration, "best": best,
@@ -368,8 +416,9 @@ def train(args, argv: list[str]) -> None:
         state = model.initial_state(seed, z)
         pred, state = model.rollout(seed[:, -1], state, z, feats[:, :future])
         rec = rec_loss(pred, truth, groups, lam)
-        fake_p = windows_of(torch.cat([seed[:, -1:], pred], 1), args.pose_window, 3)
-        real_p = windows_of(torch.cat([seed[:, -1:], truth], 1), args.pose_window, 3)
+        k = args.pose_context
+        fake_p = with_context(windows_of(torch.cat([seed[:, -1:], pred], 1), args.pose_window, 3), seed, k)
+        real_p = with_context(windows_of(torch.cat([seed[:, -1:], truth], 1), args.pose_window, 3), seed, k)
         long_fake = None
         drift_parts = [(pred, True)]
         if long_total:
@@ -381,18 +430,25 @@ def train(args, argv: list[str]) -> None:
                     x = burned[:, -1]
                     drift_parts.append((burned, False))
             more, _ = model.rollout(x, hs, z, feats[:, future + burn :])
-            long_fake = windows_of(torch.cat([x[:, None], more], 1), args.pose_window, 3)
+            long_fake = with_context(windows_of(torch.cat([x[:, None], more], 1), args.pose_window, 3), seed, k)
             drift_parts.append((more, True))
-        fakes = fake_p if long_fake is None else torch.cat([fake_p, long_fake])
-        dp = gan_d_loss(d_pose(real_p), d_pose(fakes.detach()))
+        fakes = fake_p if long_fake is None else tuple(
+            None if a is None else torch.cat([a, b]) for a, b in zip(fake_p, long_fake))
+        dp = gan_d_loss(d_pose(*real_p), d_pose(*(None if t is None else t.detach() for t in fakes)))
+        d_total = dp
+        if args.r1 > 0:
+            r1 = r1_penalty(d_pose, *real_p)
+            d_total = dp + 0.5 * args.r1 * r1
         opt_dp.zero_grad(set_to_none=True)
-        dp.backward()
+        d_total.backward()
         opt_dp.step()
-        adv = gan_g_loss(d_pose(fake_p))
+        adv = gan_g_loss(d_pose(*fake_p))
         lg = rec + args.adv_weight * adv
         terms = {"ce": ce.item(), "rec": rec.item(), "adv": adv.item(), "d_pose": dp.item(), "d_label": dl.item()}
+        if args.r1 > 0:
+            terms["r1"] = r1.item()
         if long_fake is not None:
-            adv_long = gan_g_loss(d_pose(long_fake))
+            adv_long = gan_g_loss(d_pose(*long_fake))
             lg = lg + args.long_weight * args.adv_weight * adv_long
             terms["adv_long"] = adv_long.item()
         if args.drift_weight > 0:
@@ -410,6 +466,11 @@ def train(args, argv: list[str]) -> None:
             torch.nn.utils.clip_grad_norm_(forecaster, args.clip)
             opt_g.step()
             opt_f.step()
+        if ema_model is not None:
+            with torch.no_grad():
+                follow = 1.0 - args.ema if iteration >= args.ema_start else 1.0
+                for pe, p_ in zip(ema_model.parameters(), model.parameters()):
+                    pe.lerp_(p_, follow)
         iteration += 1
         for k, v in terms.items():
             acc[k] = acc.get(k, 0.0) + v
@@ -422,9 +483,10 @@ def train(args, argv: list[str]) -> None:
             log.record(kind="train", iteration=iteration, s_per_it=spi, **means)
             t_last, acc, n_acc = now, {}, 0
         if iteration % args.val_every == 0 or iteration == args.iterations:
-            model.cpu()
-            val = validate(model, validator)
-            model.to(device)
+            scored = model if ema_model is None else ema_model
+            scored.cpu()
+            val = validate(scored, validator)
+            scored.to(device)
             is_best = best is None or choice_key(val) < choice_key(best)
             if is_best:
                 best = {k: v for k, v in val.items() if k != "per_action"} | {"iteration": iteration}
@@ -446,7 +508,8 @@ def train(args, argv: list[str]) -> None:
 def export(out: Path, ckpt: Path, dtype: str, argv: list[str]) -> None:
     state = load_checkpoint(ckpt)
     model = IntentionModel(state["config"])
-    model.load_state_dict(state["model"])
+    averaged = state.get("ema") is not None
+    model.load_state_dict(state["ema"] if averaged else state["model"])
     best = state.get("best") or {}
     provenance = {
         "data": "Human3.6M S1, S6, S7, S8, S9, S11 (25 Hz), all 15 actions",
@@ -457,6 +520,8 @@ def export(out: Path, ckpt: Path, dtype: str, argv: list[str]) -> None:
         "checkpoint_choice": "train_intention module doc (S5 validation windows, 12 s speed ratios, then NPSS)",
         "validation": {k: best[k] for k in ("npss_ref", "euler_80", "iteration") if k in best},
     }
+    if averaged:
+        provenance["weights"] = f"moving average of the training weights, decay {state['args']['ema']} per iteration"
     save_weights(model, out, provenance, dtype=getattr(torch, dtype))
     print(f"wrote {out} ({parameter_count(model):,} parameters, {dtype}, iteration {state['iteration']})")
 

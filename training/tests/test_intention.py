@@ -281,3 +281,64 @@ def test_discriminator_warmup_leaves_the_model(tmp_path, synthetic):
     run(["--run-dir", str(tmp_path / "on"), "--iterations", "3"] + common)
     moved = torch.load(tmp_path / "on" / "last.pt", weights_only=False)["model"]
     assert any(not torch.equal(moved[k], v) for k, v in start.items() if v.is_floating_point())
+
+
+def test_context_windows_carry_their_rows_seed():
+    seed = torch.arange(2 * 6 * 1, dtype=torch.float32).reshape(2, 6, 1)
+    x = torch.randn(2, 9, 1)
+    w, ctx = train_intention.with_context(train_intention.windows_of(x, 4, 3), seed, 2)
+    assert w.shape == (4, 4, 1) and ctx.shape == (4, 2, 1)  # 2 windows per row
+    for i in range(4):
+        torch.testing.assert_close(ctx[i], seed[i // 2, -2:])
+    assert train_intention.with_context(w, seed, 0)[1] is None
+
+
+def test_r1_penalty_is_the_squared_input_gradient_of_a_linear_critic():
+    torch.manual_seed(0)
+    d = train_intention.PoseDiscriminator(3, 2, 4, context=2)
+    lin = torch.nn.Linear(3 * 2 + 2 * 2 + 2 * 2, 1)
+    d.net = lin  # D(x) = w·[window, changes, context] + b: the gradient is known in closed form
+    w = lin.weight.detach()[0]
+    windows, context = torch.randn(5, 3, 2), torch.randn(5, 2, 2)
+    gw = w[:6].reshape(3, 2).clone()
+    change = w[6:10].reshape(2, 2) * 5.0  # d/dx of the scaled frame-to-frame changes
+    gw[1:] += change
+    gw[:-1] -= change
+    expected = gw.pow(2).sum() + w[10:].pow(2).sum()
+    got = train_intention.r1_penalty(d, windows, context)
+    torch.testing.assert_close(got, expected)
+
+
+def test_context_r1_and_weight_average_run_resume_and_export_the_average(tmp_path, synthetic, monkeypatch):
+    """--pose-context, --r1 and --ema: the run resumes exactly (average included) and the export is the average."""
+    extra = ["--pose-context", "3", "--r1", "1", "--ema", "0.5"]
+    run(["--run-dir", str(tmp_path / "full"), "--iterations", "3"] + TINY + extra)
+    calls, real = [], train_intention.rec_loss
+
+    def interrupted(*a):
+        calls.append(1)
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+        return real(*a)
+
+    monkeypatch.setattr(train_intention, "rec_loss", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        run(["--run-dir", str(tmp_path / "split"), "--iterations", "3"] + TINY + extra)
+    monkeypatch.setattr(train_intention, "rec_loss", real)
+    run(["--run-dir", str(tmp_path / "split"), "--resume"])
+    a = torch.load(tmp_path / "full" / "last.pt", weights_only=False)
+    b = torch.load(tmp_path / "split" / "last.pt", weights_only=False)
+    for key in ("model", "ema", "d_pose"):
+        for k in a[key]:
+            assert torch.equal(a[key][k], b[key][k]), (key, k)
+    assert any(not torch.equal(a["ema"][k], v) for k, v in a["model"].items() if v.is_floating_point())
+    records = [json.loads(line) for line in (tmp_path / "full" / "metrics.jsonl").read_text().splitlines()]
+    assert all(r["r1"] >= 0 for r in records if r.get("kind") == "train")
+    out = tmp_path / "avg.safetensors"
+    run(["--export", str(out), "--from", str(tmp_path / "full" / "last.pt"), "--dtype", "float32"])
+    model = load_weights(out)
+    for k, v in a["ema"].items():
+        torch.testing.assert_close(model.state_dict()[k], v, rtol=0, atol=0)
+    assert "moving average" in model.provenance["weights"]
+    with pytest.raises(SystemExit, match="pose-context"):
+        train_intention.main(["--run-dir", str(tmp_path / "bad")] + TINY + ["--pose-context", "51"])
