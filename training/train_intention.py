@@ -28,6 +28,11 @@ What is trained (``models.IntentionModel`` holds the exported parts):
   generator runs on without gradient for a random 0..``--long-burn-in`` frames, then ``--long-frames`` frames with
   gradient whose windows also go to ``D_pose`` (truncated back-propagation: what the 12 s measures ask for,
   far past any affordable full horizon; positions there are not compared, any plausible motion is right).
+- **Speed** (this project's addition, ``--speed-weight``, 0 = the paper): the hinge terms of
+  ``long_horizon.speed_loss`` and ``accel_loss`` (no penalty while the generated joints' mean frame-to-frame
+  change, and its second difference, stay within 0.8-1.5 times the truth's) for the generated 4 s against the
+  truth's 4 s, and for the long-horizon frames with gradient against the same 4 s of truth: a window-wise D_pose
+  accepts a character that slows to a stop (real windows stand still too), this term does not.
 
 Sizes default to ``make_config("intention")``: pose decoder 3 × 256 GRU (224 encoder units ⊕ 32 noise dims),
 forecaster 128 units, 32 clusters → 8 intentions, γ = 10, 32 intention features (CPU budget; the paper gives no
@@ -65,7 +70,8 @@ from . import data as h36m
 from . import intention_labels
 from .export import load_weights, save_weights
 from .layers import MLP
-from .long_horizon import LONG_HORIZON, speed_ratios
+from . import long_horizon
+from .long_horizon import LONG_HORIZON, accel_loss, speed_loss, speed_ratios
 from .models import IntentionModel, joint_groups, make_config, parameter_count
 from .root_drift import drift_penalty
 from .checkpoint_io import BEST, CHECKPOINT, add_run_arguments, atomic_save, begin_run, read_checkpoint
@@ -117,6 +123,9 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--long-weight", type=float, default=1.0, help="weight of the long-horizon adversarial term")
     g.add_argument("--long-burn-in", type=int, default=200, help="most frames run without gradient")
     g.add_argument("--long-frames", type=int, default=40, help="frames with gradient after the burn-in")
+    g.add_argument("--speed-weight", type=float, default=0.0, metavar="W",
+                   help="adds W x the hinge speed and acceleration terms (long_horizon.speed_loss, accel_loss) of the "
+                        "generated 4 s and of the long-horizon frames, each against the truth's 4 s (0: off)")
     g.add_argument("--drift-weight", type=float, default=0.0, metavar="W",
                    help="adds W x the root-drift penalty (root_drift.drift_penalty: hip height and lean of the "
                         "integrated root held within 100 mm and 10 degrees of the last seed frame's) of the generated "
@@ -296,6 +305,7 @@ def train(args, argv: list[str]) -> None:
         raise SystemExit("error: --future must be >= 2 and at least --pose-window and --label-window frames")
     torch.set_num_threads(args.threads)
     device = torch.device(args.device)
+    long_horizon.MOTION_LOSS[0] = "hinge"  # the form of --speed-weight's terms
     log = Logger(run_dir)
     command = resume["command"] if resume else "python -m training.train_intention " + shlex.join(argv)
     log(("resuming: " if resume else "starting: ") + command)
@@ -451,6 +461,14 @@ def train(args, argv: list[str]) -> None:
             adv_long = gan_g_loss(d_pose(*long_fake))
             lg = lg + args.long_weight * args.adv_weight * adv_long
             terms["adv_long"] = adv_long.item()
+        if args.speed_weight > 0:
+            real = torch.cat([seed[:, -1:], truth], 1)
+            moved = [torch.cat([seed[:, -1:], pred], 1)]
+            if long_total:
+                moved.append(torch.cat([x[:, None], more], 1))
+            speed = sum(speed_loss(model, m, real) + accel_loss(model, m, real) for m in moved)
+            lg = lg + args.speed_weight * speed
+            terms["speed"] = speed.item()
         if args.drift_weight > 0:
             drift = drift_penalty(model, seed, drift_parts).to(lg.dtype)
             lg = lg + args.drift_weight * drift

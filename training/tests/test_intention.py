@@ -342,3 +342,23 @@ def test_context_r1_and_weight_average_run_resume_and_export_the_average(tmp_pat
     assert "moving average" in model.provenance["weights"]
     with pytest.raises(SystemExit, match="pose-context"):
         train_intention.main(["--run-dir", str(tmp_path / "bad")] + TINY + ["--pose-context", "51"])
+
+
+def test_speed_term_is_logged_and_pulls_a_frozen_generator(tmp_path, synthetic):
+    """--speed-weight: the term is logged, is positive for a model that does not move (its output layer zeroed:
+    every generated frame equals the last seed frame, ratio 0 below the 0.8 band) and moves its weights."""
+    run(["--run-dir", str(tmp_path / "base"), "--iterations", "1"] + TINY)
+    ck = torch.load(tmp_path / "base" / "last.pt", weights_only=False)
+    frozen = {k: (torch.zeros_like(v) if k.startswith("decoder.") else v) for k, v in ck["model"].items()}
+    assert any(k.startswith("decoder.") for k in frozen)
+    ck["model"] = frozen
+    torch.save(ck, tmp_path / "base" / "last.pt")
+    out = tmp_path / "frozen.safetensors"
+    run(["--export", str(out), "--from", str(tmp_path / "base" / "last.pt"), "--dtype", "float32"])
+    run(["--run-dir", str(tmp_path / "s"), "--iterations", "1", "--init-weights", str(out), "--speed-weight", "1",
+         "--adv-weight", "0", "--lr", "1e-2"] + TINY)
+    records = [json.loads(line) for line in (tmp_path / "s" / "metrics.jsonl").read_text().splitlines()]
+    speeds = [r["speed"] for r in records if r.get("kind") == "train"]
+    assert speeds and speeds[0] > 0.5  # (0.8 - 0)² for the speed, about as much for the acceleration, twice
+    after = torch.load(tmp_path / "s" / "last.pt", weights_only=False)["model"]
+    assert any(not torch.equal(after[k], v) for k, v in frozen.items() if k.startswith("decoder."))
