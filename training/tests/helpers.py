@@ -1,6 +1,7 @@
-"""Test helpers shared by the training tests: a synthetic dataset shaped like H3.6M."""
+"""Test helpers shared by the training tests: a synthetic dataset shaped like H3.6M, a run killed mid-iteration."""
 
 import numpy as np
+import pytest
 
 from training import data
 
@@ -25,3 +26,20 @@ def synthetic_dataset(seed=0, frames=400, scaling="standard"):
         for i, a in enumerate(data.ACTIONS[:3])
     ]
     return ts, wins
+
+
+def run_interrupted(monkeypatch, module, name: str, calls: int, run) -> None:
+    """Runs ``run()`` with ``module.name`` raising KeyboardInterrupt on its ``calls``-th call (a run killed in
+    the middle of an iteration), then puts the real function back."""
+    seen, real = [], getattr(module, name)
+
+    def interrupted(*a, **k):
+        seen.append(1)
+        if len(seen) == calls:
+            raise KeyboardInterrupt
+        return real(*a, **k)
+
+    monkeypatch.setattr(module, name, interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        run()
+    monkeypatch.setattr(module, name, real)

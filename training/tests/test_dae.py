@@ -10,7 +10,7 @@ from training.export import load_weights
 from training.export_fixtures import H36M_DIMS_USED
 from training.models import DAELSTM, H36M_ACTIONS, make_config
 
-from .helpers import synthetic_dataset
+from .helpers import run_interrupted, synthetic_dataset
 
 
 def small_model(actions=True, seed=0):
@@ -165,18 +165,8 @@ def test_three_stages_resume_exactly_and_export(tmp_path, synthetic, monkeypatch
     init = ["--init-dae", str(tmp_path / "dae" / "last.pt"), "--init-lstm", str(tmp_path / "lstm" / "last.pt")]
     run(["--stage", "finetune", "--run-dir", str(tmp_path / "full"), "--iterations", "3"] + TINY + FINETUNE + init)
     # the same run interrupted during its third iteration (last.pt holds iteration 2), then resumed
-    calls, real = [], train_dae.closed_loop_loss
-
-    def interrupted(*a):
-        calls.append(1)
-        if len(calls) == 3:
-            raise KeyboardInterrupt
-        return real(*a)
-
-    monkeypatch.setattr(train_dae, "closed_loop_loss", interrupted)
-    with pytest.raises(KeyboardInterrupt):
-        run(["--stage", "finetune", "--run-dir", str(tmp_path / "split"), "--iterations", "3"] + TINY + FINETUNE + init)
-    monkeypatch.setattr(train_dae, "closed_loop_loss", real)
+    run_interrupted(monkeypatch, train_dae, "closed_loop_loss", 3, lambda: run(
+        ["--stage", "finetune", "--run-dir", str(tmp_path / "split"), "--iterations", "3"] + TINY + FINETUNE + init))
     assert torch.load(tmp_path / "split" / "last.pt", weights_only=False)["iteration"] == 2
     run(["--stage", "finetune", "--run-dir", str(tmp_path / "split"), "--resume"])
     a = torch.load(tmp_path / "full" / "last.pt", weights_only=False)

@@ -13,7 +13,7 @@ from training.export import load_weights
 from training.export_fixtures import H36M_DIMS_USED
 from training.models import IntentionModel, make_config
 
-from .helpers import synthetic_dataset
+from .helpers import run_interrupted, synthetic_dataset
 
 
 def small_model(lookahead=3, seed=0):
@@ -205,18 +205,8 @@ def run(argv):
 
 def test_a_run_resumes_exactly_and_exports(tmp_path, synthetic, monkeypatch):
     run(["--run-dir", str(tmp_path / "full"), "--iterations", "3"] + TINY)
-    calls, real = [], train_intention.rec_loss
-
-    def interrupted(*a):
-        calls.append(1)
-        if len(calls) == 3:
-            raise KeyboardInterrupt
-        return real(*a)
-
-    monkeypatch.setattr(train_intention, "rec_loss", interrupted)
-    with pytest.raises(KeyboardInterrupt):
-        run(["--run-dir", str(tmp_path / "split"), "--iterations", "3"] + TINY)
-    monkeypatch.setattr(train_intention, "rec_loss", real)
+    run_interrupted(monkeypatch, train_intention, "rec_loss", 3,
+                    lambda: run(["--run-dir", str(tmp_path / "split"), "--iterations", "3"] + TINY))
     run(["--run-dir", str(tmp_path / "split"), "--resume"])
     a = torch.load(tmp_path / "full" / "last.pt", weights_only=False)
     b = torch.load(tmp_path / "split" / "last.pt", weights_only=False)
@@ -313,18 +303,8 @@ def test_context_r1_and_weight_average_run_resume_and_export_the_average(tmp_pat
     """--pose-context, --r1 and --ema: the run resumes exactly (average included) and the export is the average."""
     extra = ["--pose-context", "3", "--r1", "1", "--ema", "0.5"]
     run(["--run-dir", str(tmp_path / "full"), "--iterations", "3"] + TINY + extra)
-    calls, real = [], train_intention.rec_loss
-
-    def interrupted(*a):
-        calls.append(1)
-        if len(calls) == 3:
-            raise KeyboardInterrupt
-        return real(*a)
-
-    monkeypatch.setattr(train_intention, "rec_loss", interrupted)
-    with pytest.raises(KeyboardInterrupt):
-        run(["--run-dir", str(tmp_path / "split"), "--iterations", "3"] + TINY + extra)
-    monkeypatch.setattr(train_intention, "rec_loss", real)
+    run_interrupted(monkeypatch, train_intention, "rec_loss", 3,
+                    lambda: run(["--run-dir", str(tmp_path / "split"), "--iterations", "3"] + TINY + extra))
     run(["--run-dir", str(tmp_path / "split"), "--resume"])
     a = torch.load(tmp_path / "full" / "last.pt", weights_only=False)
     b = torch.load(tmp_path / "split" / "last.pt", weights_only=False)
