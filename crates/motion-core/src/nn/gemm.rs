@@ -48,6 +48,15 @@ const ROW_SPLIT_MIN_BYTES: usize = 256 << 10;
 /// Fewest output rows per thread of a split row-kernel product.
 const ROW_SPLIT_MIN_OUTPUTS: usize = 64;
 
+/// Where a row-split product over `parts` threads cuts its output range: the first `left` parts
+/// take `outputs.start..at`, cut at a multiple of 16 columns (whole cache lines of f32 outputs per
+/// row); returns `(left, at)`.
+fn split_point(outputs: &std::ops::Range<usize>, parts: usize) -> (usize, usize) {
+    let left = parts / 2;
+    let at = (outputs.start + outputs.len() * left / parts).next_multiple_of(16);
+    (left, at.min(outputs.end))
+}
+
 /// Below this many multiply-adds a product is not split across threads.
 const PARALLEL_MIN_WORK: usize = 1 << 21;
 /// Minimum rows per thread when splitting.
@@ -153,9 +162,7 @@ impl MatMul {
                 super::rows_portable::product_outputs(mm, x, w, y, accumulate, outputs);
                 return;
             }
-            let left = parts / 2;
-            let at = (outputs.start + outputs.len() * left / parts).next_multiple_of(16);
-            let at = at.min(outputs.end);
+            let (left, at) = split_point(&outputs, parts);
             let (first, second) = y.split_at_mut(at - outputs.start);
             super::parallel::pool::join(
                 || split(mm, x, w, first, accumulate, outputs.start..at, left),
@@ -252,10 +259,7 @@ impl MatMul {
                 };
                 return;
             }
-            let left = parts / 2;
-            // Cut at a multiple of 16 columns (whole cache lines of f32 outputs per row).
-            let at = (outputs.start + outputs.len() * left / parts).next_multiple_of(16);
-            let at = at.min(outputs.end);
+            let (left, at) = split_point(&outputs, parts);
             super::parallel::pool::join(
                 || split(path, mm, x, w, y, accumulate, outputs.start..at, left),
                 || split(path, mm, x, w, y, accumulate, at..outputs.end, parts - left),
