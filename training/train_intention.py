@@ -303,6 +303,10 @@ def train(args, argv: list[str]) -> None:
     ckpt_path = run_dir / CHECKPOINT
     if args.future < 2 or args.pose_window > args.future or args.label_window > args.future:
         raise SystemExit("error: --future must be >= 2 and at least --pose-window and --label-window frames")
+    if not 0 <= args.pose_context <= h36m.SEED_FRAMES:
+        raise SystemExit(f"error: --pose-context must be 0 to the {h36m.SEED_FRAMES} seed frames")
+    if args.r1 < 0 or args.speed_weight < 0 or not 0 <= args.ema < 1:
+        raise SystemExit("error: --r1 and --speed-weight must be >= 0 and --ema in [0, 1)")
     torch.set_num_threads(args.threads)
     device = torch.device(args.device)
     long_horizon.MOTION_LOSS[0] = "hinge"  # the form of --speed-weight's terms
@@ -346,8 +350,6 @@ def train(args, argv: list[str]) -> None:
     centroids = model.labels.centroids.double().numpy()
     merge = model.labels.merge.long().numpy()
     labelled = LabelledSet(dataset, centroids, merge)
-    if args.pose_context > h36m.SEED_FRAMES:
-        raise SystemExit(f"error: --pose-context must be at most the {h36m.SEED_FRAMES} seed frames")
     d_pose = PoseDiscriminator(args.pose_window, model.output_size, args.d_hidden, args.pose_context)
     d_label = LabelDiscriminator(args.label_window, model.intentions, max(8, args.d_hidden // 4))
     model.to(device).train()

@@ -322,6 +322,9 @@ def test_context_r1_and_weight_average_run_resume_and_export_the_average(tmp_pat
     assert "moving average" in model.provenance["weights"]
     with pytest.raises(SystemExit, match="pose-context"):
         train_intention.main(["--run-dir", str(tmp_path / "bad")] + TINY + ["--pose-context", "51"])
+    for bad in (["--pose-context", "-1"], ["--r1", "-1"], ["--ema", "1"], ["--speed-weight", "-2"]):
+        with pytest.raises(SystemExit, match="must be"):
+            train_intention.main(["--run-dir", str(tmp_path / "bad")] + TINY + bad)
 
 
 def test_speed_term_is_logged_and_pulls_a_frozen_generator(tmp_path, synthetic):
