@@ -33,6 +33,11 @@ What is trained (``models.IntentionModel`` holds the exported parts):
   change, and its second difference, stay within 0.8-1.5 times the truth's) for the generated 4 s against the
   truth's 4 s, and for the long-horizon frames with gradient against the same 4 s of truth: a window-wise D_pose
   accepts a character that slows to a stop (real windows stand still too), this term does not.
+- **Smoothness** (this project's addition, ``--smooth-weight``, 0 = the paper): ``kinematics.roughness_loss`` of
+  the same frames against the same truth: the roughness (mean second difference over mean first difference) of
+  the 12 NDMS joints' body-frame positions held within 1.2 times the truth's. The exp-map acceleration term above
+  pools every angle, and real data's small joints are rough at 25 Hz, so it lets the limbs jitter; NDMS compares
+  position velocities, which jitter turns in random directions.
 
 Sizes default to ``make_config("intention")``: pose decoder 3 × 256 GRU (224 encoder units ⊕ 32 noise dims),
 forecaster 128 units, 32 clusters → 8 intentions, γ = 10, 32 intention features (CPU budget; the paper gives no
@@ -71,6 +76,7 @@ from . import intention_labels
 from .export import load_weights, save_weights
 from .layers import MLP
 from . import long_horizon
+from .kinematics import roughness_loss
 from .long_horizon import LONG_HORIZON, accel_loss, speed_loss, speed_ratios
 from .models import IntentionModel, joint_groups, make_config, parameter_count
 from .root_drift import drift_penalty
@@ -126,6 +132,9 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--speed-weight", type=float, default=0.0, metavar="W",
                    help="adds W x the hinge speed and acceleration terms (long_horizon.speed_loss, accel_loss) of the "
                         "generated 4 s and of the long-horizon frames, each against the truth's 4 s (0: off)")
+    g.add_argument("--smooth-weight", type=float, default=0.0, metavar="W",
+                   help="adds W x the roughness term (kinematics.roughness_loss: the NDMS joints' positions no "
+                        "rougher than 1.2 x the truth's) of the generated 4 s and of the long-horizon frames (0: off)")
     g.add_argument("--drift-weight", type=float, default=0.0, metavar="W",
                    help="adds W x the root-drift penalty (root_drift.drift_penalty: hip height and lean of the "
                         "integrated root held within 100 mm and 10 degrees of the last seed frame's) of the generated "
@@ -305,8 +314,8 @@ def train(args, argv: list[str]) -> None:
         raise SystemExit("error: --future must be >= 2 and at least --pose-window and --label-window frames")
     if not 0 <= args.pose_context <= h36m.SEED_FRAMES:
         raise SystemExit(f"error: --pose-context must be 0 to the {h36m.SEED_FRAMES} seed frames")
-    if args.r1 < 0 or args.speed_weight < 0 or not 0 <= args.ema < 1:
-        raise SystemExit("error: --r1 and --speed-weight must be >= 0 and --ema in [0, 1)")
+    if args.r1 < 0 or args.speed_weight < 0 or args.smooth_weight < 0 or not 0 <= args.ema < 1:
+        raise SystemExit("error: --r1, --speed-weight and --smooth-weight must be >= 0 and --ema in [0, 1)")
     torch.set_num_threads(args.threads)
     device = torch.device(args.device)
     long_horizon.MOTION_LOSS[0] = "hinge"  # the form of --speed-weight's terms
@@ -463,14 +472,18 @@ def train(args, argv: list[str]) -> None:
             adv_long = gan_g_loss(d_pose(*long_fake))
             lg = lg + args.long_weight * args.adv_weight * adv_long
             terms["adv_long"] = adv_long.item()
+        real = torch.cat([seed[:, -1:], truth], 1)
+        moved = [torch.cat([seed[:, -1:], pred], 1)]
+        if long_total:
+            moved.append(torch.cat([x[:, None], more], 1))
         if args.speed_weight > 0:
-            real = torch.cat([seed[:, -1:], truth], 1)
-            moved = [torch.cat([seed[:, -1:], pred], 1)]
-            if long_total:
-                moved.append(torch.cat([x[:, None], more], 1))
             speed = sum(speed_loss(model, m, real) + accel_loss(model, m, real) for m in moved)
             lg = lg + args.speed_weight * speed
             terms["speed"] = speed.item()
+        if args.smooth_weight > 0:
+            rough = sum(roughness_loss(model, m, real) for m in moved)
+            lg = lg + args.smooth_weight * rough
+            terms["rough"] = rough.item()
         if args.drift_weight > 0:
             drift = drift_penalty(model, seed, drift_parts).to(lg.dtype)
             lg = lg + args.drift_weight * drift

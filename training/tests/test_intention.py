@@ -322,7 +322,8 @@ def test_context_r1_and_weight_average_run_resume_and_export_the_average(tmp_pat
     assert "moving average" in model.provenance["weights"]
     with pytest.raises(SystemExit, match="pose-context"):
         train_intention.main(["--run-dir", str(tmp_path / "bad")] + TINY + ["--pose-context", "51"])
-    for bad in (["--pose-context", "-1"], ["--r1", "-1"], ["--ema", "1"], ["--speed-weight", "-2"]):
+    for bad in (["--pose-context", "-1"], ["--r1", "-1"], ["--ema", "1"], ["--speed-weight", "-2"],
+                ["--smooth-weight", "-1"]):
         with pytest.raises(SystemExit, match="must be"):
             train_intention.main(["--run-dir", str(tmp_path / "bad")] + TINY + bad)
 
@@ -345,3 +346,12 @@ def test_speed_term_is_logged_and_pulls_a_frozen_generator(tmp_path, synthetic):
     assert speeds and speeds[0] > 0.5  # (0.8 - 0)² for the speed, about as much for the acceleration, twice
     after = torch.load(tmp_path / "s" / "last.pt", weights_only=False)["model"]
     assert any(not torch.equal(after[k], v) for k, v in frozen.items() if k.startswith("decoder."))
+
+
+def test_smooth_term_is_logged_and_moves_the_generator(tmp_path, synthetic):
+    """--smooth-weight: the roughness term (tests/test_kinematics.py) is logged, finite and non-negative, on the 4 s
+    and the long-horizon frames."""
+    run(["--run-dir", str(tmp_path / "s"), "--iterations", "2", "--smooth-weight", "10"] + TINY)
+    records = [json.loads(line) for line in (tmp_path / "s" / "metrics.jsonl").read_text().splitlines()]
+    rough = [r["rough"] for r in records if r.get("kind") == "train"]
+    assert rough and all(np.isfinite(rough)) and min(rough) >= 0
