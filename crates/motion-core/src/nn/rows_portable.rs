@@ -19,7 +19,7 @@
 //! kernels then read directly.
 use super::layout::MatMul;
 use super::packed::{PackedMatrix, Rows};
-use super::vec128::F4;
+use super::vec128::{prefetch, F4};
 
 /// f32 lanes per accumulator: one 128-bit vector.
 const PL: usize = 4;
@@ -174,33 +174,41 @@ fn tiles(mm: &MatMul, x: &[f32], rows: &[f32], o0: usize, y: &mut [f32], accumul
         while r + 8 <= n {
             // SAFETY: rows `r..r + 8` exist; batch row 0 and outputs `o0 + r..o0 + r + 8` are
             // inside `x` and `y` (asserted above).
-            unsafe { tile::<8, 1>(mm, x, 0, rows, r, o0, y, accumulate) };
+            unsafe { tile::<8, 1, true>(mm, x, 0, rows, r, o0, y, accumulate) };
             r += 8;
         }
     }
     while r + 4 <= n {
         let mut b = 0;
         while b + 2 <= mm.batch {
-            // SAFETY: as above, batch rows `b..b + 2`.
-            unsafe { tile::<4, 2>(mm, x, b, rows, r, o0, y, accumulate) };
+            // SAFETY: as above, batch rows `b..b + 2`. The first pair prefetches the next rows.
+            unsafe {
+                if b == 0 {
+                    tile::<4, 2, true>(mm, x, b, rows, r, o0, y, accumulate)
+                } else {
+                    tile::<4, 2, false>(mm, x, b, rows, r, o0, y, accumulate)
+                }
+            };
             b += 2;
         }
         if b < mm.batch {
             // SAFETY: as above, batch row `b`.
-            unsafe { tile::<4, 1>(mm, x, b, rows, r, o0, y, accumulate) };
+            unsafe { tile::<4, 1, true>(mm, x, b, rows, r, o0, y, accumulate) };
         }
         r += 4;
     }
     while r < n {
         for b in 0..mm.batch {
             // SAFETY: as above, weight row `r`, batch row `b`.
-            unsafe { tile::<1, 1>(mm, x, b, rows, r, o0, y, accumulate) };
+            unsafe { tile::<1, 1, false>(mm, x, b, rows, r, o0, y, accumulate) };
         }
         r += 1;
     }
 }
 
-/// `Y[b0 + b, o0 + r0 + r] (+)= Σ_i X[b0 + b, i] W[r0 + r, i]` for `r < R`, `b < B`.
+/// `Y[b0 + b, o0 + r0 + r] (+)= Σ_i X[b0 + b, i] W[r0 + r, i]` for `r < R`, `b < B`;
+/// `PREFETCH`: ask for the next `R` weight rows (one line of 16 f32s per row every 16 inputs) as
+/// this tile streams its own, so that the batch groups after the first find them in L1.
 ///
 /// # Safety
 /// `rows` holds rows `r0..r0 + R` of `mm.inputs` elements; rows `b0..b0 + B` of `x` and
@@ -208,7 +216,7 @@ fn tiles(mm: &MatMul, x: &[f32], rows: &[f32], o0: usize, y: &mut [f32], accumul
 /// strides of `mm`).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-unsafe fn tile<const R: usize, const B: usize>(
+unsafe fn tile<const R: usize, const B: usize, const PREFETCH: bool>(
     mm: &MatMul,
     x: &[f32],
     b0: usize,
@@ -231,6 +239,11 @@ unsafe fn tile<const R: usize, const B: usize>(
             let mut wv = [F4::zero(); R];
             for (r, v) in wv.iter_mut().enumerate() {
                 *v = F4::load(w.add((r0 + r) * k + i));
+            }
+            if PREFETCH && i % 16 == 0 {
+                for r in 0..R {
+                    prefetch(w.wrapping_add((r0 + R + r) * k + i));
+                }
             }
             for (b, row) in acc.iter_mut().enumerate() {
                 let xv = F4::load(xp.add((b0 + b) * mm.x_stride + i));
