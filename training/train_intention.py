@@ -33,6 +33,10 @@ What is trained (``models.IntentionModel`` holds the exported parts):
   change, and its second difference, stay within 0.8-1.5 times the truth's) for the generated 4 s against the
   truth's 4 s, and for the long-horizon frames with gradient against the same 4 s of truth: a window-wise D_pose
   accepts a character that slows to a stop (real windows stand still too), this term does not.
+- **Root speed** (this project's addition, ``--root-weight``, 0 = the paper): ``long_horizon.root_speed_loss`` of
+  the same frames against the same truth, in the same hinge form: the speed of the root's translation. The
+  joint-angle terms leave the root out, and without this the legs keep walking while the body slows to a stop
+  (8-12 s root speed of walking 0.07 times the truth's).
 - **Smoothness** (this project's addition, ``--smooth-weight``, 0 = the paper): ``kinematics.roughness_loss`` of
   the same frames against the same truth: the roughness (mean second difference over mean first difference) of
   the 12 NDMS joints' body-frame positions held within 1.2 times the truth's. The exp-map acceleration term above
@@ -77,7 +81,7 @@ from .export import load_weights, save_weights
 from .layers import MLP
 from . import long_horizon
 from .kinematics import roughness_loss
-from .long_horizon import LONG_HORIZON, accel_loss, speed_loss, speed_ratios
+from .long_horizon import LONG_HORIZON, accel_loss, root_speed_loss, speed_loss, speed_ratios
 from .models import IntentionModel, joint_groups, make_config, parameter_count
 from .root_drift import drift_penalty
 from .checkpoint_io import BEST, CHECKPOINT, add_run_arguments, atomic_save, begin_run, read_checkpoint
@@ -132,6 +136,9 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--speed-weight", type=float, default=0.0, metavar="W",
                    help="adds W x the hinge speed and acceleration terms (long_horizon.speed_loss, accel_loss) of the "
                         "generated 4 s and of the long-horizon frames, each against the truth's 4 s (0: off)")
+    g.add_argument("--root-weight", type=float, default=0.0, metavar="W",
+                   help="adds W x the hinge root-speed term (long_horizon.root_speed_loss: the root's translation "
+                        "speed against the truth's 4 s) of the generated 4 s and of the long-horizon frames (0: off)")
     g.add_argument("--smooth-weight", type=float, default=0.0, metavar="W",
                    help="adds W x the roughness term (kinematics.roughness_loss: the NDMS joints' positions no "
                         "rougher than 1.2 x the truth's) of the generated 4 s and of the long-horizon frames (0: off)")
@@ -314,8 +321,9 @@ def train(args, argv: list[str]) -> None:
         raise SystemExit("error: --future must be >= 2 and at least --pose-window and --label-window frames")
     if not 0 <= args.pose_context <= h36m.SEED_FRAMES:
         raise SystemExit(f"error: --pose-context must be 0 to the {h36m.SEED_FRAMES} seed frames")
-    if args.r1 < 0 or args.speed_weight < 0 or args.smooth_weight < 0 or not 0 <= args.ema < 1:
-        raise SystemExit("error: --r1, --speed-weight and --smooth-weight must be >= 0 and --ema in [0, 1)")
+    if min(args.r1, args.speed_weight, args.root_weight, args.smooth_weight) < 0 or not 0 <= args.ema < 1:
+        raise SystemExit("error: --r1, --speed-weight, --root-weight and --smooth-weight must be >= 0 and --ema in "
+                         "[0, 1)")
     torch.set_num_threads(args.threads)
     device = torch.device(args.device)
     long_horizon.MOTION_LOSS[0] = "hinge"  # the form of --speed-weight's terms
@@ -480,6 +488,10 @@ def train(args, argv: list[str]) -> None:
             speed = sum(speed_loss(model, m, real) + accel_loss(model, m, real) for m in moved)
             lg = lg + args.speed_weight * speed
             terms["speed"] = speed.item()
+        if args.root_weight > 0:
+            root = sum(root_speed_loss(model, m, real) for m in moved)
+            lg = lg + args.root_weight * root
+            terms["root"] = root.item()
         if args.smooth_weight > 0:
             rough = sum(roughness_loss(model, m, real) for m in moved)
             lg = lg + args.smooth_weight * rough

@@ -8,7 +8,7 @@ import pytest
 import torch
 from torch.nn import functional as F
 
-from training import data, intention_labels, train_intention
+from training import data, intention_labels, long_horizon, train_intention
 from training.export import load_weights
 from training.export_fixtures import H36M_DIMS_USED
 from training.models import IntentionModel, make_config
@@ -323,7 +323,7 @@ def test_context_r1_and_weight_average_run_resume_and_export_the_average(tmp_pat
     with pytest.raises(SystemExit, match="pose-context"):
         train_intention.main(["--run-dir", str(tmp_path / "bad")] + TINY + ["--pose-context", "51"])
     for bad in (["--pose-context", "-1"], ["--r1", "-1"], ["--ema", "1"], ["--speed-weight", "-2"],
-                ["--smooth-weight", "-1"]):
+                ["--smooth-weight", "-1"], ["--root-weight", "-1"]):
         with pytest.raises(SystemExit, match="must be"):
             train_intention.main(["--run-dir", str(tmp_path / "bad")] + TINY + bad)
 
@@ -348,10 +348,34 @@ def test_speed_term_is_logged_and_pulls_a_frozen_generator(tmp_path, synthetic):
     assert any(not torch.equal(after[k], v) for k, v in frozen.items() if k.startswith("decoder."))
 
 
-def test_smooth_term_is_logged_and_moves_the_generator(tmp_path, synthetic):
-    """--smooth-weight: the roughness term (tests/test_kinematics.py) is logged, finite and non-negative, on the 4 s
-    and the long-horizon frames."""
-    run(["--run-dir", str(tmp_path / "s"), "--iterations", "2", "--smooth-weight", "10"] + TINY)
+def test_smooth_and_root_terms_are_logged(tmp_path, synthetic):
+    """--smooth-weight and --root-weight: the roughness term (tests/test_kinematics.py) and the root-speed term are
+    logged, finite and non-negative, on the 4 s and the long-horizon frames."""
+    run(["--run-dir", str(tmp_path / "s"), "--iterations", "2", "--smooth-weight", "10", "--root-weight", "1"] + TINY)
     records = [json.loads(line) for line in (tmp_path / "s" / "metrics.jsonl").read_text().splitlines()]
-    rough = [r["rough"] for r in records if r.get("kind") == "train"]
-    assert rough and all(np.isfinite(rough)) and min(rough) >= 0
+    for term in ("rough", "root"):
+        values = [r[term] for r in records if r.get("kind") == "train"]
+        assert len(values) == 2 and all(np.isfinite(values)) and min(values) >= 0
+
+
+def test_root_speed_term_sees_only_the_root_translation(monkeypatch):
+    """long_horizon.root_speed_loss: zero for the truth, grows as the root translation slows (hinge: nothing
+    inside the band), blind to the joint angles, and refuses a model whose first dims are not the root's."""
+    monkeypatch.setattr(long_horizon, "MOTION_LOSS", ["hinge"])
+    model = small_model()
+    model.norm.set_stats(torch.zeros(99, dtype=torch.float64), torch.full((99,), 10.0, dtype=torch.float64))
+    t = torch.linspace(0, 6, 40, dtype=torch.float64)
+    truth = 1.0 + 0.3 * torch.sin(t[None, :, None] + torch.arange(model.output_size)[None, None, :])
+    assert long_horizon.root_speed_loss(model, truth, truth).item() == 0.0
+    losses = []
+    for f in (0.9, 0.5, 0.1):
+        slow = truth.clone()
+        slow[..., :3] *= f
+        losses.append(long_horizon.root_speed_loss(model, slow, truth).item())
+    assert losses[0] == 0.0 < losses[1] < losses[2]
+    angles = truth.clone()
+    angles[..., 3:] = 0.0
+    assert long_horizon.root_speed_loss(model, angles, truth).item() == 0.0
+    model.norm.dims_used = torch.arange(1, model.output_size + 1)
+    with pytest.raises(ValueError, match="root translation"):
+        long_horizon.root_speed_loss(model, truth, truth)
