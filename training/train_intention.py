@@ -42,6 +42,11 @@ What is trained (``models.IntentionModel`` holds the exported parts):
   the 12 NDMS joints' body-frame positions held within 1.2 times the truth's. The exp-map acceleration term above
   pools every angle, and real data's small joints are rough at 25 Hz, so it lets the limbs jitter; NDMS compares
   position velocities, which jitter turns in random directions.
+- **Word realism** (this project's addition, ``--word-weight``, 0 = the paper): ``word_realism.word_realism_loss``
+  of the same frames: paper 003's plausibility measure (eq. 10) as a training signal on training data only, ``1 −
+  NDMS`` of each generated 8-frame word against its nearest word of the *training* subjects' motion of the
+  window's action (the search is not differentiated). The terms above match overall speed and smoothness; this
+  one pulls each stretch of motion toward the velocities real motion has in that pose.
 
 Sizes default to ``make_config("intention")``: pose decoder 3 × 256 GRU (224 encoder units ⊕ 32 noise dims),
 forecaster 128 units, 32 clusters → 8 intentions, γ = 10, 32 intention features (CPU budget; the paper gives no
@@ -84,6 +89,7 @@ from .kinematics import roughness_loss
 from .long_horizon import LONG_HORIZON, accel_loss, root_speed_loss, speed_loss, speed_ratios
 from .models import IntentionModel, joint_groups, make_config, parameter_count
 from .root_drift import drift_penalty
+from .word_realism import WordBank, word_realism_loss
 from .checkpoint_io import BEST, CHECKPOINT, add_run_arguments, atomic_save, begin_run, read_checkpoint
 from .train import RESUME_OVERRIDABLE, Logger, Validator, explicit_args
 
@@ -142,6 +148,10 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--smooth-weight", type=float, default=0.0, metavar="W",
                    help="adds W x the roughness term (kinematics.roughness_loss: the NDMS joints' positions no "
                         "rougher than 1.2 x the truth's) of the generated 4 s and of the long-horizon frames (0: off)")
+    g.add_argument("--word-weight", type=float, default=0.0, metavar="W",
+                   help="adds W x the word-realism term (word_realism.word_realism_loss: 1 - NDMS of each generated "
+                        "8-frame word against its nearest word of the training subjects' motion of the window's "
+                        "action) of the generated 4 s and of the long-horizon frames (0: off)")
     g.add_argument("--drift-weight", type=float, default=0.0, metavar="W",
                    help="adds W x the root-drift penalty (root_drift.drift_penalty: hip height and lean of the "
                         "integrated root held within 100 mm and 10 degrees of the last seed frame's) of the generated "
@@ -253,14 +263,16 @@ class LabelledSet:
         present = [i for i, seqs in enumerate(self.seqs) if any(s.shape[0] > h36m.MIN_START + window for s in seqs)]
         frames = np.empty((batch, window, self.seqs[present[0]][0].shape[1]), dtype=np.float32)
         labels = np.empty((batch, window), dtype=np.int64)
+        actions = np.empty(batch, dtype=np.int64)
         for b in range(batch):
             ai = present[int(rng.integers(len(present)))]
+            actions[b] = ai
             options = [k for k, s in enumerate(self.seqs[ai]) if s.shape[0] > h36m.MIN_START + window]
             k = options[int(rng.integers(len(options)))]
             start = int(rng.integers(h36m.MIN_START, self.seqs[ai][k].shape[0] - window))
             frames[b] = self.seqs[ai][k][start : start + window]
             labels[b] = self.labels[ai][k][start : start + window]
-        return frames, labels
+        return frames, labels, actions
 
 
 # ---------------------------------------------------------------- validation
@@ -321,9 +333,9 @@ def train(args, argv: list[str]) -> None:
         raise SystemExit("error: --future must be >= 2 and at least --pose-window and --label-window frames")
     if not 0 <= args.pose_context <= h36m.SEED_FRAMES:
         raise SystemExit(f"error: --pose-context must be 0 to the {h36m.SEED_FRAMES} seed frames")
-    if min(args.r1, args.speed_weight, args.root_weight, args.smooth_weight) < 0 or not 0 <= args.ema < 1:
-        raise SystemExit("error: --r1, --speed-weight, --root-weight and --smooth-weight must be >= 0 and --ema in "
-                         "[0, 1)")
+    if min(args.r1, args.speed_weight, args.root_weight, args.smooth_weight, args.word_weight) < 0 or not 0 <= args.ema < 1:
+        raise SystemExit("error: --r1, --speed-weight, --root-weight, --smooth-weight and --word-weight must be >= 0 "
+                         "and --ema in [0, 1)")
     torch.set_num_threads(args.threads)
     device = torch.device(args.device)
     long_horizon.MOTION_LOSS[0] = "hinge"  # the form of --speed-weight's terms
@@ -367,6 +379,11 @@ def train(args, argv: list[str]) -> None:
     centroids = model.labels.centroids.double().numpy()
     merge = model.labels.merge.long().numpy()
     labelled = LabelledSet(dataset, centroids, merge)
+    bank = None
+    if args.word_weight > 0:
+        t0 = time.time()
+        bank = WordBank(labelled.seqs, model.norm.unnormalize)
+        log(f"word bank: {len(bank):,} words of the training subjects' motion in {time.time() - t0:.0f} s")
     d_pose = PoseDiscriminator(args.pose_window, model.output_size, args.d_hidden, args.pose_context)
     d_label = LabelDiscriminator(args.label_window, model.intentions, max(8, args.d_hidden // 4))
     model.to(device).train()
@@ -423,7 +440,7 @@ def train(args, argv: list[str]) -> None:
     long_total = args.long_burn_in + args.long_frames if args.long_weight > 0 else 0
     t_last, acc, n_acc = time.time(), {}, 0
     while iteration < args.iterations:
-        frames_np, labels_np = labelled.sample(rng, args.batch, seed_len + future)
+        frames_np, labels_np, actions_np = labelled.sample(rng, args.batch, seed_len + future)
         frames = torch.from_numpy(frames_np).to(device)
         labels = torch.from_numpy(labels_np).to(device)
         seed, truth = frames[:, :seed_len], frames[:, seed_len:]
@@ -496,6 +513,11 @@ def train(args, argv: list[str]) -> None:
             rough = sum(roughness_loss(model, m, real) for m in moved)
             lg = lg + args.smooth_weight * rough
             terms["rough"] = rough.item()
+        if bank is not None:
+            acts = torch.from_numpy(actions_np).to(device)
+            word = sum(word_realism_loss(model, m, acts, bank) for m in moved)
+            lg = lg + args.word_weight * word
+            terms["word"] = word.item()
         if args.drift_weight > 0:
             drift = drift_penalty(model, seed, drift_parts).to(lg.dtype)
             lg = lg + args.drift_weight * drift

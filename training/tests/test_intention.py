@@ -323,7 +323,7 @@ def test_context_r1_and_weight_average_run_resume_and_export_the_average(tmp_pat
     with pytest.raises(SystemExit, match="pose-context"):
         train_intention.main(["--run-dir", str(tmp_path / "bad")] + TINY + ["--pose-context", "51"])
     for bad in (["--pose-context", "-1"], ["--r1", "-1"], ["--ema", "1"], ["--speed-weight", "-2"],
-                ["--smooth-weight", "-1"], ["--root-weight", "-1"]):
+                ["--smooth-weight", "-1"], ["--root-weight", "-1"], ["--word-weight", "-1"]):
         with pytest.raises(SystemExit, match="must be"):
             train_intention.main(["--run-dir", str(tmp_path / "bad")] + TINY + bad)
 
@@ -348,12 +348,14 @@ def test_speed_term_is_logged_and_pulls_a_frozen_generator(tmp_path, synthetic):
     assert any(not torch.equal(after[k], v) for k, v in frozen.items() if k.startswith("decoder."))
 
 
-def test_smooth_and_root_terms_are_logged(tmp_path, synthetic):
-    """--smooth-weight and --root-weight: the roughness term (tests/test_kinematics.py) and the root-speed term are
-    logged, finite and non-negative, on the 4 s and the long-horizon frames."""
-    run(["--run-dir", str(tmp_path / "s"), "--iterations", "2", "--smooth-weight", "10", "--root-weight", "1"] + TINY)
+def test_smooth_root_and_word_terms_are_logged(tmp_path, synthetic):
+    """--smooth-weight, --root-weight and --word-weight: the roughness term (tests/test_kinematics.py), the
+    root-speed term and the word-realism term (tests/test_word_realism.py) are logged, finite and non-negative, on
+    the 4 s and the long-horizon frames."""
+    run(["--run-dir", str(tmp_path / "s"), "--iterations", "2", "--smooth-weight", "10", "--root-weight", "1",
+         "--word-weight", "1"] + TINY)
     records = [json.loads(line) for line in (tmp_path / "s" / "metrics.jsonl").read_text().splitlines()]
-    for term in ("rough", "root"):
+    for term in ("rough", "root", "word"):
         values = [r[term] for r in records if r.get("kind") == "train"]
         assert len(values) == 2 and all(np.isfinite(values)) and min(values) >= 0
 
