@@ -93,6 +93,33 @@ fn joined<A: Clone, D: ndarray::RemoveAxis>(
     result.expect("arrays sized by this module")
 }
 
+/// The clips of [`ActionTruth::real_motion_ndms`]: `count` pieces of `len` frames as
+/// `(sequence index, first frame)`, deterministic. Clip `i` comes from the `i mod n`-th of the `n`
+/// sequences at least `len` frames long (in the given order); the clips of one sequence start
+/// evenly spread over it (`(frames - len) · (j + 1) / (clips + 1)` for its `j`-th of `clips`).
+/// Empty when no sequence is long enough or `count` is 0.
+pub fn real_motion_clips(
+    sequences: &[Array2<f64>],
+    count: usize,
+    len: usize,
+) -> Vec<(usize, usize)> {
+    let long: Vec<usize> = (0..sequences.len())
+        .filter(|&k| sequences[k].nrows() >= len)
+        .collect();
+    if long.is_empty() {
+        return Vec::new();
+    }
+    let n = long.len();
+    (0..count)
+        .map(|i| {
+            let (which, j) = (i % n, i / n);
+            let clips = (count - which).div_ceil(n);
+            let free = sequences[long[which]].nrows() - len;
+            (long[which], free * (j + 1) / (clips + 1))
+        })
+        .collect()
+}
+
 /// Frames of the last second at 25 Hz (joint-speed check).
 const LAST_SECOND_FRAMES: usize = 25;
 
@@ -276,6 +303,39 @@ impl ActionTruth {
                 .assign(&zero_velocity_held_root(window.seed.view(), self.horizon));
         }
         out
+    }
+
+    /// NDMS of *real* motion that is not the truth: one clip (the windows' seed length plus the
+    /// horizon, at 25 Hz) of `other_sequences` (the action's takes of other subjects, e.g. the
+    /// training subjects) per test window, chosen by [`real_motion_clips`], scored as a forecast
+    /// exactly as [`ActionTruth::score`] scores one (seed seam, same database). What a model whose
+    /// motion is perfectly real, but not the test subject's continuation, scores under this
+    /// protocol. `None` when no sequence is long enough for a clip.
+    pub fn real_motion_ndms(
+        &self,
+        other_sequences: &[Array2<f64>],
+    ) -> Result<Option<NdmsReport>, ProtocolError> {
+        let seed = self.windows.first().map_or(0, |w| w.seed.nrows());
+        let prefix = NdmsConfig::h36m().kappa - 1;
+        let clips = real_motion_clips(other_sequences, self.windows.len(), seed + self.horizon);
+        if clips.is_empty() || seed < prefix {
+            return Ok(None);
+        }
+        let mut forecasts = Vec::with_capacity(clips.len());
+        let mut seeds = Vec::with_capacity(clips.len());
+        for (k, start) in clips {
+            let frames = other_sequences[k].slice(s![start..start + seed + self.horizon, ..]);
+            let positions = protocol_positions(&self.skeleton, frames)
+                .map_err(kinematics("the other subjects' real motion"))?;
+            seeds.push(positions.slice(s![seed - prefix..seed, .., ..]).to_owned());
+            forecasts.push(positions.slice(s![seed.., .., ..]).to_owned());
+        }
+        let forecast_views: Vec<_> = forecasts.iter().map(|f| f.view()).collect();
+        let seed_views: Vec<_> = seeds.iter().map(|f| f.view()).collect();
+        self.database
+            .score_forecasts(&forecast_views, Some(&seed_views))
+            .map(Some)
+            .map_err(metric("NDMS of real motion"))
     }
 
     /// Words in the NDMS database.
@@ -570,6 +630,45 @@ mod tests {
             seed: all.slice(s![..50, ..]).to_owned(),
             ground_truth: all.slice(s![50.., ..]).to_owned(),
         }
+    }
+
+    #[test]
+    fn real_motion_clips_alternate_over_the_long_sequences_and_spread_inside_each() {
+        let seqs = [
+            frames(200, 0.0, 0.0),
+            frames(50, 0.0, 0.0),
+            frames(300, 0.0, 0.0),
+        ];
+        let clips = real_motion_clips(&seqs, 5, 100);
+        assert_eq!(clips, vec![(0, 25), (2, 66), (0, 50), (2, 133), (0, 75)]);
+        assert!(real_motion_clips(&seqs, 3, 301).is_empty());
+        assert!(real_motion_clips(&seqs, 0, 10).is_empty());
+        for (k, start) in real_motion_clips(&seqs, 9, 200) {
+            assert!(start + 200 <= seqs[k].nrows());
+        }
+    }
+
+    #[test]
+    fn real_motion_in_the_database_scores_one_and_other_motion_less() {
+        let windows = (0..2).map(|i| window(i, 40)).collect();
+        let references = [frames(160, 0.3, 4.0), frames(140, 1.1, 4.0)];
+        let truth = ActionTruth::new(windows, &references, 40).unwrap();
+        let same = truth.real_motion_ndms(&references).unwrap().unwrap();
+        assert_eq!(same.per_word.len(), 40);
+        assert!(
+            same.per_word.iter().all(|&v| (v - 1.0).abs() < 1e-9),
+            "{:?}",
+            same.per_word
+        );
+        let other = truth
+            .real_motion_ndms(&[frames(120, 2.0, 9.0)])
+            .unwrap()
+            .unwrap();
+        assert!(other.mean < 0.99 && other.mean > 0.0, "{}", other.mean);
+        assert!(truth
+            .real_motion_ndms(&[frames(60, 0.0, 4.0)])
+            .unwrap()
+            .is_none());
     }
 
     fn truth(ground_truth: &[usize], horizon: usize) -> ActionTruth {

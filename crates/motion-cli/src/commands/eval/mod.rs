@@ -24,7 +24,7 @@ use ndarray::{s, Array3, Array4};
 use motion_core::model::{ActionClassifier, BatchGenerator, MotionModel, Network, Noise};
 use motion_core::protocol::{
     load_action_windows_covered, load_subject_sequences, ACTIONS, LONG_TERM_HORIZON, SEED_FRAMES,
-    TEST_SUBJECT,
+    SUBJECTS, TEST_SUBJECT,
 };
 use motion_core::skeleton::{H36M_FRAME_DIMS, H36M_PROTOCOL_FPS};
 use motion_metrics::euler_error_at_horizons;
@@ -35,11 +35,12 @@ use super::plausibility;
 use super::UsageError;
 use crate::model_source;
 use motion_core::formats::npy_stream::NpyStream;
+use motion_metrics::ndms::NdmsReport;
 use motion_metrics::protocol::{ActionTruth, Coverage, NpssScores, Scores, Speed};
 use report::{
     ActionResult, ActionScores, CoverageReport, EvalReport, GroundTruth, Means, MeansOverActions,
-    Method, ModelInfo, NdmsScores, NpssReport, PlausibilityKeys, Protocol, SavedPredictions,
-    Skipped, SpeedReport,
+    Method, ModelInfo, NdmsScores, NpssReport, PlausibilityKeys, Protocol, RealMotionMeans,
+    SavedPredictions, Skipped, SpeedReport,
 };
 use selection::{Planned, Selection};
 
@@ -200,6 +201,12 @@ pub fn run(args: Args) -> Result<()> {
         let references = load_subject_sequences(&dataset, TEST_SUBJECT, planned.action)?;
         let truth = ActionTruth::new(windows, &references, horizon)?;
         drop(references);
+        let mut others = Vec::new();
+        for subject in SUBJECTS.iter().filter(|&&s| s != TEST_SUBJECT) {
+            others.extend(load_subject_sequences(&dataset, subject, planned.action)?);
+        }
+        let real_motion_ndms = truth.real_motion_ndms(&others)?;
+        drop(others);
         let reference = plausibility::reference(&dataset, planned.action)?;
 
         progress.set_message(format!("{}: predicting", planned.action));
@@ -254,7 +261,7 @@ pub fn run(args: Args) -> Result<()> {
             None => None,
         };
         drop(predictions);
-        results.push(action_result(
+        let mut result = action_result(
             planned,
             &truth,
             &model_scores,
@@ -262,7 +269,9 @@ pub fn run(args: Args) -> Result<()> {
             measured,
             samples,
             horizon,
-        ));
+        );
+        result.ground_truth.real_motion_ndms = real_motion_ndms.as_ref().map(ndms_scores);
+        results.push(result);
     }
     progress.finish_and_clear();
 
@@ -472,6 +481,15 @@ fn speed_report(speed: &Speed) -> SpeedReport {
     }
 }
 
+fn ndms_scores(report: &NdmsReport) -> NdmsScores {
+    NdmsScores {
+        mean: report.mean,
+        bins: report.bins.clone(),
+        first_word_end: report.first_word_end,
+        exact: report.exact,
+    }
+}
+
 /// The scores of the model or the baseline beside its plausibility report and classifier curve.
 fn action_scores(
     scores: &Scores,
@@ -486,12 +504,7 @@ fn action_scores(
         euler_error_per_frame: scores.euler_per_frame.clone(),
         npss: npss_report(&scores.npss),
         npss_reference: npss_report(&scores.npss_reference),
-        ndms: NdmsScores {
-            mean: scores.ndms.mean,
-            bins: scores.ndms.bins.clone(),
-            first_word_end: scores.ndms.first_word_end,
-            exact: scores.ndms.exact,
-        },
+        ndms: ndms_scores(&scores.ndms),
         mean_joint_speed_last_1s: speed_report(&scores.speed_last_second),
         apd: scores.apd,
         plausibility: PlausibilityKeys(plausibility),
@@ -535,6 +548,7 @@ fn action_result(
             mean_joint_speed_last_1s: truth.speed_last_second.as_ref().map(speed_report),
             plausibility: PlausibilityKeys(real),
             classifier: real_curve,
+            real_motion_ndms: None, // set by the caller: the other subjects' takes
         },
         published: published::for_action(planned.action),
     }
@@ -554,6 +568,12 @@ fn full_report(
         actions: results.len(),
         model: Means::of(&results.iter().map(|r| &r.model).collect::<Vec<_>>()),
         zero_velocity: Means::of(&results.iter().map(|r| &r.zero_velocity).collect::<Vec<_>>()),
+        real_motion: RealMotionMeans::of(
+            &results
+                .iter()
+                .map(|r| r.ground_truth.real_motion_ndms.as_ref())
+                .collect::<Vec<_>>(),
+        ),
     };
     EvalReport {
         model: ModelInfo {
@@ -598,7 +618,7 @@ fn full_report(
 const METHOD: Method = Method {
     samples: "Euler error: mean over all 8 x K sequences; NPSS: each sample index scored as a set of the 8 windows, then the mean over the K sets; NDMS: f_sim over all words of all 8 x K forecasts; APD: per window over its K samples (world positions of all 32 joints, mm), mean over windows",
     npss: "npss = |DFT|² (paper 000's definition); npss_reference = Re(DFT)² (the published code, which every published NPSS used)",
-    ndms: "database = every motion word (kappa 8, stride 1) of the action's S5 files at 25 Hz; queries = forecasts with the last 7 seed frames prepended; exact nearest neighbour (brute force); bins of 0.4 s by word end",
+    ndms: "database = every motion word (kappa 8, stride 1) of the action's S5 files at 25 Hz; queries = forecasts with the last 7 seed frames prepended; exact nearest neighbour (brute force); bins of 0.4 s by word end; ground_truth.real_motion_ndms = the same score of real motion that is not the truth: one clip (seed + horizon) per test window from the action's takes of the other subjects (S1, S6, S7, S8, S9, S11), clip i from the (i mod n)-th take long enough, evenly spread within it (motion_metrics::protocol::real_motion_clips)",
     positions: "FK of seed + forecast with the root integrated (each 25 Hz root delta applied twice)",
     mean_joint_speed_last_1s: "mean displacement per 25 Hz frame (mm) of the 12 NDMS joints over the last 25 frame steps; world = with the root trajectory, pose = root deltas zeroed (body motion only)",
     zero_velocity: "the last seed pose repeated with the root held (root deltas 0: no translation, no turning); its joint angles are the protocol's repeated last frame, so its Euler error and NPSS are paper 000 Table 6's zero-velocity baseline",

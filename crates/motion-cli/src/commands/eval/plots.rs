@@ -82,6 +82,7 @@ mod tests {
                 mean_joint_speed_last_1s: None,
                 plausibility: scores.plausibility.clone(),
                 classifier: None,
+                real_motion_ndms: None,
             },
             published: published::for_action("walking"),
         }];

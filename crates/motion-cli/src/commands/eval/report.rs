@@ -175,6 +175,10 @@ pub struct GroundTruth {
     /// The action-classifier curve (absent with `--no-classifier`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub classifier: Option<ClassifierCurve>,
+    /// NDMS of the other subjects' real motion of the action, scored as a forecast against the
+    /// same database (`method.ndms`): what motion that is real, but not the test subject's
+    /// continuation, scores here (`null` without a take long enough).
+    pub real_motion_ndms: Option<NdmsScores>,
 }
 
 /// NPSS over the whole horizon and per window label.
@@ -241,6 +245,37 @@ pub struct MeansOverActions {
     pub model: Means,
     /// The zero-velocity baseline's means.
     pub zero_velocity: Means,
+    /// The other subjects' real motion (`ground_truth.real_motion_ndms` of each action).
+    pub real_motion: RealMotionMeans,
+}
+
+/// Means over actions of the real-motion NDMS (`null` unless every action has it).
+#[derive(Debug, Clone, Serialize)]
+pub struct RealMotionMeans {
+    /// NDMS f_sim.
+    pub ndms: Option<f64>,
+    /// NDMS per 0.4 s bin.
+    pub ndms_bins: Vec<Option<f64>>,
+}
+
+impl RealMotionMeans {
+    /// The means of one real-motion NDMS per action.
+    pub fn of(scores: &[Option<&NdmsScores>]) -> Self {
+        let all: Option<Vec<&NdmsScores>> = scores.iter().copied().collect();
+        let all = all.filter(|a| !a.is_empty()).unwrap_or_default();
+        let mean = |pick: &dyn Fn(&NdmsScores) -> Option<f64>| {
+            let values: Vec<f64> = all.iter().filter_map(|s| pick(s)).collect();
+            (!all.is_empty() && values.len() == all.len())
+                .then(|| values.iter().sum::<f64>() / values.len() as f64)
+        };
+        let bins = all.first().map_or(0, |s| s.bins.len());
+        Self {
+            ndms: mean(&|s| Some(s.mean)),
+            ndms_bins: (0..bins)
+                .map(|i| mean(&|s| s.bins.get(i).copied()))
+                .collect(),
+        }
+    }
 }
 
 /// Means over actions of the headline numbers (`null` unless every action has the number).
@@ -318,10 +353,15 @@ fn cells(values: impl IntoIterator<Item = Option<f64>>) -> String {
 
 /// The NDMS 0.4 s bins of model and baseline, then paper 003's "Ours" row for `action` (Table 2;
 /// `average` for the mean over 15 actions) followed by `note`.
-fn ndms_bins(out: &mut String, model: &str, baseline: &str, action: &str, note: &str) {
+fn ndms_bins(out: &mut String, model: &str, baseline: &str, real: &str, action: &str, note: &str) {
     out.push_str(&format!(
         "  NDMS 0.4 s bins   model    {model}\n                    zero-vel {baseline}\n"
     ));
+    if !real.is_empty() {
+        out.push_str(&format!(
+            "                    real     {real} (other subjects' motion, not the truth)\n"
+        ));
+    }
     for r in published::ndms_rows(action) {
         if r.method.starts_with("Ours") {
             let bins: Vec<String> = r
@@ -482,6 +522,10 @@ fn action_block(out: &mut String, a: &ActionResult) {
         out,
         &cells(m.ndms.bins.iter().copied().map(Some)),
         &cells(z.ndms.bins.iter().copied().map(Some)),
+        &a.ground_truth
+            .real_motion_ndms
+            .as_ref()
+            .map_or(String::new(), |r| cells(r.bins.iter().copied().map(Some))),
         action,
         "",
     );
@@ -570,6 +614,11 @@ pub fn table(report: &EvalReport) -> String {
         &mut out,
         &cells(m.ndms_bins.iter().copied()),
         &cells(z.ndms_bins.iter().copied()),
+        &if means.real_motion.ndms_bins.is_empty() {
+            String::new()
+        } else {
+            cells(means.real_motion.ndms_bins.iter().copied())
+        },
         "average",
         " (average of 15 actions)",
     );
@@ -704,5 +753,32 @@ mod tests {
         assert!(json["euler_error_ms"]["80"].is_null());
         assert_eq!(json["ndms"]["exact"], true);
         assert_eq!(json["drift"]["reference_windows"], 0);
+    }
+
+    fn ndms(mean: f64, bins: &[f64]) -> NdmsScores {
+        NdmsScores {
+            mean,
+            bins: bins.to_vec(),
+            first_word_end: 0,
+            exact: true,
+        }
+    }
+
+    /// The real-motion means need every action's score; the bins row prints only with them.
+    #[test]
+    fn real_motion_means_need_every_action_and_print_a_bins_row() {
+        let (a, b) = (ndms(0.4, &[0.5, 0.3]), ndms(0.2, &[0.3, 0.1]));
+        let means = RealMotionMeans::of(&[Some(&a), Some(&b)]);
+        assert_eq!(means.ndms, Some(0.30000000000000004));
+        assert_eq!(means.ndms_bins, vec![Some(0.4), Some(0.2)]);
+        let partial = RealMotionMeans::of(&[Some(&a), None]);
+        assert_eq!((partial.ndms, partial.ndms_bins.len()), (None, 0));
+        assert_eq!(RealMotionMeans::of(&[]).ndms, None);
+        let mut out = String::new();
+        ndms_bins(&mut out, "0.1", "0.0", "0.400 0.200", "walking", "");
+        assert!(out.contains("real     0.400 0.200 (other subjects' motion, not the truth)"));
+        let mut out = String::new();
+        ndms_bins(&mut out, "0.1", "0.0", "", "walking", "");
+        assert!(!out.contains("real"));
     }
 }
