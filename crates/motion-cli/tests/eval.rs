@@ -118,6 +118,15 @@ fn walking_with_the_fixture_model_reproduces_the_zero_velocity_row() {
     let zv_ndms = num(&walking["zero_velocity"]["ndms"]["mean"]);
     assert!(zv_ndms < 0.1, "zero-velocity NDMS {zv_ndms}");
     assert!(num(&walking["ground_truth"]["mean_joint_speed_last_1s"]["world"]) > 1.0);
+    // Real walking of the other subjects: far above the standing baseline, below the truth's 1
+    // (its words are not in the S5 database).
+    let real = &walking["ground_truth"]["real_motion_ndms"];
+    assert_eq!(real["bins"].as_array().unwrap().len(), 10);
+    assert!((0.3..0.95).contains(&num(&real["mean"])), "{real}");
+    assert_eq!(
+        report["mean_over_actions"]["real_motion"]["ndms"],
+        real["mean"]
+    );
     assert_eq!(
         num(&walking["published"]["paper000_table4_npss_reference_0_4s"]["VGRU-d"]),
         0.887
