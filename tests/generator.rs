@@ -307,6 +307,68 @@ fn intention_z_per_row_seeded_or_explicit() {
     );
 }
 
+/// The intention fixture with `noise_scale` set in its config, loaded (or the loading error).
+fn intention_with_noise_scale(scale: f32) -> Result<Arc<MotionModel>, String> {
+    let store = WeightStore::open(fixture("intention.safetensors")).unwrap();
+    let tensors: Vec<(String, Vec<usize>, Vec<f32>)> = store
+        .names()
+        .map(|name| {
+            let (shape, values) = store.tensor_any_shape(name).unwrap();
+            (name.to_string(), shape, values)
+        })
+        .collect();
+    let mut metadata = store.metadata_map().clone();
+    let mut config: serde_json::Value = serde_json::from_str(&metadata["config"]).unwrap();
+    config["noise_scale"] = serde_json::json!(scale);
+    metadata.insert("config".into(), config.to_string());
+    let bytes = motion::core::weights::serialize_f32(
+        tensors
+            .iter()
+            .map(|(n, shape, v)| (n.as_str(), shape.as_slice(), v.as_slice())),
+        &metadata,
+    );
+    WeightStore::from_bytes(&bytes, "scaled.safetensors")
+        .and_then(|store| MotionModel::from_store(&store))
+        .map(Arc::new)
+        .map_err(|e| e.to_string())
+}
+
+#[test]
+fn intention_noise_scale_scales_drawn_z_only() {
+    let base = model("intention");
+    let s = seed();
+    let n = base.config().noise_dims.unwrap();
+    // The file without the key and with 1 draw the same z.
+    let one = intention_with_noise_scale(1.0).unwrap();
+    assert_eq!(
+        run(&base, s.view(), None, Noise::Seed(3), 20),
+        run(&one, s.view(), None, Noise::Seed(3), 20)
+    );
+    // Scale 0: every seeded sample is the z = 0 future; an explicit z is used as given.
+    let zero = intention_with_noise_scale(0.0).unwrap();
+    let at_zero = run(&base, s.view(), None, Noise::Explicit(&vec![0.0; n]), 20);
+    assert_eq!(run(&zero, s.view(), None, Noise::Seed(3), 20), at_zero);
+    assert_eq!(run(&zero, s.view(), None, Noise::Seed(4), 20), at_zero);
+    let z = vec![0.7f32; n];
+    assert_eq!(
+        run(&zero, s.view(), None, Noise::Explicit(&z), 20),
+        run(&base, s.view(), None, Noise::Explicit(&z), 20)
+    );
+    // Scale 0.5: between the two, and different from both.
+    let half = intention_with_noise_scale(0.5).unwrap();
+    let (full, mid) = (
+        run(&base, s.view(), None, Noise::Seed(3), 20),
+        run(&half, s.view(), None, Noise::Seed(3), 20),
+    );
+    assert_ne!(mid, full);
+    assert_ne!(mid, at_zero);
+    // Out of range: refused when the file is read, naming the key.
+    for bad in [-0.5f32, 1e6] {
+        let err = intention_with_noise_scale(bad).unwrap_err();
+        assert!(err.contains("noise_scale"), "{bad}: {err}");
+    }
+}
+
 #[test]
 fn intention_works_with_a_single_seed_frame_and_random_paper_size_weights() {
     // One seed frame: the last seed frame is also the first; paper sizes (gamma 10: 8 frames

@@ -32,6 +32,7 @@ from .layers import BIAS_INIT, MLP, BodyGRUCell, GRUCell, LSTMCell, orthogonal_b
 H36M_ACTIONS = list(ACTIONS)
 
 ARCHITECTURES = ("vgru-d", "gru-d", "dae-lstm", "intention")
+MAX_NOISE_SCALE = 100.0  # the intention model's noise_scale: 0 ..= this (motion_core::model::config::limits)
 
 
 def make_config(architecture: str, dims_used: list[int], **overrides) -> dict:
@@ -506,8 +507,11 @@ class IntentionModel(MotionModel):
         self.intention_features = int(config["intention_features"])
         self.label_hidden = int(config["label_hidden"])
         self.num_layers = int(config["layers"])
+        self.noise_scale = float(config.get("noise_scale", 1.0))
         if not 0 < self.noise_dims < self.hidden_size or self.lookahead < 1 or self.num_layers < 1:
             raise ValueError("intention model needs 0 < noise_dims < hidden, lookahead >= 1, layers >= 1")
+        if not 0.0 <= self.noise_scale <= MAX_NOISE_SCALE:
+            raise ValueError(f"noise_scale {self.noise_scale} is not in [0, {MAX_NOISE_SCALE}]")
         o, c = self.output_size, self.intentions
         self.labels = IntentionLabels(int(config["clusters"]), o)
         self.label_encoder = GRUCell(o + c, self.label_hidden)
@@ -588,13 +592,17 @@ class IntentionModel(MotionModel):
         return torch.stack(outputs, 1), hs
 
     def closed_loop(self, seed: torch.Tensor, horizon: int, action=None, eps=None, return_seed_outputs: bool = False):
-        """Frames ``S .. S+horizon-1`` for ``seed [B, S, O]``; ``eps`` is ``z`` (``[N]`` or ``[B, N]``; sampled
-        from torch's generator when None). No teacher-forced seed outputs exist (``return_seed_outputs``
+        """Frames ``S .. S+horizon-1`` for ``seed [B, S, O]``; ``eps`` is ``z`` (``[N]`` or ``[B, N]``, used as
+        given; when None drawn from torch's generator as ``N(0, s² I)``, ``s`` = ``config['noise_scale']``, 1 when
+        absent). No teacher-forced seed outputs exist (``return_seed_outputs``
         gives None for them)."""
         batch = seed.shape[0]
         if seed.shape[1] < 1 or horizon < 1:
             raise ValueError(f"need at least 1 seed frame and horizon >= 1, got {seed.shape[1]}, {horizon}")
-        z = self.sample_noise(batch, seed) if eps is None else torch.as_tensor(eps, dtype=seed.dtype).expand(batch, -1)
+        if eps is None:  # drawn: N(0, s² I) with the file's noise_scale s; training draws N(0, I) itself
+            z = self.noise_scale * self.sample_noise(batch, seed)
+        else:
+            z = torch.as_tensor(eps, dtype=seed.dtype).expand(batch, -1)
         labels, _, probs = self.forecast_intentions(seed, max(0, horizon + self.lookahead - 2))
         out = self.generate(seed, horizon, z, labels, probs)
         return (None, out) if return_seed_outputs else out

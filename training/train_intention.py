@@ -165,6 +165,9 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--clip", type=float, default=5.0, help="gradient-norm clipping")
     g.add_argument("--seed", type=int, default=1)
     add_run_arguments(p, log_every=25)
+    p.add_argument("--noise-scale", type=float, default=None, metavar="S",
+                   help="with --export: store noise_scale S in the file: its drawn z ~ N(0, S² I) at inference "
+                        "(training always draws N(0, I); absent = 1, the paper's)")
     return p
 
 
@@ -572,9 +575,12 @@ def train(args, argv: list[str]) -> None:
     log.close()
 
 
-def export(out: Path, ckpt: Path, dtype: str, argv: list[str]) -> None:
+def export(out: Path, ckpt: Path, dtype: str, argv: list[str], noise_scale: float | None = None) -> None:
     state = load_checkpoint(ckpt)
-    model = IntentionModel(state["config"])
+    config = dict(state["config"])
+    if noise_scale is not None:
+        config["noise_scale"] = noise_scale
+    model = IntentionModel(config)  # ValueError (exit 2) for a noise scale out of range
     averaged = state.get("ema") is not None
     model.load_state_dict(state["ema"] if averaged else state["model"])
     best = state.get("best") or {}
@@ -587,6 +593,8 @@ def export(out: Path, ckpt: Path, dtype: str, argv: list[str]) -> None:
         "checkpoint_choice": "train_intention module doc (S5 validation windows, 12 s speed ratios, then NPSS)",
         "validation": {k: best[k] for k in ("npss_ref", "euler_80", "iteration") if k in best},
     }
+    if noise_scale is not None:
+        provenance["noise_scale"] = "chosen at export (weights/README.md): drawn z ~ N(0, s² I)"
     if averaged:
         provenance["weights"] = f"moving average of the training weights, decay {state['args']['ema']} per iteration"
     save_weights(model, out, provenance, dtype=getattr(torch, dtype))
@@ -600,7 +608,7 @@ def main(argv: list[str] | None = None) -> int:
         if args.export is not None:
             if args.from_ is None:
                 raise SystemExit("error: --export needs --from CKPT")
-            export(args.export, args.from_, args.dtype, argv)
+            export(args.export, args.from_, args.dtype, argv, args.noise_scale)
         else:
             train(args, argv)
     except ValueError as e:

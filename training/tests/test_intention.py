@@ -223,6 +223,23 @@ def test_a_run_resumes_exactly_and_exports(tmp_path, synthetic, monkeypatch):
     assert sorted(set(model.labels.merge.long().tolist())) == [0, 1, 2]
     for k, v in best["model"].items():
         torch.testing.assert_close(model.state_dict()[k], v, rtol=0, atol=0)
+    assert "noise_scale" not in model.config and model.noise_scale == 1.0
+    # --noise-scale: stored in the file's config; a drawn z is scaled by it, an explicit z is not.
+    half = tmp_path / "half.safetensors"
+    run(["--export", str(half), "--from", str(tmp_path / "full" / "best.pt"), "--noise-scale", "0.5"])
+    scaled = load_weights(half).double().eval()
+    assert scaled.config["noise_scale"] == 0.5
+    model = model.double().eval()
+    seed = torch.randn(2, 5, model.output_size, dtype=torch.float64)
+    torch.manual_seed(3)
+    z = model.sample_noise(2, seed)
+    torch.manual_seed(3)
+    got = scaled.closed_loop(seed, 4)
+    torch.testing.assert_close(got, model.closed_loop(seed, 4, eps=0.5 * z), rtol=0, atol=1e-12)
+    torch.testing.assert_close(scaled.closed_loop(seed, 4, eps=z), model.closed_loop(seed, 4, eps=z), rtol=0, atol=0)
+    assert train_intention.main(["--export", str(tmp_path / "bad.safetensors"), "--from",
+                                 str(tmp_path / "full" / "best.pt"), "--noise-scale", "-1"]) == 2
+    assert not (tmp_path / "bad.safetensors").exists()
 
 
 def test_bad_arguments_are_refused(tmp_path, synthetic):

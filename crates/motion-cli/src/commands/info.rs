@@ -134,8 +134,9 @@ fn text_summary(model: &MotionModel) -> String {
             line(
                 "noise",
                 format!(
-                    "z ~ N(0, I) of noise_dims {n} per sample; pose encoder {} units, decoder \
-                     layers start at its state + z",
+                    "z ~ N(0, s² I) of noise_dims {n} per sample, s = noise_scale {}; pose \
+                     encoder {} units, decoder layers start at its state + z",
+                    c.noise_scale.unwrap_or(1.0),
                     c.hidden.saturating_sub(n)
                 ),
             );

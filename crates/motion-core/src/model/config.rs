@@ -78,6 +78,11 @@ pub struct ModelConfig {
     /// units).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub noise_dims: Option<usize>,
+    /// Standard deviation `s` of the noise drawn per sample, `z ~ N(0, s² I)` (`intention` only;
+    /// absent = 1, the paper's `N(0, I)`): an inference-time choice stored with the weights, as a
+    /// GAN's truncation. Training always draws `N(0, I)`; an explicit `z` is used as given.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub noise_scale: Option<f32>,
     /// Units of the intention forecaster's encoder and decoder GRUs (`intention` only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub label_hidden: Option<usize>,
@@ -139,6 +144,8 @@ pub mod limits {
     pub const INTENTIONS: usize = 10_000;
     /// Look-ahead of the intention model (frames).
     pub const LOOKAHEAD: usize = 10_000;
+    /// The intention model's `noise_scale`: 0 ..= this.
+    pub const NOISE_SCALE: f32 = 100.0;
     /// Values of one row's window of intention probabilities, `lookahead * intentions`.
     pub const WINDOW_VALUES: usize = 1 << 20;
     /// Frames per second: 1 ..= this.
@@ -266,6 +273,14 @@ impl ModelConfig {
                 "intention needs 0 < noise_dims < hidden, got noise_dims {noise}, hidden {}",
                 self.hidden
             ));
+        }
+        if let Some(scale) = self.noise_scale {
+            if !(0.0..=limits::NOISE_SCALE).contains(&scale) {
+                return Err(format!(
+                    "noise_scale {scale} is not in [0, {}]",
+                    limits::NOISE_SCALE
+                ));
+            }
         }
         for (field, value) in [
             ("label_hidden", self.label_hidden),
@@ -443,6 +458,7 @@ mod tests {
             dae_hidden: None,
             dae_layers: None,
             noise_dims: None,
+            noise_scale: None,
             label_hidden: None,
             intentions: None,
             clusters: None,

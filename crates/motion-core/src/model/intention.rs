@@ -36,7 +36,7 @@ use super::weights::{WeightStore, WeightsError};
 use crate::nn::{GruCell, GruConfig, GruConvention, GruScratch, Linear, LinearConfig};
 
 /// The sizes of an intention model, read from its config.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct IntentionConfig {
     /// Pose width `O` (used dims).
     pub outputs: usize,
@@ -46,6 +46,8 @@ pub struct IntentionConfig {
     pub layers: usize,
     /// Noise width `N` (`0 < N < H`).
     pub noise_dims: usize,
+    /// Standard deviation of a drawn `z` (`noise_scale`, 1 when absent).
+    pub noise_scale: f32,
     /// Units of the forecaster's GRUs `L`.
     pub label_hidden: usize,
     /// Intention labels `C`.
@@ -66,6 +68,7 @@ impl IntentionConfig {
             hidden: config.hidden,
             layers: config.layers,
             noise_dims: config.noise_dims.unwrap_or(0),
+            noise_scale: config.noise_scale.unwrap_or(1.0),
             label_hidden: config.label_hidden.unwrap_or(0),
             intentions: config.intentions.unwrap_or(0),
             clusters: config.clusters.unwrap_or(0),
@@ -305,13 +308,17 @@ impl Intention {
     }
 
     /// Starts `noise.len()` rows on a seed of `seed_len` frames: encoder states zeroed, each
-    /// row's `z` drawn once from its source (a seeded `N(0, I)` generator or a fixed vector).
+    /// row's `z` drawn once from its source (a seeded `N(0, s² I)` generator, `s` the file's
+    /// `noise_scale`, or a fixed vector used as given).
     pub fn begin(&self, state: &mut IntentionState, mut noise: Vec<NoiseSource>, seed_len: usize) {
         let batch = noise.len();
         assert!(batch <= state.capacity, "more rows than the state holds");
-        let nd = self.config.noise_dims;
+        let (nd, scale) = (self.config.noise_dims, self.config.noise_scale);
         for (source, z) in noise.iter_mut().zip(state.z.chunks_exact_mut(nd)) {
             source.fill(z);
+            if matches!(source, NoiseSource::Rng(_)) {
+                z.iter_mut().for_each(|v| *v *= scale);
+            }
         }
         state.seed_len = seed_len;
         state.forecast_last = 0;

@@ -41,6 +41,7 @@ impl ModelConfig {
             dae_hidden: dae.then_some(3000),
             dae_layers: dae.then_some(3),
             noise_dims: intention.then_some(32),
+            noise_scale: None,
             label_hidden: intention.then_some(128),
             intentions: intention.then_some(8),
             clusters: intention.then_some(32),
