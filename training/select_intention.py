@@ -109,8 +109,8 @@ def validation_speed(model: IntentionModel, windows, actions, samples: int, scal
             np.save(Path(tmp) / "s.npy", seed.numpy())
             cmd = [str(motion_cli), "score", "--pred", str(Path(tmp) / "p.npy"), "--seed", str(Path(tmp) / "s.npy"),
                    "--action", action, "--metric", "speed_ratio", "--json"]
-            if data_dir is not None:
-                cmd += ["--data", str(data_dir)]
+            if data_dir is not None:  # the dataset folder (h3.6m/dataset); motion-cli wants the root holding it
+                cmd += ["--data", str(Path(data_dir).resolve().parent.parent)]
             run = subprocess.run(cmd, capture_output=True, text=True)
             if run.returncode != 0:
                 raise RuntimeError(f"{motion_cli} score ({action}): {run.stderr.strip()}")
@@ -123,7 +123,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("checkpoints", type=Path, nargs="+")
     p.add_argument("--scales", default="1", help="noise scales of step 2, comma-separated (default: 1)")
     p.add_argument("--samples", type=int, default=5, help="samples per validation window (default 5)")
-    p.add_argument("--data-dir", type=Path, default=None)
+    p.add_argument("--data-dir", type=Path, default=None,
+                   help="the H3.6M dataset folder (ROOT/h3.6m/dataset; default: $MOTION_DATA_DIR's)")
     p.add_argument("--motion-cli", type=Path, default=Path("target/release/motion-cli"),
                    help="the motion-cli binary that scores the speed ratios (default: target/release/motion-cli)")
     args = p.parse_args(argv)
