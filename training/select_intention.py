@@ -60,38 +60,40 @@ def load_model(path: Path) -> IntentionModel:
 
 
 @torch.no_grad()
-def validation_ndms(model: IntentionModel, windows, databases: dict[str, torch.Tensor], samples: int,
+def forecasts(model: IntentionModel, windows, action: str, samples: int, scale: float, horizon: int):
+    """``(seeds, frames)`` of ``action``'s validation windows, each seed repeated ``samples`` times with ``z = scale ·
+    N(0, I)`` (seeded by ``NDMS_NOISE_SEED``): full frames ``[W·samples, 50, F]`` and ``[W·samples, horizon, F]``."""
+    full = np.stack([w.frames for w in windows if w.action == action])
+    seed = torch.from_numpy(np.repeat(full[:, : h36m.SEED_FRAMES], samples, 0))
+    z = scale * torch.randn(len(seed), model.noise_dims, generator=torch.Generator().manual_seed(NDMS_NOISE_SEED))
+    pred = model.norm.unnormalize(model.closed_loop(model.norm.normalize(seed.float()), horizon, eps=z)).double()
+    return seed, pred
+
+
+@torch.no_grad()
+def validation_ndms(model: IntentionModel, windows, bank: wr.WordBank, actions: list[str], samples: int,
                     scale: float) -> dict[str, np.ndarray]:
-    """Per action: NDMS per 0.4 s bin of ``samples`` forecasts of each of its windows (module doc); ``databases``
-    holds each action's S5 words (``word_realism.words`` of its files, stride 1, f64)."""
+    """Per action: NDMS per 0.4 s bin of ``samples`` forecasts of each of its windows (module doc); ``bank`` holds
+    each action's S5 words (stride 1, f64), in the order of ``actions``."""
     out = {}
     prefix = wr.KAPPA - 1
-    for action, bank in databases.items():
-        full = np.stack([w.frames for w in windows if w.action == action])
-        seed = torch.from_numpy(np.repeat(full[:, : h36m.SEED_FRAMES], samples, 0))
-        z = scale * torch.randn(len(seed), model.noise_dims, generator=torch.Generator().manual_seed(NDMS_NOISE_SEED))
-        pred = model.norm.unnormalize(model.closed_loop(model.norm.normalize(seed.float()), 100, eps=z)).double()
+    for index, action in enumerate(actions):
+        seed, pred = forecasts(model, windows, action, samples, scale, 100)
         joined = torch.cat([seed[:, -prefix - 1 :], pred], 1)  # the root integrates from one frame before the words
         q = wr.words(wr.world_positions(joined))[:, 1:]  # [forecasts, 100, D]: word k ends at forecast frame k
         flat = q.flatten(0, 1)
-        d2 = (bank * bank).sum(-1)[None] - 2.0 * flat @ bank.T
-        scores = wr.similarity(flat, bank[d2.argmin(-1)]).view(q.shape[0], q.shape[1]).mean(0)
+        scores = wr.similarity(flat, bank.nearest(flat, index)).view(q.shape[0], q.shape[1]).mean(0)
         out[action] = scores.view(-1, WORDS_PER_BIN).mean(-1).numpy()
     return out
 
 
-def s5_databases(dataset_dir, actions) -> dict[str, torch.Tensor]:
-    """Each action's S5 words (stride 1, f64); actions without an S5 file are left out."""
-    out = {}
-    for a in actions:
-        seqs = [h36m.downsample(h36m.read_sequence(p)) for k in (1, 2)
-                if (p := h36m.sequence_path(dataset_dir, 5, a, k)) is not None]
-        if seqs:
-            out[a] = torch.cat([wr.words(wr.world_positions(torch.from_numpy(s)[None]))[0] for s in seqs])
-    return out
+def s5_bank(dataset_dir, actions: list[str]) -> wr.WordBank:
+    """The S5 words (stride 1, f64) of each of ``actions`` (each must have an S5 file), in that order."""
+    return wr.WordBank([[h36m.downsample(h36m.read_sequence(p)) for k in (1, 2)
+                         if (p := h36m.sequence_path(dataset_dir, 5, a, k)) is not None] for a in actions],
+                       stride=1, dtype=torch.float64)
 
 
-@torch.no_grad()
 def validation_speed(model: IntentionModel, windows, actions, samples: int, scale: float, motion_cli: Path,
                      data_dir) -> dict[str, float]:
     """Per action: the lowest ``motion-cli score`` speed ratio over its windows 0-2 … 8-12 s of ``samples`` 12 s
@@ -100,12 +102,8 @@ def validation_speed(model: IntentionModel, windows, actions, samples: int, scal
     out = {}
     with tempfile.TemporaryDirectory() as tmp:
         for action in actions:
-            full = np.stack([w.frames for w in windows if w.action == action])
-            seed = torch.from_numpy(np.repeat(full[:, : h36m.SEED_FRAMES], samples, 0))
-            z = scale * torch.randn(len(seed), model.noise_dims,
-                                    generator=torch.Generator().manual_seed(NDMS_NOISE_SEED))
-            pred = model.norm.unnormalize(model.closed_loop(model.norm.normalize(seed.float()), LONG_HORIZON, eps=z))
-            np.save(Path(tmp) / "p.npy", pred.double().numpy())
+            seed, pred = forecasts(model, windows, action, samples, scale, LONG_HORIZON)
+            np.save(Path(tmp) / "p.npy", pred.numpy())
             np.save(Path(tmp) / "s.npy", seed.numpy())
             cmd = [str(motion_cli), "score", "--pred", str(Path(tmp) / "p.npy"), "--seed", str(Path(tmp) / "s.npy"),
                    "--action", action, "--metric", "speed_ratio", "--json"]
@@ -136,14 +134,14 @@ def main(argv: list[str] | None = None) -> int:
             raise ValueError(f"{args.motion_cli}: no motion-cli binary (cargo build --release -p motion-cli)")
         models = {path: load_model(path) for path in args.checkpoints}
         windows = h36m.validation_windows(args.data_dir, h36m.ACTIONS, 4)
-        databases = s5_databases(args.data_dir or h36m.default_dataset_dir(), [a for a in h36m.ACTIONS
-                                                                             if any(w.action == a for w in windows)])
+        actions = [a for a in h36m.ACTIONS if any(w.action == a for w in windows)]
+        bank = s5_bank(args.data_dir or h36m.default_dataset_dir(), actions)
     except (OSError, ValueError, KeyError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
 
     def ndms(model, scale):
-        per_action = validation_ndms(model, windows, databases, args.samples, scale)
+        per_action = validation_ndms(model, windows, bank, actions, args.samples, scale)
         return float(np.mean([b[NDMS_BINS].mean() for b in per_action.values()]))
 
     first = {path: ndms(m, 1.0) for path, m in models.items()}

@@ -88,11 +88,12 @@ def similarity(a: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
 
 
 class WordBank:
-    """The normalized words (every ``stride`` frames) of real sequences, per action: ``words[a]`` ``[N_a, D]``
-    float32. ``sequences[a]`` are full exp-map frames ``[T, 99]`` at 25 Hz (or normalized model frames with
-    ``unnormalize``)."""
+    """The normalized words (every ``stride`` frames) of real sequences, per action: ``words[a]`` ``[N_a, D]`` of
+    ``dtype`` (float32 for training; float64 for an exact search). ``sequences[a]`` are full exp-map frames ``[T, 99]``
+    at 25 Hz (or normalized model frames with ``unnormalize``)."""
 
-    def __init__(self, sequences: list[list[np.ndarray]], unnormalize=None, stride: int = BANK_STRIDE):
+    def __init__(self, sequences: list[list[np.ndarray]], unnormalize=None, stride: int = BANK_STRIDE,
+                 dtype: torch.dtype = torch.float32):
         self.words: list[torch.Tensor | None] = []
         with torch.no_grad():
             for seqs in sequences:
@@ -103,7 +104,7 @@ class WordBank:
                     full = torch.from_numpy(np.ascontiguousarray(s)).double()
                     if unnormalize is not None:
                         full = unnormalize(full.float()).double()
-                    parts.append(words(world_positions(full[None]), stride)[0].float())
+                    parts.append(words(world_positions(full[None]), stride)[0].to(dtype))
                 self.words.append(torch.cat(parts) if parts else None)
         self.sq = [None if w is None else (w * w).sum(-1) for w in self.words]
 
@@ -116,7 +117,7 @@ class WordBank:
         bank = self.words[action]
         if bank is None:
             raise ValueError(f"the word bank has no words of action {action}")
-        q = queries.detach().float()
+        q = queries.detach().to(bank.dtype)
         d2 = self.sq[action][None] - 2.0 * q @ bank.T
         return bank[d2.argmin(-1)]
 

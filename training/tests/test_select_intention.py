@@ -19,7 +19,7 @@ def skeleton_or_skip():
 def test_a_forecast_that_is_the_truth_scores_one_in_every_bin_and_a_model_less():
     frames = walking_frames(260)
     window = data.ValidationWindow(action="walking", subaction=1, start=40, frames=frames[40:190])
-    bank = wr.words(wr.world_positions(torch.from_numpy(frames)[None]))[0]
+    bank = wr.WordBank([[frames]], stride=1, dtype=torch.float64)
     model = small_model()
     model.norm.set_stats(torch.zeros(99, dtype=torch.float64), torch.ones(99, dtype=torch.float64))
     real = model.closed_loop
@@ -30,11 +30,11 @@ def test_a_forecast_that_is_the_truth_scores_one_in_every_bin_and_a_model_less()
         return truth.expand(seed.shape[0], -1, -1).to(seed.dtype)
 
     model.closed_loop = the_truth
-    bins = select_intention.validation_ndms(model, [window], {"walking": bank}, samples=2, scale=1.0)["walking"]
+    bins = select_intention.validation_ndms(model, [window], bank, ["walking"], samples=2, scale=1.0)["walking"]
     assert bins.shape == (10,)
     np.testing.assert_allclose(bins, 1.0, atol=1e-9)
     model.closed_loop = real
-    got = select_intention.validation_ndms(model, [window], {"walking": bank}, samples=2, scale=0.5)["walking"]
+    got = select_intention.validation_ndms(model, [window], bank, ["walking"], samples=2, scale=0.5)["walking"]
     assert ((got >= 0) & (got < 0.99)).all()
 
 

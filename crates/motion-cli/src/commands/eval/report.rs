@@ -261,13 +261,13 @@ pub struct RealMotionMeans {
 impl RealMotionMeans {
     /// The means of one real-motion NDMS per action.
     pub fn of(scores: &[Option<&NdmsScores>]) -> Self {
-        let all: Option<Vec<&NdmsScores>> = scores.iter().copied().collect();
-        let all = all.filter(|a| !a.is_empty()).unwrap_or_default();
-        let mean = |pick: &dyn Fn(&NdmsScores) -> Option<f64>| {
-            let values: Vec<f64> = all.iter().filter_map(|s| pick(s)).collect();
-            (!all.is_empty() && values.len() == all.len())
-                .then(|| values.iter().sum::<f64>() / values.len() as f64)
-        };
+        // Every action must have the row; one missing leaves the means `None` (and no bins).
+        let all: Vec<&NdmsScores> = scores
+            .iter()
+            .copied()
+            .collect::<Option<_>>()
+            .unwrap_or_default();
+        let mean = |pick: &dyn Fn(&NdmsScores) -> Option<f64>| mean_of_all(&all, pick);
         let bins = all.first().map_or(0, |s| s.bins.len());
         Self {
             ndms: mean(&|s| Some(s.mean)),
@@ -295,18 +295,21 @@ pub struct Means {
     pub apd: Option<f64>,
 }
 
+/// The mean of `pick` over `items`, `None` unless every item has a finite value (and there is one).
+fn mean_of_all<T>(items: &[&T], pick: &dyn Fn(&T) -> Option<f64>) -> Option<f64> {
+    let values: Vec<f64> = items
+        .iter()
+        .filter_map(|s| pick(s).filter(|v| v.is_finite()))
+        .collect();
+    (values.len() == items.len() && !values.is_empty())
+        .then(|| values.iter().sum::<f64>() / values.len() as f64)
+}
+
 impl Means {
     /// The means of `scores` (one per action); a number missing or not finite in any action
     /// leaves its mean `None`.
     pub fn of(scores: &[&ActionScores]) -> Self {
-        let mean = |pick: &dyn Fn(&ActionScores) -> Option<f64>| {
-            let values: Vec<f64> = scores
-                .iter()
-                .filter_map(|s| pick(s).filter(|v| v.is_finite()))
-                .collect();
-            (values.len() == scores.len() && !values.is_empty())
-                .then(|| values.iter().sum::<f64>() / values.len() as f64)
-        };
+        let mean = |pick: &dyn Fn(&ActionScores) -> Option<f64>| mean_of_all(scores, pick);
         let bins = scores.first().map_or(0, |s| s.ndms.bins.len());
         Means {
             npss_reference: mean(&|s| Some(s.npss_reference.whole)),
