@@ -162,7 +162,13 @@ pub fn benches(c: &mut Criterion) {
                         b.iter(|| {
                             pool.install(|| {
                                 sgemm_panels::gemm_panels(
-                                    BATCH, &x, inputs, &panels, &mut y, outputs, false,
+                                    BATCH,
+                                    &x,
+                                    inputs,
+                                    &panels,
+                                    &mut y,
+                                    outputs,
+                                    sgemm_panels::Init::Zero,
                                 )
                             });
                             black_box(y[0])

@@ -76,6 +76,27 @@ impl MatMul {
         }
     }
 
+    /// `Y = X Wᵀ + bias` (the same `bias [outputs]` added to every row), by the path the batch
+    /// size picks. The panel GEMM adds the bias as it stores its sums; the other paths write the
+    /// bias into `Y` and accumulate. Panics as [`MatMul::run`] does, and if `bias` is shorter
+    /// than `outputs`.
+    pub fn run_bias(&self, x: &[f32], w: &PackedMatrix, bias: &[f32], y: &mut [f32]) {
+        assert!(bias.len() >= self.outputs, "bias too short");
+        if self.batch > row_kernel_max_batch(w) && self.check(x, w, y) {
+            if let Wide::Panels(panels) = w.wide() {
+                let init = sgemm_panels::Init::Bias(bias);
+                let (b, xs, ys) = (self.batch, self.x_stride, self.y_stride);
+                sgemm_panels::gemm_panels(b, x, xs, panels, y, ys, init);
+                return;
+            }
+        }
+        for b in 0..self.batch {
+            let row = &mut y[b * self.y_stride..b * self.y_stride + self.outputs];
+            row.copy_from_slice(&bias[..self.outputs]);
+        }
+        self.run(x, w, y, true);
+    }
+
     /// [`MatMul::run`] through the row kernels whatever the batch (benchmarks compare paths).
     pub fn run_rows(&self, x: &[f32], w: &PackedMatrix, y: &mut [f32], accumulate: bool) {
         if !self.check(x, w, y) {
@@ -290,7 +311,7 @@ impl MatMul {
                 panels,
                 y,
                 self.y_stride,
-                accumulate,
+                sgemm_panels::Init::from_accumulate(accumulate),
             ),
             (_, Some(rows)) => self.sgemm_threads(x, rows, y, accumulate),
             _ => unreachable!("a matrix without panels has f32 rows"),
@@ -564,6 +585,29 @@ mod tests {
                             assert_product(name, &mm, &x, &w, &init, &y, accumulate);
                         }
                     }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn run_bias_adds_the_bias_row_on_every_path() {
+        // Batches on the row kernels and on the GEMM (panels, or matrixmultiply without them),
+        // strided rows whose gaps must stay as they were.
+        for (seed, &(inputs, outputs)) in [(37, 11), (512, 54), (100, 300)].iter().enumerate() {
+            let values = data(outputs * inputs, 40 + seed as u64);
+            let bias = data(outputs, 50 + seed as u64);
+            for w in matrices(&values, outputs, inputs) {
+                for batch in [1, 5, 17, 64] {
+                    let mm = MatMul::dense(batch, inputs, outputs).strided(inputs + 3, outputs + 2);
+                    let x = data(batch * (inputs + 3), 60 + seed as u64);
+                    let mut init = data(batch * (outputs + 2), 70);
+                    let mut y = init.clone();
+                    mm.run_bias(&x, &w, &bias, &mut y);
+                    for row in init.chunks_exact_mut(outputs + 2) {
+                        row[..outputs].copy_from_slice(&bias);
+                    }
+                    assert_product("run_bias", &mm, &x, &w, &init, &y, true);
                 }
             }
         }

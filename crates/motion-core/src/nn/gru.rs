@@ -149,12 +149,9 @@ impl GruCell {
         scratch: &mut GruScratch,
     ) {
         let g = 3 * self.config.hidden;
-        for row in scratch.gi[..batch * g].chunks_exact_mut(g) {
-            row.copy_from_slice(&self.bias_ih);
-        }
         MatMul::dense(batch, self.config.inputs, g)
             .strided(x_stride, g)
-            .run(x, &self.weight_ih, &mut scratch.gi, true);
+            .run_bias(x, &self.weight_ih, &self.bias_ih, &mut scratch.gi);
     }
 
     /// One full step: `h ← GRU(x, h)` for `batch` rows (`x` contiguous `[batch, I]`, `h [batch, H]`).
@@ -191,20 +188,21 @@ impl GruCell {
             &mut h[..batch * hid],
             &mut gh[..batch * g],
         );
-        for row in gh.chunks_exact_mut(g) {
-            row.copy_from_slice(&self.bias_hh);
-        }
+        let (bias_rz, bias_n) = self.bias_hh.split_at(2 * hid);
         // r and z first (rows 0..2H of U).
-        MatMul::dense(batch, hid, 2 * hid)
-            .strided(hid, g)
-            .run(h, &self.weight_hh_rz, gh, true);
+        MatMul::dense(batch, hid, 2 * hid).strided(hid, g).run_bias(
+            h,
+            &self.weight_hh_rz,
+            bias_rz,
+            gh,
+        );
         match self.config.convention {
             GruConvention::PyTorch => {
-                MatMul::dense(batch, hid, hid).strided(hid, g).run(
+                MatMul::dense(batch, hid, hid).strided(hid, g).run_bias(
                     h,
                     &self.weight_hh_n,
+                    bias_n,
                     &mut gh[2 * hid..],
-                    true,
                 );
                 gates::pytorch_state_update(gi, gh, h, batch, hid);
             }
@@ -212,11 +210,11 @@ impl GruCell {
                 // The candidate from U_n (r ⊙ h).
                 let rh = &mut rh[..batch * hid];
                 gates::reset_times_hidden(gi, gh, h, rh, batch, hid);
-                MatMul::dense(batch, hid, hid).strided(hid, g).run(
+                MatMul::dense(batch, hid, hid).strided(hid, g).run_bias(
                     rh,
                     &self.weight_hh_n,
+                    bias_n,
                     &mut gh[2 * hid..],
-                    true,
                 );
                 gates::paper_state_update(gi, gh, h, batch, hid);
             }

@@ -59,9 +59,6 @@ impl Linear {
     /// `y[b] = W x[b] + bias` for `batch` contiguous rows of `x [batch, in]` into `y [batch, out]`.
     pub fn forward(&self, x: &[f32], batch: usize, y: &mut [f32]) {
         let out = self.config.outputs;
-        for row in y[..batch * out].chunks_exact_mut(out) {
-            row.copy_from_slice(&self.bias);
-        }
-        MatMul::dense(batch, self.config.inputs, out).run(x, &self.weight, y, true);
+        MatMul::dense(batch, self.config.inputs, out).run_bias(x, &self.weight, &self.bias, y);
     }
 }

@@ -21,8 +21,8 @@ pub struct LstmCell {
     config: LstmConfig,
     weight_ih: PackedMatrix,
     weight_hh: PackedMatrix,
-    bias_ih: Vec<f32>,
-    bias_hh: Vec<f32>,
+    /// `bias_ih + bias_hh`, the one bias of the step's gate pre-activations.
+    bias: Vec<f32>,
 }
 
 /// Per-step work buffer of an LSTM cell for up to `capacity` rows.
@@ -49,12 +49,13 @@ impl LstmCell {
         config: LstmConfig,
     ) -> Result<Self, WeightsError> {
         let (i, h) = (config.inputs, config.hidden);
+        let bias_ih: Vec<f32> = store.tensor(&format!("{prefix}.bias_ih"), &[4 * h])?;
+        let bias_hh: Vec<f32> = store.tensor(&format!("{prefix}.bias_hh"), &[4 * h])?;
         Ok(Self {
             config,
             weight_ih: PackedMatrix::load(store, &format!("{prefix}.weight_ih"), 4 * h, i)?,
             weight_hh: PackedMatrix::load(store, &format!("{prefix}.weight_hh"), 4 * h, h)?,
-            bias_ih: store.tensor(&format!("{prefix}.bias_ih"), &[4 * h])?,
-            bias_hh: store.tensor(&format!("{prefix}.bias_hh"), &[4 * h])?,
+            bias: bias_ih.iter().zip(&bias_hh).map(|(a, b)| a + b).collect(),
         })
     }
 
@@ -65,7 +66,8 @@ impl LstmCell {
 
     /// Number of trainable parameters.
     pub fn parameter_count(&self) -> usize {
-        self.weight_ih.len() + self.weight_hh.len() + self.bias_ih.len() + self.bias_hh.len()
+        // Two stored biases (`bias_ih`, `bias_hh`) of 4H each.
+        self.weight_ih.len() + self.weight_hh.len() + 2 * self.bias.len()
     }
 
     /// One step for `batch` rows: `x [batch, I]`, hidden `h` and cell `c` (`[batch, H]`) updated in place.
@@ -80,12 +82,7 @@ impl LstmCell {
         let hid = self.config.hidden;
         let g = 4 * hid;
         let gates = &mut scratch.gates[..batch * g];
-        for row in gates.chunks_exact_mut(g) {
-            for ((o, bi), bh) in row.iter_mut().zip(&self.bias_ih).zip(&self.bias_hh) {
-                *o = bi + bh;
-            }
-        }
-        MatMul::dense(batch, self.config.inputs, g).run(x, &self.weight_ih, gates, true);
+        MatMul::dense(batch, self.config.inputs, g).run_bias(x, &self.weight_ih, &self.bias, gates);
         MatMul::dense(batch, hid, g).run(h, &self.weight_hh, gates, true);
         // Element-wise half with the branch-free exponential of `gates` (vectorizes; within
         // 2.4e-7 of f64, see `gates::exp_fast`).

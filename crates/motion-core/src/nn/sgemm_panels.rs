@@ -39,6 +39,30 @@ const PARALLEL_MIN_WORK: usize = 1 << 21;
 /// Minimum rows per thread when splitting.
 const PARALLEL_MIN_ROWS: usize = 2 * TILE_ROWS;
 
+/// What one register tile adds its sums to (its first pass of inputs: [`Init`] with the bias
+/// already offset to the tile's first column; later passes `Load`).
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy)]
+enum TileInit {
+    Zero,
+    Load,
+    Bias(*const f32),
+}
+
+#[cfg(target_arch = "x86_64")]
+impl TileInit {
+    /// The tile init of pass `pc` (inputs from `pc` on) for columns from `first`.
+    fn of(init: Init, pc: usize, first: usize) -> Self {
+        match init {
+            _ if pc > 0 => TileInit::Load,
+            Init::Zero => TileInit::Zero,
+            Init::Accumulate => TileInit::Load,
+            // `wrapping_add`: a fully masked-off AVX-512 register may start past the bias.
+            Init::Bias(bias) => TileInit::Bias(bias.as_ptr().wrapping_add(first)),
+        }
+    }
+}
+
 /// One cache line of packed weights (keeps every panel row 64-byte aligned for the loads).
 #[derive(Debug, Clone, Copy)]
 #[repr(C, align(64))]
@@ -125,13 +149,37 @@ pub fn panels_in_use() -> bool {
     matches!(super::simd::active(), SimdPath::Avx512 | SimdPath::Avx2)
 }
 
-/// `Y = X Wᵀ` (`accumulate = false`) or `Y += X Wᵀ` (`accumulate = true`) for `batch` rows of
+/// What the sums `X Wᵀ` of a product are added to.
+#[derive(Debug, Clone, Copy)]
+pub enum Init<'a> {
+    /// Nothing: `Y = X Wᵀ`.
+    Zero,
+    /// `Y` itself: `Y += X Wᵀ`.
+    Accumulate,
+    /// One row `bias [outputs]`, the same for every row of `Y`: `Y = X Wᵀ + bias`, without
+    /// writing the bias into `Y` first (at batch 256 those copies and the reads of `Y` they cause
+    /// were 3 % of a GRU-d step).
+    Bias(&'a [f32]),
+}
+
+impl Init<'_> {
+    /// `Accumulate` if `accumulate`, else `Zero` (the `accumulate` flag of [`super::gemm::MatMul::run`]).
+    pub fn from_accumulate(accumulate: bool) -> Self {
+        if accumulate {
+            Init::Accumulate
+        } else {
+            Init::Zero
+        }
+    }
+}
+
+/// `Y = X Wᵀ` plus what `init` says (nothing, `Y` itself, or a bias row) for `batch` rows of
 /// `X [batch, w.inputs()]` (row stride `x_stride`) into `Y [batch, w.outputs()]` (row stride
 /// `y_stride`). Columns of `Y` past `w.outputs()` are not touched.
 ///
 /// Splits over the current rayon pool's threads when the product is large. Panics if a slice is
-/// too short for the layout or if rows of `Y` would overlap (`y_stride < outputs`), both
-/// programming errors.
+/// too short for the layout (a bias shorter than `w.outputs()` included) or if rows of `Y` would
+/// overlap (`y_stride < outputs`), all programming errors.
 pub fn gemm_panels(
     batch: usize,
     x: &[f32],
@@ -139,10 +187,10 @@ pub fn gemm_panels(
     w: &PanelMatrix,
     y: &mut [f32],
     y_stride: usize,
-    accumulate: bool,
+    init: Init,
 ) {
     let path = super::simd::active();
-    gemm_panels_with(path, batch, x, x_stride, w, y, y_stride, accumulate);
+    gemm_panels_with(path, batch, x, x_stride, w, y, y_stride, init);
 }
 
 /// [`gemm_panels`] on the kernel of `path` whatever the selected one (tests and benchmarks);
@@ -156,12 +204,12 @@ pub fn gemm_panels_on(
     w: &PanelMatrix,
     y: &mut [f32],
     y_stride: usize,
-    accumulate: bool,
+    init: Init,
 ) -> Result<(), super::simd::SimdError> {
     if !path.supported() {
         return Err(super::simd::SimdError::Unsupported(path));
     }
-    gemm_panels_with(path, batch, x, x_stride, w, y, y_stride, accumulate);
+    gemm_panels_with(path, batch, x, x_stride, w, y, y_stride, init);
     Ok(())
 }
 
@@ -174,11 +222,14 @@ fn gemm_panels_with(
     w: &PanelMatrix,
     y: &mut [f32],
     y_stride: usize,
-    accumulate: bool,
+    init: Init,
 ) {
     let (inputs, outputs) = (w.inputs, w.outputs);
     if batch == 0 || outputs == 0 {
         return;
+    }
+    if let Init::Bias(bias) = init {
+        assert!(bias.len() >= outputs, "bias too short");
     }
     assert!(
         x.len() >= (batch - 1) * x_stride + inputs,
@@ -210,14 +261,12 @@ fn gemm_panels_with(
                 let (y_chunk, rest) = y_rest.split_at_mut(y_len);
                 y_rest = rest;
                 let x_chunk = &x[start * x_stride..];
-                s.spawn(move |_| {
-                    serial(path, n, x_chunk, x_stride, w, y_chunk, y_stride, accumulate)
-                });
+                s.spawn(move |_| serial(path, n, x_chunk, x_stride, w, y_chunk, y_stride, init));
                 start += n;
             }
         });
     } else {
-        serial(path, batch, x, x_stride, w, y, y_stride, accumulate);
+        serial(path, batch, x, x_stride, w, y, y_stride, init);
     }
 }
 
@@ -238,15 +287,18 @@ fn serial(
     w: &PanelMatrix,
     y: &mut [f32],
     y_stride: usize,
-    accumulate: bool,
+    init: Init,
 ) {
     #[cfg(not(target_arch = "x86_64"))]
     let _ = path; // panels are an x86-64 kernel; other targets run the portable product
     let (inputs, outputs) = (w.inputs, w.outputs);
     if inputs == 0 {
-        if !accumulate {
-            for b in 0..batch {
-                y[b * y_stride..b * y_stride + outputs].fill(0.0);
+        for b in 0..batch {
+            let row = &mut y[b * y_stride..b * y_stride + outputs];
+            match init {
+                Init::Zero => row.fill(0.0),
+                Init::Accumulate => {}
+                Init::Bias(bias) => row.copy_from_slice(&bias[..outputs]),
             }
         }
         return;
@@ -260,19 +312,19 @@ fn serial(
                 // SAFETY: the path is selected only on a CPU with AVX-512F, and the caller
                 // checked that every row of `x` and `y` the layout addresses lies inside the
                 // slices (`y` exclusively borrowed).
-                unsafe { avx512::blocked(batch, x, x_stride, w, y, y_stride, accumulate, kc, mc) };
+                unsafe { avx512::blocked(batch, x, x_stride, w, y, y_stride, init, kc, mc) };
                 return;
             }
             SimdPath::Avx2 => {
                 let mc = block_len(batch, avx2::mc_max(kc), avx2::TILE_ROWS);
                 // SAFETY: as above, with AVX2 and FMA.
-                unsafe { avx2::blocked(batch, x, x_stride, w, y, y_stride, accumulate, kc, mc) };
+                unsafe { avx2::blocked(batch, x, x_stride, w, y, y_stride, init, kc, mc) };
                 return;
             }
             _ => {}
         }
     }
-    portable(batch, x, x_stride, w, y, y_stride, accumulate);
+    portable(batch, x, x_stride, w, y, y_stride, init);
 }
 
 /// Plain loops over the packed layout (machines without AVX-512F; also a layout check in tests).
@@ -283,7 +335,7 @@ fn portable(
     w: &PanelMatrix,
     y: &mut [f32],
     y_stride: usize,
-    accumulate: bool,
+    init: Init,
 ) {
     let (inputs, outputs) = (w.inputs, w.outputs);
     let data = w.data();
@@ -303,8 +355,12 @@ fn portable(
             let first = p * PANEL_WIDTH;
             let width = PANEL_WIDTH.min(outputs - first);
             let yr = &mut y[b * y_stride + first..b * y_stride + first + width];
-            for (o, a) in yr.iter_mut().zip(acc) {
-                *o = if accumulate { *o + a } else { a };
+            for (j, (o, a)) in yr.iter_mut().zip(acc).enumerate() {
+                *o = match init {
+                    Init::Zero => a,
+                    Init::Accumulate => *o + a,
+                    Init::Bias(bias) => bias[first + j] + a,
+                };
             }
         }
     }
@@ -312,7 +368,7 @@ fn portable(
 
 #[cfg(target_arch = "x86_64")]
 mod avx512 {
-    use super::{PanelMatrix, PANEL_WIDTH, TILE_ROWS};
+    use super::{Init, PanelMatrix, TileInit, PANEL_WIDTH, TILE_ROWS};
     use std::arch::x86_64::*;
 
     /// Registers per panel row.
@@ -332,7 +388,7 @@ mod avx512 {
         w: &PanelMatrix,
         y: &mut [f32],
         y_stride: usize,
-        accumulate: bool,
+        init: Init,
         kc_max: usize,
         mc_max: usize,
     ) {
@@ -343,7 +399,6 @@ mod avx512 {
         let mut pc = 0;
         while pc < inputs {
             let kc = kc_max.min(inputs - pc);
-            let load_c = accumulate || pc > 0;
             let mut ic = 0;
             while ic < batch {
                 let mc = mc_max.min(batch - ic);
@@ -372,7 +427,8 @@ mod avx512 {
                         unsafe {
                             let c = y_ptr.add((ic + ir) * y_stride + first);
                             let a = x_block.as_ptr().add(ir * x_stride + pc);
-                            tile_rows(m, kc, a, x_stride, b, c, y_stride, load_c, masks);
+                            let init = TileInit::of(init, pc, first);
+                            tile_rows(m, kc, a, x_stride, b, c, y_stride, init, masks);
                         }
                         ir += m;
                     }
@@ -405,13 +461,13 @@ mod avx512 {
         b: *const f32,
         c: *mut f32,
         ldc: usize,
-        load_c: bool,
+        init: TileInit,
         masks: [__mmask16; VECS],
     ) {
         macro_rules! by_rows {
             ($($n:literal)*) => {
                 match m {
-                    $($n => unsafe { tile::<$n>(kc, a, lda, b, c, ldc, load_c, masks) },)*
+                    $($n => unsafe { tile::<$n>(kc, a, lda, b, c, ldc, init, masks) },)*
                     _ => unreachable!("tile rows out of range"),
                 }
             };
@@ -431,7 +487,7 @@ mod avx512 {
         b: *const f32,
         c: *mut f32,
         ldc: usize,
-        load_c: bool,
+        init: TileInit,
         masks: [__mmask16; VECS],
     ) {
         let mut acc = [[_mm512_setzero_ps(); VECS]; M];
@@ -459,10 +515,13 @@ mod avx512 {
                 unsafe {
                     // `wrapping_add`: a fully masked-off register may start past the end of `y`.
                     let p = c.wrapping_add(r * ldc + 16 * v);
-                    let out = if load_c {
-                        _mm512_add_ps(_mm512_maskz_loadu_ps(masks[v], p), s)
-                    } else {
-                        s
+                    let out = match init {
+                        TileInit::Zero => s,
+                        TileInit::Load => _mm512_add_ps(_mm512_maskz_loadu_ps(masks[v], p), s),
+                        TileInit::Bias(bias) => {
+                            let bias = bias.wrapping_add(16 * v);
+                            _mm512_add_ps(_mm512_maskz_loadu_ps(masks[v], bias), s)
+                        }
                     };
                     _mm512_mask_storeu_ps(p, masks[v], out);
                 }
@@ -476,7 +535,7 @@ mod avx512 {
 /// weight vectors + 1 broadcast).
 #[cfg(target_arch = "x86_64")]
 mod avx2 {
-    use super::{PanelMatrix, PANEL_WIDTH};
+    use super::{Init, PanelMatrix, TileInit, PANEL_WIDTH};
     use std::arch::x86_64::*;
 
     /// Rows of `X` per register tile.
@@ -509,7 +568,7 @@ mod avx2 {
         w: &PanelMatrix,
         y: &mut [f32],
         y_stride: usize,
-        accumulate: bool,
+        init: Init,
         kc_max: usize,
         mc_max: usize,
     ) {
@@ -520,7 +579,6 @@ mod avx2 {
         let mut pc = 0;
         while pc < inputs {
             let kc = kc_max.min(inputs - pc);
-            let load_c = accumulate || pc > 0;
             let mut ic = 0;
             while ic < batch {
                 let mc = mc_max.min(batch - ic);
@@ -559,7 +617,8 @@ mod avx2 {
                                 let b = data.add((p * inputs + pc) * PANEL_WIDTH + half * HALF);
                                 let c = y_ptr.add((ic + ir) * y_stride + first);
                                 let a = x_block.as_ptr().add(ir * x_stride + pc);
-                                tile_rows(m, kc, a, x_stride, b, c, y_stride, load_c, width);
+                                let init = TileInit::of(init, pc, first);
+                                tile_rows(m, kc, a, x_stride, b, c, y_stride, init, width);
                             }
                         }
                         ir += m;
@@ -582,13 +641,13 @@ mod avx2 {
         b: *const f32,
         c: *mut f32,
         ldc: usize,
-        load_c: bool,
+        init: TileInit,
         width: usize,
     ) {
         macro_rules! by_rows {
             ($($n:literal)*) => {
                 match m {
-                    $($n => unsafe { tile::<$n>(kc, a, lda, b, c, ldc, load_c, width) },)*
+                    $($n => unsafe { tile::<$n>(kc, a, lda, b, c, ldc, init, width) },)*
                     _ => unreachable!("tile rows out of range"),
                 }
             };
@@ -608,7 +667,7 @@ mod avx2 {
         b: *const f32,
         c: *mut f32,
         ldc: usize,
-        load_c: bool,
+        init: TileInit,
         width: usize,
     ) {
         let mut acc = [[_mm256_setzero_ps(); 2]; M];
@@ -655,10 +714,12 @@ mod avx2 {
                 if width == HALF {
                     for (v, &s) in row.iter().enumerate() {
                         let q = p.add(8 * v);
-                        let out = if load_c {
-                            _mm256_add_ps(_mm256_loadu_ps(q), s)
-                        } else {
-                            s
+                        let out = match init {
+                            TileInit::Zero => s,
+                            TileInit::Load => _mm256_add_ps(_mm256_loadu_ps(q), s),
+                            TileInit::Bias(bias) => {
+                                _mm256_add_ps(_mm256_loadu_ps(bias.add(8 * v)), s)
+                            }
                         };
                         _mm256_storeu_ps(q, out);
                     }
@@ -668,7 +729,11 @@ mod avx2 {
                     _mm256_storeu_ps(buf.as_mut_ptr().add(8), row[1]);
                     for (j, &v) in buf.iter().enumerate().take(width) {
                         let q = p.add(j);
-                        *q = if load_c { *q + v } else { v };
+                        *q = match init {
+                            TileInit::Zero => v,
+                            TileInit::Load => *q + v,
+                            TileInit::Bias(bias) => *bias.add(j) + v,
+                        };
                     }
                 }
             }
@@ -695,7 +760,17 @@ mod tests {
             .collect()
     }
 
-    /// `y0 (+)= X Wᵀ` in f64 (for the rows/columns the layout addresses).
+    /// The three [`Init`]s as test cases (the bias drawn per case).
+    #[derive(Debug, Clone, Copy)]
+    enum Mode {
+        Zero,
+        Accumulate,
+        Bias,
+    }
+    const MODES: [Mode; 3] = [Mode::Zero, Mode::Accumulate, Mode::Bias];
+
+    /// `X Wᵀ` plus `y0` or `bias` (per `mode`) in f64, for the rows/columns the layout addresses;
+    /// `y0` elsewhere.
     #[allow(clippy::too_many_arguments)]
     fn reference(
         batch: usize,
@@ -706,7 +781,8 @@ mod tests {
         w: &[f32],
         y0: &[f32],
         y_stride: usize,
-        accumulate: bool,
+        mode: Mode,
+        bias: &[f32],
     ) -> Vec<f64> {
         let mut y: Vec<f64> = y0.iter().map(|&v| v as f64).collect();
         for b in 0..batch {
@@ -715,7 +791,11 @@ mod tests {
                     .map(|k| x[b * x_stride + k] as f64 * w[o * inputs + k] as f64)
                     .sum();
                 let t = &mut y[b * y_stride + o];
-                *t = if accumulate { *t + d } else { d };
+                *t = match mode {
+                    Mode::Zero => d,
+                    Mode::Accumulate => *t + d,
+                    Mode::Bias => bias[o] as f64 + d,
+                };
             }
         }
         y
@@ -723,16 +803,22 @@ mod tests {
 
     /// Runs one case through `gemm_panels` and the kernel of every SIMD path the CPU has, and
     /// compares with f64.
-    fn check(batch: usize, inputs: usize, outputs: usize, pad: (usize, usize), accumulate: bool) {
+    fn check(batch: usize, inputs: usize, outputs: usize, pad: (usize, usize), mode: Mode) {
         let (x_stride, y_stride) = (inputs + pad.0, outputs + pad.1);
         let seed = (batch * 1_000_003 + inputs * 1009 + outputs) as u64;
         let x = data(batch.max(1) * x_stride, seed);
         let w = data(outputs * inputs, seed + 1);
         let y0 = data(batch.max(1) * y_stride, seed + 2);
+        let bias = data(outputs, seed + 3);
+        let init = match mode {
+            Mode::Zero => Init::Zero,
+            Mode::Accumulate => Init::Accumulate,
+            Mode::Bias => Init::Bias(&bias),
+        };
         let packed = PanelMatrix::pack(&w, outputs, inputs);
         assert_eq!((packed.outputs(), packed.inputs()), (outputs, inputs));
         let expect = reference(
-            batch, inputs, outputs, &x, x_stride, &w, &y0, y_stride, accumulate,
+            batch, inputs, outputs, &x, x_stride, &w, &y0, y_stride, mode, &bias,
         );
         // Sums of `inputs` products of values in [-1, 1): f32 rounding grows like sqrt(inputs).
         let tol = 2e-6 * (inputs as f64).sqrt().max(1.0) * 4.0;
@@ -745,16 +831,15 @@ mod tests {
         for (name, path) in kernels {
             let mut y = y0.clone();
             match path {
-                None => gemm_panels(batch, &x, x_stride, &packed, &mut y, y_stride, accumulate),
-                Some(p) => gemm_panels_on(
-                    p, batch, &x, x_stride, &packed, &mut y, y_stride, accumulate,
-                )
-                .unwrap(),
+                None => gemm_panels(batch, &x, x_stride, &packed, &mut y, y_stride, init),
+                Some(p) => {
+                    gemm_panels_on(p, batch, &x, x_stride, &packed, &mut y, y_stride, init).unwrap()
+                }
             }
             for (i, (&got, &want)) in y.iter().zip(&expect).enumerate() {
                 assert!(
                     (got as f64 - want).abs() <= tol * want.abs().max(1.0),
-                    "{name} batch {batch} in {inputs} out {outputs} pad {pad:?} acc {accumulate}: \
+                    "{name} batch {batch} in {inputs} out {outputs} pad {pad:?} {mode:?}: \
                      y[{i}] = {got}, expected {want}"
                 );
             }
@@ -766,7 +851,7 @@ mod tests {
         for &batch in &[1, 2, 13, 256, 257] {
             for &inputs in &[54, 216, 512, 1024] {
                 for &outputs in &[54, 1024, 1536] {
-                    check(batch, inputs, outputs, (0, 0), batch % 2 == 1);
+                    check(batch, inputs, outputs, (0, 0), MODES[batch % 3]);
                 }
             }
         }
@@ -789,8 +874,8 @@ mod tests {
             (9, 1027, 20),
         ] {
             for pad in [(0, 0), (3, 5), (16, 0)] {
-                for accumulate in [false, true] {
-                    check(batch, inputs, outputs, pad, accumulate);
+                for mode in MODES {
+                    check(batch, inputs, outputs, pad, mode);
                 }
             }
         }
@@ -808,7 +893,7 @@ mod tests {
                 .build()
                 .expect("thread pool");
             let mut y = vec![0.0; batch * outputs];
-            pool.install(|| gemm_panels(batch, &x, inputs, &w, &mut y, outputs, false));
+            pool.install(|| gemm_panels(batch, &x, inputs, &w, &mut y, outputs, Init::Zero));
             y
         };
         // Each row is computed by one thread in the same order either way: identical bits.
@@ -819,12 +904,22 @@ mod tests {
     fn sgemm_zero_inputs_and_empty_products() {
         let w = PanelMatrix::pack(&[], 5, 0);
         let mut y = vec![1.0; 10];
-        gemm_panels(2, &[], 0, &w, &mut y, 5, true);
+        gemm_panels(2, &[], 0, &w, &mut y, 5, Init::Accumulate);
         assert_eq!(y, vec![1.0; 10]);
-        gemm_panels(2, &[], 0, &w, &mut y, 5, false);
+        gemm_panels(2, &[], 0, &w, &mut y, 5, Init::Zero);
         assert_eq!(y, vec![0.0; 10]);
+        gemm_panels(
+            2,
+            &[],
+            0,
+            &w,
+            &mut y,
+            5,
+            Init::Bias(&[1.0, 2.0, 3.0, 4.0, 5.0]),
+        );
+        assert_eq!(y, [1.0, 2.0, 3.0, 4.0, 5.0].repeat(2));
         let w = PanelMatrix::pack(&[], 0, 3);
-        gemm_panels(2, &[0.0; 6], 3, &w, &mut [], 0, false);
+        gemm_panels(2, &[0.0; 6], 3, &w, &mut [], 0, Init::Zero);
         gemm_panels(
             0,
             &[],
@@ -832,7 +927,7 @@ mod tests {
             &PanelMatrix::pack(&[0.0; 6], 2, 3),
             &mut [],
             2,
-            false,
+            Init::Zero,
         );
     }
 
@@ -842,7 +937,7 @@ mod tests {
         let x = data(batch * inputs, 11);
         let w = PanelMatrix::pack(&data(outputs * inputs, 12), outputs, inputs);
         let mut y = vec![9.0; batch * y_stride];
-        gemm_panels(batch, &x, inputs, &w, &mut y, y_stride, false);
+        gemm_panels(batch, &x, inputs, &w, &mut y, y_stride, Init::Zero);
         for b in 0..batch {
             assert!(y[b * y_stride + outputs..(b + 1) * y_stride]
                 .iter()
