@@ -511,7 +511,8 @@ mod avx512 {
         }
         for (r, row) in acc.iter().enumerate() {
             for (v, &s) in row.iter().enumerate() {
-                // SAFETY: row `r` of the tile, columns selected by the mask, lie inside `y`.
+                // SAFETY: row `r` of the tile, columns selected by the mask, lie inside `y`, and
+                // a bias holds them (`gemm_panels` asserted its length).
                 unsafe {
                     // `wrapping_add`: a fully masked-off register may start past the end of `y`.
                     let p = c.wrapping_add(r * ldc + 16 * v);
@@ -708,7 +709,8 @@ mod avx2 {
             }
         }
         for (r, row) in acc.iter().enumerate() {
-            // SAFETY: row `r` of the tile, columns `0..width`, lie inside `y`.
+            // SAFETY: row `r` of the tile, columns `0..width`, lie inside `y`, and a bias holds
+            // them (`gemm_panels` asserted its length).
             unsafe {
                 let p = c.add(r * ldc);
                 if width == HALF {
