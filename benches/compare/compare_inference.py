@@ -37,6 +37,7 @@ import torch
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from ort_avx2 import Worker, make_avx2_copy  # noqa: E402
+from paired import paired_ratio  # noqa: E402
 from step_graph import (  # noqa: E402
     REPO,
     ClosedLoopStep,
@@ -119,20 +120,6 @@ def ort_avx2_runner(worker: Worker, onnx_path: str, threads: int, feeds_npz: str
 def best_on(med: dict[str, float], path: str) -> float:
     """Ours on one SIMD path: the default step, or the opt-in row split where it was timed."""
     return min(v for n, v in med.items() if n in (f"simd-{path}", f"simd-{path}-split"))
-
-
-def paired_ratio(times: dict[str, list[float]], num: tuple[str, ...], den: tuple[str, ...]) -> float:
-    """Median over repetitions of (best of ``num`` / best of ``den``) within each repetition.
-
-    The engines of one repetition run back to back, so a slow minute of a shared host slows both
-    sides of its ratio; the ratio of medians can pair one engine's quiet minute with the other's
-    busy one (on the 2-core VMs we measure on a cell moved by up to 40 % between runs that way).
-    """
-    def best(names: tuple[str, ...], rep: int) -> float:
-        return min(times[n][rep] for n in names if n in times)
-
-    reps = len(next(iter(times.values())))
-    return statistics.median(best(num, r) / best(den, r) for r in range(reps))
 
 
 def ours_runner(cli: str, weights: str, batch: int, threads: int, extra: tuple[str, ...] = ()):

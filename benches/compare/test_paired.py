@@ -1,10 +1,10 @@
-"""The statistics compare_inference.py reports (no engines run here)."""
+"""The paired ratios compare_inference.py reports (paired.py; no engines run here)."""
 import os
 import statistics
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from compare_inference import paired_ratio  # noqa: E402
+from paired import paired_ratio  # noqa: E402
 
 
 def test_paired_ratio_pairs_each_repetition_and_takes_the_better_variant():
