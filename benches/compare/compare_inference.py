@@ -273,10 +273,11 @@ def main() -> int:
                 best_ours = min(v for n, v in med.items() if n.startswith("ours"))
                 best_ort = min(v for n, v in med.items() if n.startswith("onnxruntime") and "avx2" not in n)
                 best_ort_avx2 = min((v for n, v in med.items() if n.startswith("onnxruntime-avx2")), default=None)
-                ort_for = {p: best_ort_avx2 if p == "avx2" and best_ort_avx2 else best_ort for p in simd_paths}
+                # Which ORT each path is compared with (held to AVX2 for `avx2` when timed).
                 stock = ("onnxruntime", "onnxruntime-1t")
                 held = ("onnxruntime-avx2", "onnxruntime-avx2-1t")
                 ort_names = {p: held if p == "avx2" and best_ort_avx2 else stock for p in simd_paths}
+                ort_for = {p: min(med[n] for n in ort_names[p] if n in med) for p in simd_paths}
                 best_torch = min(v for n, v in med.items() if n.startswith("pytorch"))
                 best_base = min((v for n, v in med.items() if n.startswith("baseline")), default=float("nan"))
                 row = {
