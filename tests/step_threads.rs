@@ -89,12 +89,30 @@ fn threaded_steps_allocate_nothing_and_shards_agree() {
             }
         }
         set_simd_path(SimdPath::best()).unwrap();
-        // Rows are independent: 3 shards of a batch of 100 give the frames of one piece.
-        let (mut one, mut three) = (started(&model, 100, 1), started(&model, 100, 3));
-        for _ in 0..30 {
-            let (a, b) = (one.step().unwrap().to_owned(), three.step().unwrap());
-            let diff = (&a - &b).iter().fold(0f32, |m, v| m.max(v.abs()));
-            assert!(diff <= 1e-5, "{arch:?}: shards differ by {diff}");
+        // Rows are independent: 3 shards of a batch of 100 give the frames of one piece, stepped
+        // from this thread (shards this long go to the crate's shard helpers, one thread here,
+        // so two shards queue on it) and from a thread of a rayon pool (its shards go to that
+        // pool); 2 shards of 16 rows (short: the global pool) likewise.
+        let inner = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap();
+        for (batch, shards) in [(100, 3), (16, 2)] {
+            let mut one = started(&model, batch, 1);
+            let mut outside = started(&model, batch, shards);
+            let mut inside = started(&model, batch, shards);
+            for _ in 0..30 {
+                let a = one.step().unwrap().to_owned();
+                let b = outside.step().unwrap().to_owned();
+                let c = inner.install(|| inside.step().unwrap().to_owned());
+                for (other, place) in [(b, "outside"), (c, "inside")] {
+                    let diff = (&a - &other).iter().fold(0f32, |m, v| m.max(v.abs()));
+                    assert!(
+                        diff <= 1e-5,
+                        "{arch:?}: {shards} shards of {batch} stepped {place} a pool differ by {diff}"
+                    );
+                }
+            }
         }
     }
 }

@@ -8,8 +8,10 @@
 //! [`BatchGenerator::new`], so a step allocates nothing of its own. At batch 1 the products are
 //! GEMVs and a step touches no heap at all (tested). Below twice [`SHARD_MIN_ROWS`] rows a step
 //! stays on the calling thread; from there on every shard but the first is handed to the rayon
-//! pool each step, and rayon allocates one small job record per handed shard (and
-//! `matrixmultiply`, which the portable path uses above batch 16, its packing buffers).
+//! pool each step (long shards to the crate's shard helpers, a pool of one thread fewer, so that
+//! no thread is left over to compete with the shards), and rayon allocates one small job record
+//! per handed shard (and `matrixmultiply`, which the portable path uses above batch 16, its
+//! packing buffers).
 //!
 //! Large batches are cut into **shards** of consecutive rows, one per rayon thread, each with its
 //! own recurrent state and buffers: a step is then one fork-join for the whole step instead of
@@ -41,6 +43,14 @@ use std::sync::Arc;
 /// win on the portable path and tie or lose on AVX2 and AVX-512, where the second shard's
 /// reading of the weights again costs as much as it saves.
 pub const SHARD_MIN_ROWS: usize = 8;
+/// Fewest multiply-adds per shard and step (the shard's rows times the model's parameters) for
+/// which a sharded step hands its other shards to the crate's shard helpers, one thread fewer
+/// than the pool, instead of the pool itself (see `nn::parallel::pool::shard_scope`): on a
+/// 2-vCPU AMD EPYC Zen 5 the helpers took the 99th percentile step of the GRU-d 2x512 at batch
+/// 16 (22 M per shard) from up to 2.06x its median to 1.11-1.40x, medians within the runs'
+/// spread, and the shipped VGRU-d at batch 256 (98 M) from 2.03-2.41x to 1.15-1.54x, but made
+/// the shipped VGRU-d at batch 16 (6 M, steps of about 70 µs) 5-25 % slower at the median.
+const SHARD_HELPERS_MIN_MACS: usize = 1 << 24;
 /// Smallest model whose steps run on a pool thread: below, no product is large enough to split.
 const POOL_STEP_MIN_PARAMETERS: usize = 1 << 19;
 
@@ -91,6 +101,9 @@ pub struct BatchGenerator {
     /// Run each (single-shard) step on a rayon pool thread, where the row kernels split their
     /// products over threads ([`set_row_split`](Self::set_row_split)).
     pool_step: bool,
+    /// Hand the shards after the first to the crate's shard helpers rather than the current
+    /// pool (long shards, see [`SHARD_HELPERS_MIN_MACS`]).
+    shard_helpers: bool,
     frame: Vec<f32>,
     out_full: Vec<f32>,
     body_steps: usize,
@@ -212,6 +225,7 @@ impl BatchGenerator {
             shards,
             row_split_possible,
             pool_step: false,
+            shard_helpers: shard_rows * model.parameter_count() >= SHARD_HELPERS_MIN_MACS,
             frame: vec![0.0; cfg.frame_dims],
             out_full: vec![0.0; batch * cfg.frame_dims],
             body_steps: 0,
@@ -462,14 +476,16 @@ impl BatchGenerator {
         } else {
             let chunk = self.shard_rows * model.config().frame_dims;
             // The calling thread advances the first shard itself and hands the others to the
-            // pool: one worker woken per extra shard, none for the caller (on a 2-vCPU VM,
+            // pool, or for long shards to the shard helpers (`SHARD_HELPERS_MIN_MACS`): one
+            // worker woken per extra shard, none for the caller (on a 2-vCPU VM,
             // `par_iter` from outside the pool, which parks the caller and wakes a worker per
             // shard, measured median 430 µs and p99 3.7 ms at batch 16 (GRU-d 2x512, AVX-512)
             // against 222 µs and p99 3.5 ms this way; the shipped VGRU-d p99 2,947 -> 209 µs).
+            let helpers = self.shard_helpers;
             let mut outs = self.out_full.chunks_mut(chunk);
             let mut shards = self.shards.iter_mut();
             if let (Some(first), Some(first_out)) = (shards.next(), outs.next()) {
-                crate::nn::parallel::pool::in_place_scope(|s| {
+                crate::nn::parallel::pool::shard_scope(helpers, |s| {
                     for (shard, out) in shards.zip(outs) {
                         s.spawn(move |_| {
                             crate::nn::parallel::serial(|| shard.advance(model, step, out))

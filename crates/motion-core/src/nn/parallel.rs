@@ -18,9 +18,53 @@ thread_local! {
 /// The thread pool the crate splits work over: rayon with the `parallel` feature.
 #[cfg(feature = "parallel")]
 pub(crate) mod pool {
-    pub(crate) use rayon::{
-        current_num_threads, current_thread_index, in_place_scope, join, prelude, scope,
-    };
+    pub(crate) use rayon::{current_num_threads, current_thread_index, join, prelude, scope};
+    use std::sync::OnceLock;
+
+    /// Runs `op` on the calling thread with a scope whose spawned jobs run on the threads that
+    /// share a sharded step with its caller (a batch's shards, see
+    /// [`crate::model::BatchGenerator`]): the caller advances one shard and the scope's jobs the
+    /// others.
+    ///
+    /// Called from a thread of a rayon pool, the jobs go to that pool (the caller is one of its
+    /// threads, and takes back a job no other thread has started). From any other thread (a
+    /// game's main loop, the CLI) they go to the current pool, or with `helpers` to the crate's
+    /// **shard helpers**: a pool of one thread fewer than the current pool's (created at the
+    /// first such call), so that the caller and the helpers together are as many threads as the
+    /// pool has. The whole pool leaves one thread more than there are shards: on a 2-vCPU AMD
+    /// EPYC Zen 5 (`motion-cli bench --steps 1000`, two shards, alternating runs) that spare
+    /// thread made 1 % of the long steps about twice the median (the 99th percentile at batch
+    /// 256 1.94-2.41x the median with the global pool of two threads, 1.14-1.54x with one
+    /// helper; GRU-d 2x512 and the shipped VGRU-d, f16, every SIMD path), while short steps
+    /// gained from it (the shipped VGRU-d at batch 16, about 70 µs a step, was 5-25 % slower
+    /// with one helper: a sleeping helper takes longer to wake than a spare thread still
+    /// spinning), so the caller chooses by the shard's size.
+    pub(crate) fn shard_scope<'scope, OP, R>(helpers: bool, op: OP) -> R
+    where
+        OP: FnOnce(&rayon::Scope<'scope>) -> R,
+    {
+        if helpers && current_thread_index().is_none() {
+            if let Some(pool) = shard_helpers() {
+                return pool.in_place_scope(op);
+            }
+        }
+        rayon::in_place_scope(op)
+    }
+
+    /// The shard helpers (`None` when their threads could not be started: the current pool
+    /// runs the shards then).
+    fn shard_helpers() -> Option<&'static rayon::ThreadPool> {
+        static HELPERS: OnceLock<Option<rayon::ThreadPool>> = OnceLock::new();
+        HELPERS
+            .get_or_init(|| {
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(current_num_threads().saturating_sub(1).max(1))
+                    .thread_name(|i| format!("motion-shard-{i}"))
+                    .build()
+                    .ok()
+            })
+            .as_ref()
+    }
 }
 
 /// The thread pool the crate splits work over: without the `parallel` feature, the calling
@@ -68,8 +112,9 @@ pub(crate) mod pool {
         op(&Scope(PhantomData))
     }
 
-    /// Runs `op` with a serial [`Scope`] (rayon's runs `op` on the calling thread).
-    pub(crate) fn in_place_scope<'scope, OP, R>(op: OP) -> R
+    /// Runs `op` with a serial [`Scope`] (the parallel build's hands the scope's jobs to the
+    /// threads sharing a sharded step).
+    pub(crate) fn shard_scope<'scope, OP, R>(_helpers: bool, op: OP) -> R
     where
         OP: FnOnce(&Scope<'scope>) -> R,
     {
