@@ -92,12 +92,13 @@ fn threaded_steps_allocate_nothing_and_shards_agree() {
         // Rows are independent: 3 shards of a batch of 100 give the frames of one piece, stepped
         // from this thread (shards this long go to the crate's shard helpers, one thread here,
         // so two shards queue on it) and from a thread of a rayon pool (its shards go to that
-        // pool); 2 shards of 16 rows (short: the global pool) likewise.
+        // pool); 2 shards of 8 rows (4 rows x about 2.7 M parameters, below the helpers'
+        // 2^24 multiply-adds: the global pool) likewise.
         let inner = rayon::ThreadPoolBuilder::new()
             .num_threads(2)
             .build()
             .unwrap();
-        for (batch, shards) in [(100, 3), (16, 2)] {
+        for (batch, shards) in [(100, 3), (8, 2)] {
             let mut one = started(&model, batch, 1);
             let mut outside = started(&model, batch, shards);
             let mut inside = started(&model, batch, shards);

@@ -45,11 +45,13 @@ use std::sync::Arc;
 pub const SHARD_MIN_ROWS: usize = 8;
 /// Fewest multiply-adds per shard and step (the shard's rows times the model's parameters) for
 /// which a sharded step hands its other shards to the crate's shard helpers, one thread fewer
-/// than the pool, instead of the pool itself (see `nn::parallel::pool::shard_scope`): on a
-/// 2-vCPU AMD EPYC Zen 5 the helpers took the 99th percentile step of the GRU-d 2x512 at batch
-/// 16 (22 M per shard) from up to 2.06x its median to 1.11-1.40x, medians within the runs'
-/// spread, and the shipped VGRU-d at batch 256 (98 M) from 2.03-2.41x to 1.15-1.54x, but made
-/// the shipped VGRU-d at batch 16 (6 M, steps of about 70 µs) 5-25 % slower at the median.
+/// than the pool, instead of the pool itself (see `nn::parallel::pool::shard_scope`). On a
+/// 2-vCPU AMD EPYC Zen 5 (`motion-cli bench --steps 1000`, two shards, f16 weights, every SIMD
+/// path, alternating runs against the whole pool) the helpers took the 99th percentile step of
+/// the GRU-d 2x512 at batch 16 (22 M per shard) from up to 2.06x its median to 1.11-1.40x,
+/// medians within the runs' spread, and the shipped VGRU-d at batch 256 (98 M) from 2.03-2.41x
+/// to 1.15-1.54x, but made the shipped VGRU-d at batch 16 (6 M, steps of about 70 µs) 5-25 %
+/// slower at the median.
 const SHARD_HELPERS_MIN_MACS: usize = 1 << 24;
 /// Smallest model whose steps run on a pool thread: below, no product is large enough to split.
 const POOL_STEP_MIN_PARAMETERS: usize = 1 << 19;

@@ -31,14 +31,11 @@ pub(crate) mod pool {
     /// game's main loop, the CLI) they go to the current pool, or with `helpers` to the crate's
     /// **shard helpers**: a pool of one thread fewer than the current pool's (created at the
     /// first such call), so that the caller and the helpers together are as many threads as the
-    /// pool has. The whole pool leaves one thread more than there are shards: on a 2-vCPU AMD
-    /// EPYC Zen 5 (`motion-cli bench --steps 1000`, two shards, alternating runs) that spare
-    /// thread made 1 % of the long steps about twice the median (the 99th percentile at batch
-    /// 256 1.94-2.41x the median with the global pool of two threads, 1.14-1.54x with one
-    /// helper; GRU-d 2x512 and the shipped VGRU-d, f16, every SIMD path), while short steps
-    /// gained from it (the shipped VGRU-d at batch 16, about 70 µs a step, was 5-25 % slower
-    /// with one helper: a sleeping helper takes longer to wake than a spare thread still
-    /// spinning), so the caller chooses by the shard's size.
+    /// pool has. The whole pool leaves one thread more than there are shards, which made 1 %
+    /// of long steps about twice the median, while short steps gain from it (a spare thread
+    /// still spinning picks a shard up sooner than a sleeping helper wakes), so the caller
+    /// chooses by the shard's size (the rule and its measurements:
+    /// `model::batch::SHARD_HELPERS_MIN_MACS`).
     pub(crate) fn shard_scope<'scope, OP, R>(helpers: bool, op: OP) -> R
     where
         OP: FnOnce(&rayon::Scope<'scope>) -> R,
