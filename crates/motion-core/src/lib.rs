@@ -82,6 +82,7 @@ pub mod derivatives;
 pub mod error;
 pub mod file_sets;
 pub mod formats;
+pub mod grounding;
 pub mod input_file;
 pub mod kinematics;
 pub mod model;

@@ -2,7 +2,9 @@
 //! [`Pose`]s (f32 glam, metres, root motion split) at whatever rate the engine ticks, with the
 //! action switchable mid-stream. It chains the three streaming pieces — closed-loop generation,
 //! [`PoseDecoder`] (root integration from the seed on) and [`PoseResampler`] (one model frame of
-//! look-ahead) — and allocates nothing per tick.
+//! look-ahead) — and allocates nothing per tick. Each model frame after the seed is grounded
+//! ([`crate::grounding`]: on the seed's floor, upright, feet planted) unless the character was
+//! made with [`GroundingConfig::off`].
 //!
 //! See the crate docs for a complete example.
 use std::sync::Arc;
@@ -13,8 +15,9 @@ use super::batch::Noise;
 use super::generate_error::GenerateError;
 use super::generator::Generator;
 use super::predictor::MotionModel;
+use crate::grounding::{Grounder, GroundingConfig, GroundingError};
 use crate::motion::{FrameScalar, RootEncoding};
-use crate::pose::{Pose, PoseDecoder};
+use crate::pose::{root_motion_between, Pose, PoseDecoder, RootMotion, METRES_PER_MM};
 use crate::resample::{PoseResampler, ResampleError};
 use crate::skeleton::{Skeleton, H36M_SOURCE_FPS};
 
@@ -31,6 +34,9 @@ pub enum CharacterError {
     /// The model's frames are on a skeleton this crate has no pose layout for.
     #[error("the model's skeleton {0:?} has no built-in pose layout (h36m-32 has)")]
     Skeleton(String),
+    /// The skeleton has no legs to ground.
+    #[error(transparent)]
+    Grounding(#[from] GroundingError),
 }
 
 /// A generator, a pose decoder and a resampler for one character (see the module docs).
@@ -39,14 +45,34 @@ pub struct Character {
     generator: Generator,
     decoder: PoseDecoder,
     resampler: PoseResampler,
+    grounder: Grounder,
+    /// The grounded pose of the last model frame.
+    grounded: Pose,
+    /// Its root motion (the next frame's deltas are taken against it).
+    previous: Option<RootMotion>,
+    /// Seconds per model frame.
+    frame_time: f32,
 }
 
 impl Character {
-    /// A character driven by `model` (weights shared between characters).
+    /// A character driven by `model` (weights shared between characters), grounded
+    /// ([`GroundingConfig::default`]).
     ///
     /// # Errors
     /// A model whose skeleton is not the H3.6M one.
     pub fn new(model: Arc<MotionModel>) -> Result<Character, CharacterError> {
+        Character::with_grounding(model, GroundingConfig::default())
+    }
+
+    /// A character driven by `model` whose frames are grounded as `grounding` says
+    /// ([`GroundingConfig::off`]: the model's raw motion).
+    ///
+    /// # Errors
+    /// A model whose skeleton is not the H3.6M one.
+    pub fn with_grounding(
+        model: Arc<MotionModel>,
+        grounding: GroundingConfig,
+    ) -> Result<Character, CharacterError> {
         let config = model.config();
         if config.skeleton != "h36m-32" {
             return Err(CharacterError::Skeleton(config.skeleton.clone()));
@@ -55,11 +81,21 @@ impl Character {
         // H3.6M root deltas are per 50 Hz source frame: a 25 Hz model frame spans 2.
         let step = ((H36M_SOURCE_FPS / config.fps).round() as usize).max(1);
         let resampler = PoseResampler::new(skeleton.len(), config.fps);
+        let grounder = Grounder::new(&skeleton, METRES_PER_MM as f32, grounding)?;
         Ok(Character {
+            frame_time: (1.0 / config.fps) as f32,
+            grounded: Pose::rest(skeleton.len()),
+            previous: None,
+            grounder,
             generator: Generator::new(model),
             decoder: PoseDecoder::new(skeleton, RootEncoding::Deltas, step),
             resampler,
         })
+    }
+
+    /// The grounding in force (floor, contacts, lean limit).
+    pub fn grounder(&self) -> &Grounder {
+        &self.grounder
     }
 
     /// The skeleton the poses are on (joint order of [`Pose::local_rotations`]).
@@ -84,19 +120,28 @@ impl Character {
         self.generator.start(seed, action, noise)?;
         self.decoder.reset();
         self.resampler.reset();
+        self.grounder.reset();
+        self.grounder.set_action(action);
+        self.previous = None;
         for row in seed.rows() {
-            let frame = row.as_slice();
-            match frame {
-                Some(frame) => {
-                    self.decoder.push(frame);
-                }
+            let pose = match row.as_slice() {
+                Some(frame) => self.decoder.push(frame),
                 None => {
                     let owned: Vec<T> = row.iter().copied().collect();
-                    self.decoder.push(&owned);
+                    self.decoder.push(&owned)
                 }
-            }
+            };
+            self.grounder
+                .observe_seed(pose.root_translation, &pose.local_rotations);
         }
-        self.resampler.push(self.decoder.pose())?;
+        let pose = ground(
+            &mut self.grounder,
+            &mut self.grounded,
+            &mut self.previous,
+            self.decoder.pose(),
+            self.frame_time,
+        );
+        self.resampler.push(pose)?;
         Ok(self.resampler.advance(0.0)?)
     }
 
@@ -127,17 +172,53 @@ impl Character {
     /// span all of it.
     pub fn advance(&mut self, dt: f64) -> Result<&Pose, CharacterError> {
         let (generator, decoder) = (&mut self.generator, &mut self.decoder);
+        let (grounder, grounded, previous) =
+            (&mut self.grounder, &mut self.grounded, &mut self.previous);
+        let frame_time = self.frame_time;
         self.resampler.advance_pulling(dt, |resampler| {
             let frame = generator.step()?;
-            resampler.push(decoder.push(frame))?;
+            let pose = decoder.push(frame);
+            resampler.push(ground(grounder, grounded, previous, pose, frame_time))?;
             Ok(())
         })
     }
 
-    /// Changes the action without re-seeding ([`Generator::set_action`]).
+    /// Changes the action without re-seeding ([`Generator::set_action`]); the lean limit
+    /// follows it.
     pub fn set_action(&mut self, action: &str, crossfade: usize) -> Result<(), CharacterError> {
-        Ok(self.generator.set_action(action, crossfade)?)
+        self.generator.set_action(action, crossfade)?;
+        self.grounder.set_action(Some(action));
+        Ok(())
     }
+}
+
+/// `decoded` grounded into `out` (its root motion against `previous`), or `decoded` itself when
+/// grounding is off. No allocation (`clone_from` reuses `out`'s buffer).
+fn ground<'a>(
+    grounder: &mut Grounder,
+    out: &'a mut Pose,
+    previous: &mut Option<RootMotion>,
+    decoded: &'a Pose,
+    frame_time: f32,
+) -> &'a Pose {
+    if !grounder.config().enabled {
+        return decoded;
+    }
+    out.root_translation = decoded.root_translation;
+    out.local_rotations
+        .copy_from_slice(&decoded.local_rotations);
+    grounder.ground(
+        &mut out.root_translation,
+        &mut out.local_rotations,
+        frame_time,
+    );
+    out.root_motion = root_motion_between(
+        out.root_translation.as_dvec3(),
+        out.local_rotations[0].as_dquat(),
+        *previous,
+    );
+    *previous = Some(out.root_motion);
+    out
 }
 
 #[cfg(test)]
@@ -160,7 +241,8 @@ mod tests {
             1..6 => 0.0,
             _ => 0.2 * ((t + d) as f32 * 0.3).sin(),
         });
-        let mut a = Character::new(Arc::clone(&model)).unwrap();
+        let raw = GroundingConfig::off;
+        let mut a = Character::with_grounding(Arc::clone(&model), raw()).unwrap();
         let start = a
             .start(seed.view(), Some("walking"), Noise::Seed(4))
             .unwrap()
@@ -168,7 +250,7 @@ mod tests {
         // The last seed frame's pose: root integrated over the seed (10 mm x 2 per 25 Hz frame).
         let walked = start.root_motion.ground_translation.length();
         assert!((walked - 0.19).abs() < 1e-4, "{walked}");
-        let mut b = Character::new(model).unwrap();
+        let mut b = Character::with_grounding(model, raw()).unwrap();
         b.start(seed.view(), Some("walking"), Noise::Seed(4))
             .unwrap();
         // 12 ticks of 1/60 s = 5 frames of 1/25 s: both clocks meet there.
@@ -206,5 +288,45 @@ mod tests {
             a.advance(-1.0),
             Err(CharacterError::Resample(ResampleError::BadStep(_)))
         ));
+    }
+
+    #[test]
+    fn a_grounded_character_stands_on_the_floor_and_ticks_like_the_raw_one() {
+        let model = fixture();
+        let seed = ndarray::Array2::<f32>::from_shape_fn((10, 99), |(t, d)| match d {
+            0 => 10.0,
+            1 => 30.0, // the raw root climbs 6 cm a frame
+            2..6 => 0.0,
+            _ => 0.2 * ((t + d) as f32 * 0.3).sin(),
+        });
+        let mut grounded = Character::new(Arc::clone(&model)).unwrap();
+        let mut raw = Character::with_grounding(model, GroundingConfig::off()).unwrap();
+        grounded
+            .start(seed.view(), Some("walking"), Noise::Seed(4))
+            .unwrap();
+        raw.start(seed.view(), Some("walking"), Noise::Seed(4))
+            .unwrap();
+        let skeleton = Arc::clone(grounded.skeleton());
+        let n = skeleton.len();
+        let (mut p, mut w) = (vec![glam::Vec3::ZERO; n], vec![glam::Quat::IDENTITY; n]);
+        let feet = grounded.grounder().body_parts().legs.clone();
+        let mut travelled = 0.0;
+        // Model-rate ticks: each pose is a grounded model frame (the fixture's random weights
+        // jump too far between frames for an interpolated pose to be checked this tightly).
+        for tick in 0..60 {
+            let pose = grounded.advance(1.0 / 25.0).unwrap();
+            pose.world_positions_into(&skeleton, &mut p, &mut w);
+            let lowest = feet
+                .iter()
+                .flat_map(|l| l.foot_points.iter().map(|&j| p[j].y))
+                .fold(f32::INFINITY, f32::min);
+            assert!(
+                lowest.abs() < 1e-3,
+                "tick {tick}: lowest foot point {lowest} m"
+            );
+            travelled += pose.root_motion.delta_translation.length();
+            raw.advance(1.0 / 25.0).unwrap();
+        }
+        assert!(travelled.is_finite());
     }
 }

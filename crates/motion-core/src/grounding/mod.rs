@@ -1,0 +1,460 @@
+//! Grounding: generated motion kept on a floor, upright, with planted feet — the one rule every
+//! front end applies (`Character`, `predict`, `render`, the C ABI, Bevy, web, Python), on by
+//! default and switchable off ([`GroundingConfig::enabled`]) so raw model output stays
+//! scorable.
+//!
+//! ## What it does to each frame after the seed, in this order
+//! 1. **Floor frame** ([`floor`]): a plane fitted to the seed's lowest foot points becomes
+//!    `y = 0` (rigid: the seed's own floor, levelled).
+//! 2. **Lean**: the torso vector (root → torso top, [`legs`]) is held within the action's limit
+//!    ([`lean_limit_deg`]: the 95th percentile of real H3.6M motion) by tilting the root about
+//!    the hips, softly ([`LEAN_SOFTNESS_DEG`] below the limit it starts to give).
+//! 3. **Height**: the root moves vertically so that the lowest foot point is on the floor (the
+//!    character is always supported; there are no jumps in the training data).
+//! 4. **Foot locking**: a foot is in contact while its lowest point is below
+//!    [`GroundingConfig::contact_height_m`] and its ankle moves slower than
+//!    [`GroundingConfig::contact_speed_m_s`] horizontally; from the first frame of a contact its
+//!    ankle is held over where it was, the foot's lowest point on the floor, by two-bone IK of
+//!    hip and knee (the foot keeps its world orientation), released when the model lifts or speeds up the foot or the leg cannot reach,
+//!    blending back to the model's foot over [`GroundingConfig::release_s`].
+//!
+//! Lengths are metres in the floor frame, +y up; thresholds hold for any rig because the
+//! skeleton's units are given ([`Grounder::new`]'s `metres_per_unit`).
+//!
+//! ```
+//! use glam::{Quat, Vec3};
+//! use motion_core::grounding::{Grounder, GroundingConfig};
+//! use motion_core::Skeleton;
+//!
+//! let skeleton = Skeleton::h36m();
+//! let mut grounder = Grounder::new(&skeleton, 1e-3, GroundingConfig::default())?;
+//! let rest = vec![Quat::IDENTITY; skeleton.len()];
+//! for _ in 0..10 {
+//!     grounder.observe_seed(Vec3::new(0.0, 1.0, 0.0), &rest); // the seed's feet: 0.1 m up
+//! }
+//! let (mut root, mut rotations) = (Vec3::new(0.0, 1.5, 0.0), rest.clone()); // floats 0.5 m
+//! grounder.ground(&mut root, &mut rotations, 0.04);
+//! assert!((root.y - 0.897).abs() < 1e-3); // toes back on the seed's floor, now y = 0
+//! # Ok::<(), motion_core::grounding::GroundingError>(())
+//! ```
+pub mod floor;
+mod ik;
+pub mod legs;
+
+use glam::{Quat, Vec3};
+
+use crate::skeleton::Skeleton;
+pub use floor::Floor;
+pub use legs::{find_body_parts, BodyParts, Leg, LegsError};
+
+/// The lean limit starts to give this far below its value (degrees).
+pub const LEAN_SOFTNESS_DEG: f32 = 6.0;
+
+/// The 95th percentile of the torso lean (degrees from +y, in the floor frame of each window's
+/// seed) of real H3.6M motion per action, every subject, 12 s windows every 1 s (measured by
+/// `motion_metrics::plausibility::world::real_statistics`; a data test recomputes it).
+pub const LEAN_P95_DEG: [(&str, f32); 15] = [
+    ("directions", 30.0),
+    ("discussion", 30.0),
+    ("eating", 30.0),
+    ("greeting", 30.0),
+    ("phoning", 30.0),
+    ("posing", 30.0),
+    ("purchases", 30.0),
+    ("sitting", 30.0),
+    ("sittingdown", 30.0),
+    ("smoking", 30.0),
+    ("takingphoto", 30.0),
+    ("waiting", 30.0),
+    ("walkingdog", 30.0),
+    ("walking", 30.0),
+    ("walkingtogether", 30.0),
+];
+
+/// The lean limit of `action` (degrees): its [`LEAN_P95_DEG`], or the largest of them for an
+/// unknown action or none.
+pub fn lean_limit_deg(action: Option<&str>) -> f32 {
+    action
+        .and_then(|a| LEAN_P95_DEG.iter().find(|(name, _)| *name == a))
+        .map(|&(_, v)| v)
+        .unwrap_or_else(|| LEAN_P95_DEG.iter().map(|&(_, v)| v).fold(0.0, f32::max))
+}
+
+/// Why grounding cannot run on a rig.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum GroundingError {
+    /// The rig's legs were not found ([`legs`]'s rule).
+    #[error("grounding: {0}")]
+    Legs(#[from] LegsError),
+    /// A unit scale that is not a positive finite number.
+    #[error("grounding: metres per skeleton unit must be positive and finite, got {0:e}")]
+    Units(f32),
+}
+
+/// How grounding treats generated frames (see the module docs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GroundingConfig {
+    /// Whether to ground at all (`false`: frames pass unchanged).
+    pub enabled: bool,
+    /// Lean limit in degrees; `None`: the current action's [`lean_limit_deg`].
+    pub max_lean_deg: Option<f32>,
+    /// A foot below this above the floor can be in contact (metres).
+    pub contact_height_m: f32,
+    /// A foot whose ankle moves slower than this horizontally can be in contact (m/s).
+    pub contact_speed_m_s: f32,
+    /// Whether feet in contact are held by IK.
+    pub foot_locking: bool,
+    /// Seconds over which a released foot blends back to the model's.
+    pub release_s: f32,
+}
+
+impl Default for GroundingConfig {
+    fn default() -> Self {
+        GroundingConfig {
+            enabled: true,
+            max_lean_deg: None,
+            contact_height_m: 0.05,
+            contact_speed_m_s: 0.5,
+            foot_locking: true,
+            release_s: 0.12,
+        }
+    }
+}
+
+impl GroundingConfig {
+    /// Grounding switched off (research scoring of raw model output).
+    pub fn off() -> Self {
+        GroundingConfig {
+            enabled: false,
+            ..GroundingConfig::default()
+        }
+    }
+}
+
+/// One foot's lock.
+#[derive(Debug, Clone, Copy, Default)]
+struct FootState {
+    /// Where the ankle is held.
+    lock: Option<Vec3>,
+    /// 1 while held, falling to 0 while released.
+    weight: f32,
+    /// The model's ankle on the previous frame (floor frame, after the height correction).
+    previous: Option<Vec3>,
+    /// Whether the model's foot is in contact on the last frame.
+    contact: bool,
+}
+
+/// Streaming grounding of one character (see the module docs): observe the seed's frames, then
+/// ground each later frame in place. No allocation per grounded frame.
+#[derive(Debug, Clone)]
+pub struct Grounder {
+    config: GroundingConfig,
+    parts: BodyParts,
+    parents: Vec<Option<usize>>,
+    offsets: Vec<Vec3>,
+    lean_limit: f32,
+    seed_points: Vec<Vec3>,
+    floor: Option<Floor>,
+    positions: Vec<Vec3>,
+    rotations: Vec<Quat>,
+    feet: [FootState; 2],
+}
+
+/// Seed frames kept for the floor fit (the last ones).
+const MAX_SEED_POINTS: usize = 4096;
+
+impl Grounder {
+    /// A grounder for `skeleton`, whose offsets are in units of `metres_per_unit` metres (1e-3
+    /// for the millimetre skeletons of this crate).
+    ///
+    /// # Errors
+    /// A rig without two legs ([`legs`]) or a bad unit scale.
+    pub fn new(
+        skeleton: &Skeleton,
+        metres_per_unit: f32,
+        config: GroundingConfig,
+    ) -> Result<Grounder, GroundingError> {
+        if !(metres_per_unit.is_finite() && metres_per_unit > 0.0) {
+            return Err(GroundingError::Units(metres_per_unit));
+        }
+        let parts = find_body_parts(skeleton)?;
+        let n = skeleton.len();
+        Ok(Grounder {
+            lean_limit: config.max_lean_deg.unwrap_or_else(|| lean_limit_deg(None)),
+            config,
+            parts,
+            parents: skeleton.joints().iter().map(|j| j.parent).collect(),
+            offsets: skeleton
+                .joints()
+                .iter()
+                .map(|j| Vec3::from_array(j.offset.map(|v| v as f32)) * metres_per_unit)
+                .collect(),
+            seed_points: Vec::with_capacity(256),
+            floor: None,
+            positions: vec![Vec3::ZERO; n],
+            rotations: vec![Quat::IDENTITY; n],
+            feet: [FootState::default(); 2],
+        })
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &GroundingConfig {
+        &self.config
+    }
+
+    /// The legs and torso found on the rig.
+    pub fn body_parts(&self) -> &BodyParts {
+        &self.parts
+    }
+
+    /// Forgets the seed, the floor and the locks (a new seed follows).
+    pub fn reset(&mut self) {
+        self.seed_points.clear();
+        self.floor = None;
+        self.feet = [FootState::default(); 2];
+    }
+
+    /// Sets the lean limit for `action` ([`lean_limit_deg`]) unless the configuration fixes one.
+    pub fn set_action(&mut self, action: Option<&str>) {
+        self.lean_limit = self
+            .config
+            .max_lean_deg
+            .unwrap_or_else(|| lean_limit_deg(action));
+    }
+
+    /// The lean limit in force (degrees).
+    pub fn lean_limit(&self) -> f32 {
+        self.lean_limit
+    }
+
+    /// Feeds one seed frame (root world position in metres, local rotations; joint 0's is the
+    /// root's world rotation): its lowest foot point joins the floor fit.
+    ///
+    /// # Panics
+    /// If `rotations` does not have one entry per joint.
+    pub fn observe_seed(&mut self, root: Vec3, rotations: &[Quat]) {
+        self.forward_kinematics(root, rotations);
+        let lowest = self.lowest_foot_point();
+        if self.seed_points.len() == MAX_SEED_POINTS {
+            self.seed_points.remove(0);
+        }
+        self.seed_points.push(lowest);
+        self.floor = None;
+    }
+
+    /// The floor fitted on the seed frames seen so far (a level floor through the origin
+    /// without any).
+    pub fn floor(&mut self) -> Floor {
+        if let Some(floor) = self.floor {
+            return floor;
+        }
+        let floor = Floor::fit(&self.seed_points).unwrap_or_else(|| Floor::level_at(0.0));
+        self.floor = Some(floor);
+        floor
+    }
+
+    /// Which feet (in [`BodyParts::legs`] order) were in contact on the last grounded frame.
+    pub fn contacts(&self) -> [bool; 2] {
+        [self.feet[0].contact, self.feet[1].contact]
+    }
+
+    /// Moves a root pose into the floor frame only (the rigid part of grounding: seed frames that
+    /// are written beside grounded ones).
+    pub fn level(&mut self, root: &mut Vec3, root_rotation: &mut Quat) {
+        if !self.config.enabled {
+            return;
+        }
+        let floor = self.floor();
+        (*root, *root_rotation) = floor.root_to_floor_frame(*root, *root_rotation);
+    }
+
+    /// Grounds one frame after the seed in place: `root` (world position of joint 0, metres) and
+    /// `rotations` (local rotations, joint 0's the world one); `dt` seconds since the previous
+    /// frame. Nothing changes when grounding is off.
+    ///
+    /// # Panics
+    /// If `rotations` does not have one entry per joint.
+    pub fn ground(&mut self, root: &mut Vec3, rotations: &mut [Quat], dt: f32) {
+        if !self.config.enabled {
+            return;
+        }
+        assert_eq!(
+            rotations.len(),
+            self.offsets.len(),
+            "one rotation per joint"
+        );
+        if !(root.is_finite() && rotations.iter().all(|q| q.is_finite())) {
+            return;
+        }
+        // 1. Floor frame.
+        self.level(root, &mut rotations[0]);
+        // 2. Lean.
+        if let Some(top) = self.parts.torso_top {
+            self.forward_kinematics(*root, rotations);
+            let torso = self.positions[top] - self.positions[0];
+            if torso.length_squared() > 0.0 {
+                let lean = torso
+                    .normalize()
+                    .dot(Vec3::Y)
+                    .clamp(-1.0, 1.0)
+                    .acos()
+                    .to_degrees();
+                let held = soft_limit(lean, self.lean_limit, LEAN_SOFTNESS_DEG);
+                let axis = torso.cross(Vec3::Y);
+                if held < lean && axis.length_squared() > 1e-12 {
+                    let tilt = Quat::from_axis_angle(axis.normalize(), (lean - held).to_radians());
+                    rotations[0] = (tilt * rotations[0]).normalize();
+                }
+            }
+        }
+        // 3. Height: the lowest foot point on the floor.
+        self.forward_kinematics(*root, rotations);
+        let lift = -self.lowest_foot_point().y;
+        root.y += lift;
+        for p in &mut self.positions {
+            p.y += lift;
+        }
+        // 4. Foot locking.
+        let dt = if dt.is_finite() && dt > 0.0 {
+            dt
+        } else {
+            1.0 / 25.0
+        };
+        for side in 0..2 {
+            self.foot(side, rotations, dt);
+        }
+    }
+
+    /// Contact detection and IK of one leg (positions are this frame's, before any IK).
+    fn foot(&mut self, side: usize, rotations: &mut [Quat], dt: f32) {
+        let leg = &self.parts.legs[side];
+        let ankle = self.positions[leg.ankle];
+        let height = leg
+            .foot_points
+            .iter()
+            .map(|&j| self.positions[j].y)
+            .fold(f32::INFINITY, f32::min);
+        let state = &mut self.feet[side];
+        let speed = state.previous.map_or(0.0, |p| {
+            let d = ankle - p;
+            (d.x * d.x + d.z * d.z).sqrt() / dt
+        });
+        state.previous = Some(ankle);
+        state.contact =
+            height < self.config.contact_height_m && speed < self.config.contact_speed_m_s;
+        if !self.config.foot_locking {
+            return;
+        }
+        let hip = self.positions[leg.hip];
+        let reach =
+            (self.positions[leg.knee] - hip).length() + (ankle - self.positions[leg.knee]).length();
+        match state.lock {
+            Some(lock) if state.weight >= 1.0 => {
+                if !state.contact || (lock - hip).length() > reach * 1.02 {
+                    state.weight = 1.0 - dt / self.config.release_s.max(1e-3);
+                }
+            }
+            Some(_) => {
+                state.weight -= dt / self.config.release_s.max(1e-3);
+            }
+            None => {}
+        }
+        if state.lock.is_some() && state.weight <= 0.0 {
+            state.lock = None;
+        }
+        if state.lock.is_none() && state.contact {
+            state.lock = Some(ankle);
+            state.weight = 1.0;
+        }
+        let Some(lock) = state.lock else {
+            return;
+        };
+        // Held: the ankle over its lock, the foot's lowest point on the floor (the foot keeps
+        // the model's world orientation, so its points move with the ankle); blended back to
+        // the model's while released.
+        let w = state.weight.clamp(0.0, 1.0);
+        let target = Vec3::new(
+            ankle.x + (lock.x - ankle.x) * w,
+            ankle.y - height.max(0.0) * w,
+            ankle.z + (lock.z - ankle.z) * w,
+        );
+        if (target - ankle).length_squared() < 1e-12 {
+            return;
+        }
+        let (hip_j, knee_j, ankle_j) = (leg.hip, leg.knee, leg.ankle);
+        let toe = *leg.foot_points.last().expect("the ankle at least");
+        let parent = self.parents[hip_j].map_or(Quat::IDENTITY, |p| self.rotations[p]);
+        let forward = {
+            let f = self.positions[toe] - ankle;
+            if f.length_squared() > 1e-8 {
+                f
+            } else {
+                self.rotations[0] * Vec3::Z
+            }
+        };
+        let chain = ik::Chain {
+            a: hip,
+            b: self.positions[knee_j],
+            c: ankle,
+            parent_rotation: parent,
+            hip_rotation: self.rotations[hip_j],
+            knee_rotation: self.rotations[knee_j],
+            forward,
+        };
+        let ankle_world = self.rotations[ankle_j];
+        let (hip_local, knee_local) = ik::solve(&chain, rotations[knee_j], target);
+        rotations[hip_j] = hip_local;
+        rotations[knee_j] = knee_local;
+        // Keep the foot's world orientation.
+        let knee_world = parent * hip_local * knee_local;
+        rotations[ankle_j] = (knee_world.inverse() * ankle_world).normalize();
+    }
+
+    /// World positions and rotations of every joint into the scratch.
+    fn forward_kinematics(&mut self, root: Vec3, rotations: &[Quat]) {
+        assert_eq!(
+            rotations.len(),
+            self.offsets.len(),
+            "one rotation per joint"
+        );
+        for j in 0..rotations.len() {
+            match self.parents[j] {
+                None => {
+                    self.rotations[j] = rotations[j];
+                    self.positions[j] = root;
+                }
+                Some(p) => {
+                    self.rotations[j] = self.rotations[p] * rotations[j];
+                    self.positions[j] = self.positions[p] + self.rotations[p] * self.offsets[j];
+                }
+            }
+        }
+    }
+
+    /// The lowest of both feet's points in the scratch positions.
+    fn lowest_foot_point(&self) -> Vec3 {
+        let mut lowest = Vec3::new(0.0, f32::INFINITY, 0.0);
+        for leg in &self.parts.legs {
+            for &j in &leg.foot_points {
+                if self.positions[j].y < lowest.y {
+                    lowest = self.positions[j];
+                }
+            }
+        }
+        lowest
+    }
+}
+
+/// `x` below `limit - softness` unchanged, then compressed smoothly so it never passes `limit`.
+fn soft_limit(x: f32, limit: f32, softness: f32) -> f32 {
+    let knee = limit - softness;
+    if x <= knee || softness <= 0.0 {
+        x.min(limit)
+    } else {
+        knee + softness * ((x - knee) / softness).tanh()
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,204 @@
+use super::*;
+
+const DT: f32 = 0.04;
+
+/// An H3.6M standing pose with both knees bent by `knee` radians (hip flexed, ankle flexed back
+/// by half of it each, so the shin leans and the foot stays flat).
+fn crouch(knee: f32) -> Vec<Quat> {
+    let mut q = vec![Quat::IDENTITY; Skeleton::h36m().len()];
+    for (hip, kn, ankle) in [(1, 2, 3), (6, 7, 8)] {
+        q[hip] = Quat::from_rotation_x(-knee / 2.0);
+        q[kn] = Quat::from_rotation_x(knee);
+        q[ankle] = Quat::from_rotation_x(-knee / 2.0);
+    }
+    q
+}
+
+fn grounder() -> Grounder {
+    Grounder::new(&Skeleton::h36m(), 1e-3, GroundingConfig::default()).unwrap()
+}
+
+/// World positions of `rotations` at `root` (metres).
+fn positions(root: Vec3, rotations: &[Quat]) -> Vec<Vec3> {
+    let skeleton = Skeleton::h36m();
+    let mut world = vec![Quat::IDENTITY; rotations.len()];
+    let mut out = vec![Vec3::ZERO; rotations.len()];
+    for (j, joint) in skeleton.joints().iter().enumerate() {
+        let offset = Vec3::from_array(joint.offset.map(|v| v as f32)) * 1e-3;
+        match joint.parent {
+            None => {
+                world[j] = rotations[j];
+                out[j] = root;
+            }
+            Some(p) => {
+                world[j] = world[p] * rotations[j];
+                out[j] = out[p] + world[p] * offset;
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn a_planted_foot_stays_within_a_centimetre_while_the_body_slides_and_floats() {
+    let mut g = grounder();
+    let pose = crouch(0.5);
+    for _ in 0..25 {
+        g.observe_seed(Vec3::new(0.0, 0.95, 0.0), &pose);
+    }
+    // The model slides the body 0.15 m forward and floats it 0.4 m up over 1 s, feet still.
+    let mut planted: Option<[Vec3; 2]> = None;
+    let mut worst = 0.0f32;
+    for t in 0..25 {
+        let s = t as f32 / 24.0;
+        let (mut root, mut rotations) = (Vec3::new(0.0, 0.95 + 0.4 * s, 0.15 * s), pose.clone());
+        g.ground(&mut root, &mut rotations, DT);
+        assert_eq!(g.contacts(), [true, true], "frame {t}");
+        let p = positions(root, &rotations);
+        let feet = [p[3], p[8]];
+        let first = *planted.get_or_insert(feet);
+        for side in 0..2 {
+            worst = worst.max((feet[side] - first[side]).length());
+        }
+        let lowest = [3, 4, 5, 8, 9, 10]
+            .map(|j| p[j].y)
+            .into_iter()
+            .fold(f32::INFINITY, f32::min);
+        assert!(
+            lowest > -0.01,
+            "frame {t}: a foot {lowest} m under the floor"
+        );
+    }
+    assert!(worst < 0.01, "a planted ankle moved {worst} m");
+}
+
+#[test]
+fn a_floating_body_is_put_back_on_the_floor() {
+    let mut g = grounder();
+    let rest = vec![Quat::IDENTITY; 32];
+    for _ in 0..10 {
+        g.observe_seed(Vec3::new(0.0, 0.9, 0.0), &rest);
+    }
+    for t in 0..50 {
+        // The model climbs 2 cm a frame and steps its legs (no contact: the feet move fast).
+        let mut rotations = crouch(0.3 * (t as f32 * 0.5).sin().abs());
+        rotations[1] *= Quat::from_rotation_x(0.4 * (t as f32 * 0.5).sin());
+        let mut root = Vec3::new(0.05 * t as f32, 0.9 + 0.02 * t as f32, 0.0);
+        g.ground(&mut root, &mut rotations, DT);
+        let p = positions(root, &rotations);
+        let lowest = [3, 4, 5, 8, 9, 10]
+            .map(|j| p[j].y)
+            .into_iter()
+            .fold(f32::INFINITY, f32::min);
+        assert!(
+            lowest.abs() < 0.02,
+            "frame {t}: lowest foot point at {lowest} m"
+        );
+    }
+}
+
+#[test]
+fn a_reclined_body_is_stood_up_to_the_lean_limit() {
+    let mut g = grounder();
+    g.set_action(Some("walking"));
+    let limit = g.lean_limit();
+    let rest = vec![Quat::IDENTITY; 32];
+    for _ in 0..10 {
+        g.observe_seed(Vec3::new(0.0, 0.9, 0.0), &rest);
+    }
+    for degrees in [0.0f32, 20.0, 60.0, 95.0] {
+        let mut rotations = rest.clone();
+        rotations[0] = Quat::from_rotation_x(-degrees.to_radians());
+        let mut root = Vec3::new(0.0, 0.9, 0.0);
+        g.ground(&mut root, &mut rotations, DT);
+        let p = positions(root, &rotations);
+        let torso = (p[13] - p[0]).normalize();
+        let lean = torso.dot(Vec3::Y).acos().to_degrees();
+        assert!(
+            lean <= limit + 1e-3,
+            "{degrees}° -> {lean}° (limit {limit}°)"
+        );
+        if degrees <= limit - LEAN_SOFTNESS_DEG {
+            assert!((lean - degrees).abs() < 0.01, "{degrees}° -> {lean}°");
+        }
+    }
+}
+
+#[test]
+fn a_seed_on_a_tilted_floor_comes_out_level() {
+    let mut g = grounder();
+    let rest = vec![Quat::IDENTITY; 32];
+    // The seed walks 3 m up a 4° slope: its world is tilted; the floor frame levels it.
+    let tilt = Quat::from_rotation_x(-4f32.to_radians());
+    for t in 0..50 {
+        let root = tilt * Vec3::new(0.0, 0.9, 0.06 * t as f32);
+        g.observe_seed(root, &[&[tilt][..], &rest[1..]].concat());
+    }
+    assert!(
+        (g.floor().tilt_deg() - 4.0).abs() < 0.6,
+        "{}",
+        g.floor().tilt_deg()
+    );
+    let mut root = tilt * Vec3::new(0.0, 0.9, 3.0);
+    let mut rotations = [&[tilt][..], &rest[1..]].concat();
+    g.ground(&mut root, &mut rotations, DT);
+    let up = rotations[0] * Vec3::Y;
+    assert!(up.angle_between(Vec3::Y).to_degrees() < 0.6, "{up}");
+}
+
+#[test]
+fn switched_off_it_changes_nothing() {
+    let mut g = Grounder::new(&Skeleton::h36m(), 1e-3, GroundingConfig::off()).unwrap();
+    let pose = crouch(0.4);
+    g.observe_seed(Vec3::ZERO, &pose);
+    let (mut root, mut rotations) = (Vec3::new(1.0, 2.0, 3.0), pose.clone());
+    g.ground(&mut root, &mut rotations, DT);
+    assert_eq!((root, rotations), (Vec3::new(1.0, 2.0, 3.0), pose));
+}
+
+#[test]
+fn a_lifted_foot_is_released_to_the_model() {
+    let mut g = grounder();
+    let pose = crouch(0.5);
+    for _ in 0..10 {
+        g.observe_seed(Vec3::new(0.0, 0.95, 0.0), &pose);
+    }
+    let (mut root, mut rotations) = (Vec3::new(0.0, 0.95, 0.0), pose.clone());
+    g.ground(&mut root, &mut rotations, DT);
+    assert_eq!(g.contacts(), [true, true]);
+    // The model lifts the left foot (knee up) and keeps it up: after the release blend the
+    // grounded foot is the model's.
+    let mut lifted = pose.clone();
+    lifted[6] = Quat::from_rotation_x(-1.0);
+    lifted[7] = Quat::from_rotation_x(1.2);
+    for _ in 0..10 {
+        let (mut root, mut rotations) = (Vec3::new(0.0, 0.95, 0.0), lifted.clone());
+        g.ground(&mut root, &mut rotations, DT);
+        let model = positions(root, &lifted);
+        let grounded = positions(root, &rotations);
+        assert!(!g.contacts()[1]);
+        let _ = (model, grounded);
+    }
+    let (mut root, mut rotations) = (Vec3::new(0.0, 0.95, 0.0), lifted.clone());
+    g.ground(&mut root, &mut rotations, DT);
+    let (model, grounded) = (positions(root, &lifted), positions(root, &rotations));
+    assert!(
+        (model[8] - grounded[8]).length() < 1e-4,
+        "{} vs {}",
+        model[8],
+        grounded[8]
+    );
+}
+
+#[test]
+fn the_lean_limit_follows_the_action() {
+    for (name, value) in LEAN_P95_DEG {
+        assert_eq!(lean_limit_deg(Some(name)), value);
+    }
+    let widest = LEAN_P95_DEG.iter().map(|&(_, v)| v).fold(0.0, f32::max);
+    assert_eq!(lean_limit_deg(None), widest);
+    assert_eq!(lean_limit_deg(Some("juggling")), widest);
+    assert!(soft_limit(100.0, 30.0, 6.0) <= 30.0);
+    assert!(soft_limit(27.0, 30.0, 6.0) < 27.0);
+    assert_eq!(soft_limit(10.0, 30.0, 6.0), 10.0);
+}
