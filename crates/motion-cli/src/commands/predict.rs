@@ -7,6 +7,7 @@ use std::sync::Arc;
 
 use motion_core::formats::expmap_bvh::ExpMapTarget;
 use motion_core::formats::FileFormat;
+use motion_core::grounding::{ground_expmap_clip, ClipSpec, GroundingConfig};
 use motion_core::model::samples::check_sample_size;
 use motion_core::model::{
     generate_samples, ActionClassifier, GenerateError, ModelConfig, MotionModel,
@@ -109,6 +110,11 @@ pub struct Args {
     /// of the model's (25 Hz for H3.6M models).
     #[arg(long, value_name = "HZ")]
     pub fps: Option<f64>,
+    /// Write the model's raw motion: no grounding (by default every predicted frame is put on
+    /// the seed's floor, levelled, held upright and its planted feet locked: see the crate docs
+    /// of motion_core::grounding). For research scoring of raw output.
+    #[arg(long)]
+    pub no_grounding: bool,
     #[command(flatten)]
     pub reporting: super::output::Output,
 }
@@ -132,6 +138,8 @@ struct Job {
     out_fps: Option<f64>,
     /// `--joint-map`.
     joint_map: Option<PathBuf>,
+    /// Grounding of written predictions (off with `--no-grounding`).
+    grounding: GroundingConfig,
 }
 
 /// What one prediction produced.
@@ -224,6 +232,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         seed_end: args.seed_end,
         out_fps: args.fps,
         joint_map: args.joint_map.clone(),
+        grounding: if args.no_grounding {
+            GroundingConfig::off()
+        } else {
+            GroundingConfig::default()
+        },
     };
     let architecture = job.model.config().architecture;
     if args.samples > 1 && !architecture.is_stochastic() {
@@ -411,20 +424,32 @@ fn predict_one(
     // first predicted frame) to the last predicted frame, cut from the seed file's frames up to
     // `end` followed by a continuation (a prediction, or the file's own frames for --truth).
     let first_written = if job.prediction_only { end } else { start };
-    let written = |continuation: ndarray::ArrayView2<'_, f64>, format: FileFormat| {
-        // Only the poses of the history: a continuation's first frame is placed by its own delta.
-        let known = seed.poses.as_deref().map(|p| &p[..end.min(p.len())]);
-        let anchor = (format == FileFormat::Bvh).then_some(known);
+    let written = |continuation: ndarray::ArrayView2<'_, f64>,
+                   format: FileFormat,
+                   predicted: bool|
+     -> anyhow::Result<Array2<f64>> {
         let history = seed.frames.slice(s![..end, ..]);
         let whole =
             ndarray::concatenate(ndarray::Axis(0), &[history, continuation]).expect("same width");
         let stop = whole.nrows();
-        clip_window(&whole, first_written, stop, job.target, config.fps, anchor)
+        if job.grounding.enabled {
+            // On the seed window's floor; a real continuation is only moved onto it.
+            let mut spec =
+                ClipSpec::new(job.target, config.fps, start..end, action.as_deref(), job.grounding);
+            spec.ground_after_seed = predicted;
+            let clip = ground_expmap_clip(whole.view(), &spec)
+                .with_context(|| format!("{}", seed_path.display()))?;
+            return Ok(clip.window(first_written..stop));
+        }
+        // Only the poses of the history: a continuation's first frame is placed by its own delta.
+        let known = seed.poses.as_deref().map(|p| &p[..end.min(p.len())]);
+        let anchor = (format == FileFormat::Bvh).then_some(known);
+        Ok(clip_window(&whole, first_written, stop, job.target, config.fps, anchor))
     };
     let samples: Vec<Array2<f64>> = predictions
         .outer_iter()
-        .map(|prediction| written(prediction, format))
-        .collect();
+        .map(|prediction| written(prediction, format, true))
+        .collect::<anyhow::Result<_>>()?;
     // A seed on the user's own rig: BVH output goes back onto it, the rig's joints the model
     // lacks taken from the written seed frames (then the last seed frame).
     let rig = seed.rig.as_ref().map(|r| {
@@ -445,7 +470,11 @@ fn predict_one(
     let mut outputs = write_clips(out, format, &clips(&samples))?;
     if let Some(truth) = truth {
         let format = check_output(truth)?;
-        let real = [written(seed.frames.slice(s![end..truth_end, ..]), format)];
+        let real = [written(
+            seed.frames.slice(s![end..truth_end, ..]),
+            format,
+            false,
+        )?];
         outputs.extend(write_clips(truth, format, &clips(&real))?);
     }
     let mut notices = seed.notices;

@@ -99,6 +99,12 @@ impl Floor {
         self.level * (p - self.pivot) + Vec3::new(self.pivot.x, 0.0, self.pivot.z)
     }
 
+    /// [`to_floor_frame`](Self::to_floor_frame) in f64 (the floor's own parameters are f32).
+    pub fn to_floor_frame_f64(&self, p: DVec3) -> DVec3 {
+        let pivot = self.pivot.as_dvec3();
+        self.level.as_dquat() * (p - pivot) + DVec3::new(pivot.x, 0.0, pivot.z)
+    }
+
     /// A root pose (translation metres, world rotation) in the floor frame.
     pub fn root_to_floor_frame(&self, translation: Vec3, rotation: Quat) -> (Vec3, Quat) {
         (

@@ -37,6 +37,7 @@
 //! assert!((root.y - 0.897).abs() < 1e-3); // toes back on the seed's floor, now y = 0
 //! # Ok::<(), motion_core::grounding::GroundingError>(())
 //! ```
+pub mod clip;
 pub mod floor;
 mod ik;
 pub mod legs;
@@ -44,6 +45,7 @@ pub mod legs;
 use glam::{Quat, Vec3};
 
 use crate::skeleton::Skeleton;
+pub use clip::{ground_expmap_clip, ClipSpec, GroundedClip};
 pub use floor::Floor;
 pub use legs::{find_body_parts, BodyParts, Leg, LegsError};
 

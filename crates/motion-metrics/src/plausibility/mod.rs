@@ -22,9 +22,13 @@
 //! - **World positions** `x_t,j = (q_t,j − o_0) · R_t + o_0 + T_t` (row vectors; `o_0` the root
 //!   offset, 0 for H3.6M): the root pose `(R_t, T_t)` integrated over seed + motion from the first
 //!   seed frame (identity before it), exactly as FK of the joined frames (`expmap_positions`).
-//! - **Hip height** `h_t`: the y (up) of `Hips` (joint 0), mm. **Torso lean** `λ_t`: the angle in
-//!   degrees between +y and the vector `Hips (0) → Neck (13)` (H3.6M's `Neck` joint is the top of
-//!   the thorax, where the shoulders attach).
+//! - **Floor frame**: the seed's floor (`motion_core::grounding::floor`: a plane fitted to the
+//!   lowest foot point of each seed frame, the foot points being [`FEET`]) made the plane `y = 0`
+//!   by a rigid transform; every measure below is taken in it, so a walk whose integrated root is
+//!   tilted is not read as climbing.
+//! - **Hip height** `h_t`: the floor-frame y of `Hips` (joint 0), mm. **Torso lean** `λ_t`: the
+//!   angle in degrees between +y and the floor-frame vector `Hips (0) → Neck (13)` (H3.6M's
+//!   `Neck` joint is the top of the thorax, where the shoulders attach).
 //! - **`drift`** of one sequence in a window: `max_i |h_i − h_s|` (mm) and `max_i |λ_i − λ_s|`
 //!   (degrees) over the window's frames, `s` = the last seed frame. Reported per window: the mean
 //!   over sequences, the largest, and the fraction of sequences at or below the action's **p95**:
@@ -34,12 +38,15 @@
 //!   frames before it (so the root is integrated from the same place). Integrated H3.6M roots
 //!   start from an unknown orientation, so real motion drifts too (a walk tilted by 3° climbs
 //!   400 mm in 8 m): drift is judged against the data, never against zero.
-//! - **`foot_contact`**: the floor is the lowest world y over the seed's frames of the foot
-//!   joints `RightFoot` (3), `RightToeBase` (4), `LeftFoot` (8), `LeftToeBase` (9); a frame is
-//!   *airborne* when both feet (each foot = the lower of its ankle and toe joint) are more than
-//!   [`FOOT_CLEARANCE_MM`] = 100 mm above that floor. `foot_contact` of a window = the fraction of
-//!   its frames (over the covering sequences) that are airborne: 0 keeps contact (a still pose
-//!   gives 0), 1 floats.
+//! - **`foot_contact`**: a frame is *airborne* when both feet (each foot = the lowest of its
+//!   points [`FEET`]) are more than [`FOOT_CLEARANCE_MM`] = 100 mm above the floor (`y = 0` of the
+//!   floor frame). `foot_contact` of a window = the fraction of its frames (over the covering
+//!   sequences) that are airborne: 0 keeps contact (a still pose gives 0), 1 floats.
+//! - **On the floor**: the lowest foot point within [`ON_FLOOR_MM`] of the floor.
+//!   **Penetration**: the lowest foot point more than [`PENETRATION_MM`] under it.
+//! - **Foot skating** (the motion-diffusion literature's definition): a frame skates when a foot
+//!   point under [`SKATING_HEIGHT_MM`] moves faster than [`SKATING_SPEED_MM_S`] horizontally
+//!   (floor frame, against the previous frame).
 //!
 //! A sequence shorter than the horizon (real continuations that the file ends) contributes to the
 //! windows it covers completely; each window reports how many sequences it averages.
@@ -62,6 +69,8 @@ use ndarray::ArrayView2;
 use rayon::prelude::*;
 use serde::Serialize;
 
+use glam::DVec3;
+use motion_core::grounding::Floor;
 use motion_core::kinematics::ExpMapFk;
 use motion_core::root::{RootIntegrator, RootPose};
 use motion_core::rotation::vec_mul_mat3;
@@ -83,8 +92,17 @@ pub const FOOT_CLEARANCE_MM: f64 = 100.0;
 pub const HIPS: usize = 0;
 /// The top of the torso vector (`Neck`, the top of the thorax).
 pub const TORSO_TOP: usize = 13;
-/// The joints of each foot: `[RightFoot, RightToeBase]`, `[LeftFoot, LeftToeBase]`.
-pub const FEET: [[usize; 2]; 2] = [[3, 4], [8, 9]];
+/// The points of each foot (`motion_core::grounding::legs` on the H3.6M skeleton): right and
+/// left ankle, toe and toe end site.
+pub const FEET: [[usize; 3]; 2] = [[3, 4, 5], [8, 9, 10]];
+/// A lowest foot point within this of the floor is on it (mm).
+pub const ON_FLOOR_MM: f64 = 100.0;
+/// A lowest foot point deeper than this under the floor penetrates it (mm).
+pub const PENETRATION_MM: f64 = 20.0;
+/// Foot points below this height can skate (mm).
+pub const SKATING_HEIGHT_MM: f64 = 50.0;
+/// ... when they move faster than this horizontally (mm/s).
+pub const SKATING_SPEED_MM_S: f64 = 500.0;
 /// The percentile of real drift reported beside a prediction's.
 pub const DRIFT_PERCENTILE: f64 = 95.0;
 
@@ -130,6 +148,14 @@ pub struct SequenceMeasures {
     pub lean_change_deg: Vec<f64>,
     /// Both feet more than [`FOOT_CLEARANCE_MM`] above the seed's floor.
     pub airborne: Vec<bool>,
+    /// Torso lean `λ_i` (degrees, floor frame).
+    pub lean_deg: Vec<f64>,
+    /// Hip height above the floor (mm).
+    pub hip_height_mm: Vec<f64>,
+    /// Height of the lowest foot point above the floor (mm; negative under it).
+    pub lowest_foot_mm: Vec<f64>,
+    /// Foot skating ([`SKATING_HEIGHT_MM`], [`SKATING_SPEED_MM_S`]).
+    pub skating: Vec<bool>,
 }
 
 /// One sequence's values in one window.
@@ -143,6 +169,16 @@ pub struct WindowMeasures {
     pub lean_deg: f64,
     /// Fraction of airborne frames.
     pub airborne_fraction: f64,
+    /// 95th percentile of the torso lean (degrees).
+    pub lean_p95_deg: f64,
+    /// 5th and 95th percentiles of the hip height above the floor (mm).
+    pub hip_height_p5_p95_mm: (f64, f64),
+    /// Fraction of frames whose lowest foot point is within [`ON_FLOOR_MM`] of the floor.
+    pub on_floor_fraction: f64,
+    /// Fraction of frames that penetrate the floor ([`PENETRATION_MM`]).
+    pub penetration_fraction: f64,
+    /// Fraction of frames that skate.
+    pub skating_fraction: f64,
 }
 
 impl SequenceMeasures {
@@ -159,12 +195,25 @@ impl SequenceMeasures {
         let range = window.start_frame..window.end_frame;
         let n = range.len() as f64;
         let max = |v: &[f64]| v[range.clone()].iter().copied().fold(0.0, f64::max);
+        let fraction = |v: &[bool]| v[range.clone()].iter().filter(|&&a| a).count() as f64 / n;
+        let share = |v: &[f64], keep: &dyn Fn(f64) -> bool| {
+            v[range.clone()].iter().filter(|&&x| keep(x)).count() as f64 / n
+        };
+        let mut lean = self.lean_deg[range.clone()].to_vec();
+        let mut hips = self.hip_height_mm[range.clone()].to_vec();
         Some(WindowMeasures {
+            lean_p95_deg: reference::percentile(&mut lean, 95.0),
+            hip_height_p5_p95_mm: (
+                reference::percentile(&mut hips, 5.0),
+                reference::percentile(&mut hips, 95.0),
+            ),
+            on_floor_fraction: share(&self.lowest_foot_mm, &|h| h.abs() <= ON_FLOOR_MM),
+            penetration_fraction: share(&self.lowest_foot_mm, &|h| h < -PENETRATION_MM),
+            skating_fraction: fraction(&self.skating),
             mean_speed_mm_s: self.speed_mm_s[range.clone()].iter().sum::<f64>() / n,
             hip_height_mm: max(&self.hip_height_change_mm),
             lean_deg: max(&self.lean_change_deg),
-            airborne_fraction: self.airborne[range.clone()].iter().filter(|&&a| a).count() as f64
-                / n,
+            airborne_fraction: fraction(&self.airborne),
         })
     }
 }
@@ -190,7 +239,6 @@ impl Default for Measurer {
 struct Anchor {
     hip_height: f64,
     lean: f64,
-    floor: f64,
 }
 
 impl Measurer {
@@ -231,43 +279,69 @@ impl Measurer {
             check_finite(what, a)?;
         }
         let mut root = RootIntegrator::new(ROOT_STEP_25HZ);
-        let mut floor = f64::INFINITY;
+        let mut lowest = Vec::with_capacity(seed.nrows());
         let mut pose = RootPose::IDENTITY;
         for row in seed.rows() {
             pose = self.push(&mut root, row);
-            for foot in FEET {
-                for j in foot {
-                    floor = floor.min(self.world(j, &pose)[1]);
-                }
-            }
+            let point = FEET
+                .iter()
+                .flatten()
+                .map(|&j| self.world(j, &pose))
+                .min_by(|a, b| a[1].total_cmp(&b[1]))
+                .expect("feet");
+            lowest.push((DVec3::from_array(point) * 1e-3).as_vec3());
         }
-        let anchor = Anchor {
-            hip_height: self.world(HIPS, &pose)[1],
-            lean: self.lean(&pose),
-            floor,
+        let floor = Floor::fit(&lowest).unwrap_or_else(|| Floor::level_at(0.0));
+        let on_floor = |p: [f64; 3]| {
+            (floor.to_floor_frame_f64(DVec3::from_array(p) * 1e-3) * 1e3).to_array()
         };
+        let lean_of = |m: &Self, pose: &RootPose| {
+            let (a, b) = (on_floor(m.world(HIPS, pose)), on_floor(m.world(TORSO_TOP, pose)));
+            let v = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+            (v[0] * v[0] + v[2] * v[2]).sqrt().atan2(v[1]).to_degrees()
+        };
+        let anchor = Anchor {
+            hip_height: on_floor(self.world(HIPS, &pose))[1],
+            lean: lean_of(self, &pose),
+        };
+        let mut previous_feet = FEET.map(|foot| foot.map(|j| on_floor(self.world(j, &pose))));
         let frames = motion.nrows();
         let mut out = SequenceMeasures {
             speed_mm_s: Vec::with_capacity(frames),
             hip_height_change_mm: Vec::with_capacity(frames),
             lean_change_deg: Vec::with_capacity(frames),
             airborne: Vec::with_capacity(frames),
+            lean_deg: Vec::with_capacity(frames),
+            hip_height_mm: Vec::with_capacity(frames),
+            lowest_foot_mm: Vec::with_capacity(frames),
+            skating: Vec::with_capacity(frames),
         };
         for row in motion.rows() {
             pose = self.push(&mut root, row);
             out.speed_mm_s.push(self.speed());
+            let hips = on_floor(self.world(HIPS, &pose))[1];
+            let lean = lean_of(self, &pose);
             out.hip_height_change_mm
-                .push((self.world(HIPS, &pose)[1] - anchor.hip_height).abs());
-            out.lean_change_deg
-                .push((self.lean(&pose) - anchor.lean).abs());
-            let above = FEET.iter().all(|foot| {
-                let low = foot
-                    .iter()
-                    .map(|&j| self.world(j, &pose)[1])
-                    .fold(f64::INFINITY, f64::min);
-                low > anchor.floor + FOOT_CLEARANCE_MM
-            });
-            out.airborne.push(above);
+                .push((hips - anchor.hip_height).abs());
+            out.lean_change_deg.push((lean - anchor.lean).abs());
+            out.hip_height_mm.push(hips);
+            out.lean_deg.push(lean);
+            let feet = FEET.map(|foot| foot.map(|j| on_floor(self.world(j, &pose))));
+            let low = |foot: &[[f64; 3]; 3]| foot.iter().map(|p| p[1]).fold(f64::INFINITY, f64::min);
+            out.airborne
+                .push(feet.iter().all(|foot| low(foot) > FOOT_CLEARANCE_MM));
+            out.lowest_foot_mm
+                .push(feet.iter().map(low).fold(f64::INFINITY, f64::min));
+            let mut skating = false;
+            for (foot, before) in feet.iter().zip(&previous_feet) {
+                for (p, q) in foot.iter().zip(before) {
+                    let horizontal = ((p[0] - q[0]).powi(2) + (p[2] - q[2]).powi(2)).sqrt();
+                    skating |= p[1] < SKATING_HEIGHT_MM
+                        && horizontal * H36M_PROTOCOL_FPS > SKATING_SPEED_MM_S;
+                }
+            }
+            out.skating.push(skating);
+            previous_feet = feet;
         }
         Ok(out)
     }
@@ -295,14 +369,6 @@ impl Measurer {
         let q = self.current[j];
         let r = vec_mul_mat3([q[0] - o[0], q[1] - o[1], q[2] - o[2]], &pose.rotation);
         [0, 1, 2].map(|k| r[k] + o[k] + pose.translation[k])
-    }
-
-    /// The current frame's torso lean (degrees from +y).
-    fn lean(&self, pose: &RootPose) -> f64 {
-        let a = self.current[HIPS];
-        let b = self.current[TORSO_TOP];
-        let v = vec_mul_mat3([b[0] - a[0], b[1] - a[1], b[2] - a[2]], &pose.rotation);
-        (v[0] * v[0] + v[2] * v[2]).sqrt().atan2(v[1]).to_degrees()
     }
 
     /// Mean joint speed (mm/s) between the previous and the current frame.

@@ -25,25 +25,36 @@ fn naive(seed: &Array2<f64>, motion: &Array2<f64>) -> SequenceMeasures {
     still_root.slice_mut(s![.., ..6]).fill(0.0);
     let local = expmap_positions(&skeleton, still_root.view(), RootEncoding::Deltas, 2).unwrap();
     let seed_frames = seed.nrows();
-    let lean = |t: usize| {
-        let v: Vec<f64> = (0..3)
-            .map(|a| world[[t, 13, a]] - world[[t, 0, a]])
-            .collect();
-        let horizontal = (v[0] * v[0] + v[2] * v[2]).sqrt();
-        horizontal.atan2(v[1]).to_degrees()
+    let feet = [3, 4, 5, 8, 9, 10];
+    let lowest: Vec<glam::Vec3> = (0..seed_frames)
+        .map(|t| {
+            let j = *feet
+                .iter()
+                .min_by(|&&a, &&b| world[[t, a, 1]].total_cmp(&world[[t, b, 1]]))
+                .unwrap();
+            (glam::DVec3::new(world[[t, j, 0]], world[[t, j, 1]], world[[t, j, 2]]) * 1e-3)
+                .as_vec3()
+        })
+        .collect();
+    let floor = motion_core::grounding::Floor::fit(&lowest).unwrap();
+    let at = |t: usize, j: usize| {
+        let p = glam::DVec3::new(world[[t, j, 0]], world[[t, j, 1]], world[[t, j, 2]]);
+        floor.to_floor_frame_f64(p * 1e-3) * 1e3
     };
-    let mut floor = f64::INFINITY;
-    for t in 0..seed_frames {
-        for j in [3, 4, 8, 9] {
-            floor = floor.min(world[[t, j, 1]]);
-        }
-    }
+    let lean = |t: usize| {
+        let v = at(t, 13) - at(t, 0);
+        (v.x * v.x + v.z * v.z).sqrt().atan2(v.y).to_degrees()
+    };
     let last = seed_frames - 1;
     let mut out = SequenceMeasures {
         speed_mm_s: vec![],
         hip_height_change_mm: vec![],
         lean_change_deg: vec![],
         airborne: vec![],
+        lean_deg: vec![],
+        hip_height_mm: vec![],
+        lowest_foot_mm: vec![],
+        skating: vec![],
     };
     for t in seed_frames..joined.nrows() {
         let mut sum = 0.0;
@@ -55,12 +66,18 @@ fn naive(seed: &Array2<f64>, motion: &Array2<f64>) -> SequenceMeasures {
         }
         out.speed_mm_s.push(sum / 32.0 * 25.0);
         out.hip_height_change_mm
-            .push((world[[t, 0, 1]] - world[[last, 0, 1]]).abs());
+            .push((at(t, 0).y - at(last, 0).y).abs());
         out.lean_change_deg.push((lean(t) - lean(last)).abs());
-        let right = world[[t, 3, 1]].min(world[[t, 4, 1]]);
-        let left = world[[t, 8, 1]].min(world[[t, 9, 1]]);
-        out.airborne
-            .push(right > floor + 100.0 && left > floor + 100.0);
+        out.hip_height_mm.push(at(t, 0).y);
+        out.lean_deg.push(lean(t));
+        let right = [3, 4, 5].map(|j| at(t, j).y).into_iter().fold(f64::INFINITY, f64::min);
+        let left = [8, 9, 10].map(|j| at(t, j).y).into_iter().fold(f64::INFINITY, f64::min);
+        out.airborne.push(right > 100.0 && left > 100.0);
+        out.lowest_foot_mm.push(right.min(left));
+        out.skating.push(feet.iter().any(|&j| {
+            let (p, q) = (at(t, j), at(t - 1, j));
+            p.y < 50.0 && ((p.x - q.x).powi(2) + (p.z - q.z).powi(2)).sqrt() * 25.0 > 500.0
+        }));
     }
     out
 }
@@ -96,6 +113,10 @@ fn matches_the_naive_definition() {
         );
         close(&got.lean_change_deg, &want.lean_change_deg, "lean");
         assert_eq!(got.airborne, want.airborne);
+        close(&got.lean_deg, &want.lean_deg, "lean_deg");
+        close(&got.hip_height_mm, &want.hip_height_mm, "hip height");
+        close(&got.lowest_foot_mm, &want.lowest_foot_mm, "lowest foot");
+        assert_eq!(got.skating, want.skating);
         assert!(got.speed_mm_s.iter().all(|&v| v > 0.0));
     }
     // Some frames of the lifted motion are airborne and some not.
