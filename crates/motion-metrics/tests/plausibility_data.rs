@@ -56,6 +56,24 @@ fn every_action_has_reference_statistics_and_real_motion_is_within_them() {
             reference.drift_windows(),
             p95.join(", ")
         );
+        let real = reference.real;
+        eprintln!(
+            "{action:<16} floor frame: lean p95 {:.1}°, hip height p5-p95 {:.0}-{:.0} mm, on the floor {:.3}, penetrating {:.3}, skating {:.3} (S5 {:.3})",
+            real.lean_p95_deg,
+            real.hip_height_p5_mm,
+            real.hip_height_p95_mm,
+            real.on_floor_fraction,
+            real.penetration_fraction,
+            real.skating_fraction,
+            real.s5_skating_fraction
+        );
+        // The grounding's lean limit is this table (motion_core::grounding::LEAN_P95_DEG).
+        let limit = motion_core::grounding::lean_limit_deg(Some(action));
+        assert!(
+            (f64::from(limit) - real.lean_p95_deg).abs() < 0.5,
+            "{action}: LEAN_P95_DEG says {limit}°, the data {:.2}°",
+            real.lean_p95_deg
+        );
         assert!(reference.s5_mean_speed_mm_s > 10.0, "{action}");
         assert!(reference.drift_windows() > 20, "{action}");
         // Cached: the second call is the same object.

@@ -434,8 +434,13 @@ fn predict_one(
         let stop = whole.nrows();
         if job.grounding.enabled {
             // On the seed window's floor; a real continuation is only moved onto it.
-            let mut spec =
-                ClipSpec::new(job.target, config.fps, start..end, action.as_deref(), job.grounding);
+            let mut spec = ClipSpec::new(
+                job.target,
+                config.fps,
+                start..end,
+                action.as_deref(),
+                job.grounding,
+            );
             spec.ground_after_seed = predicted;
             let clip = ground_expmap_clip(whole.view(), &spec)
                 .with_context(|| format!("{}", seed_path.display()))?;
@@ -444,7 +449,14 @@ fn predict_one(
         // Only the poses of the history: a continuation's first frame is placed by its own delta.
         let known = seed.poses.as_deref().map(|p| &p[..end.min(p.len())]);
         let anchor = (format == FileFormat::Bvh).then_some(known);
-        Ok(clip_window(&whole, first_written, stop, job.target, config.fps, anchor))
+        Ok(clip_window(
+            &whole,
+            first_written,
+            stop,
+            job.target,
+            config.fps,
+            anchor,
+        ))
     };
     let samples: Vec<Array2<f64>> = predictions
         .outer_iter()

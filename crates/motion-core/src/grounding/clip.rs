@@ -12,11 +12,11 @@ use glam::{DVec3, Quat, Vec3};
 use ndarray::{Array2, ArrayView2};
 
 use super::{Grounder, GroundingConfig, GroundingError};
+use crate::formats::expmap_bvh::ExpMapTarget;
 use crate::motion::RootEncoding;
 use crate::pose::METRES_PER_MM;
 use crate::root::{delta_between, integrate_root, root_deltas, write_absolute_root, RootPose};
 use crate::rotation::{h36m_joint_expmap, h36m_joint_quat, quat_to_row_mat3, row_mat3_to_quat};
-use crate::formats::expmap_bvh::ExpMapTarget;
 use crate::skeleton::{Skeleton, H36M_SOURCE_FPS};
 
 /// What a clip is and where its seed lies.
@@ -210,8 +210,8 @@ mod tests {
     fn a_floating_continuation_is_written_back_on_the_floor() {
         let skeleton = Skeleton::h36m();
         let frames = floating();
-        let grounded = ground_expmap_clip(frames.view(), &spec(&skeleton, Default::default()))
-            .unwrap();
+        let grounded =
+            ground_expmap_clip(frames.view(), &spec(&skeleton, Default::default())).unwrap();
         let lowest = |frames: &Array2<f64>, t: usize| {
             let p = expmap_positions(&skeleton, frames.view(), RootEncoding::Deltas, 2).unwrap();
             [3, 4, 5, 8, 9, 10]

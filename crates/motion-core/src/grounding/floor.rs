@@ -15,11 +15,11 @@
 use glam::{DQuat, DVec3, Quat, Vec3};
 
 /// Ridge weight on the floor's slope, m²: see the module docs.
-pub const SLOPE_RIDGE_M2: f64 = 0.1;
+pub const SLOPE_RIDGE_M2: f64 = 0.05;
 /// Points higher than this above the first fit are left out of the second (metres).
 pub const AIRBORNE_M: f64 = 0.03;
 /// The largest floor tilt the fit may report (degrees).
-pub const MAX_TILT_DEG: f64 = 10.0;
+pub const MAX_TILT_DEG: f64 = 30.0;
 
 /// A fitted floor and its floor frame (see the module docs).
 #[derive(Debug, Clone, Copy, PartialEq)]

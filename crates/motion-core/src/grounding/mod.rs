@@ -53,24 +53,23 @@ pub use legs::{find_body_parts, BodyParts, Leg, LegsError};
 pub const LEAN_SOFTNESS_DEG: f32 = 6.0;
 
 /// The 95th percentile of the torso lean (degrees from +y, in the floor frame of each window's
-/// seed) of real H3.6M motion per action, every subject, 12 s windows every 1 s (measured by
-/// `motion_metrics::plausibility::world::real_statistics`; a data test recomputes it).
-pub const LEAN_P95_DEG: [(&str, f32); 15] = [
-    ("directions", 30.0),
-    ("discussion", 30.0),
-    ("eating", 30.0),
-    ("greeting", 30.0),
-    ("phoning", 30.0),
-    ("posing", 30.0),
-    ("purchases", 30.0),
-    ("sitting", 30.0),
-    ("sittingdown", 30.0),
-    ("smoking", 30.0),
-    ("takingphoto", 30.0),
-    ("waiting", 30.0),
-    ("walkingdog", 30.0),
-    ("walking", 30.0),
-    ("walkingtogether", 30.0),
+/// seed) of real H3.6M motion per action: every subject, the first 2 s after the seed of real
+/// windows every 1 s (`motion_metrics::plausibility::RealRanges`; its data test recomputes it).
+/// `discussion` and `waiting` have no S5 file and no reference: they get the widest limit.
+pub const LEAN_P95_DEG: [(&str, f32); 13] = [
+    ("directions", 20.4),
+    ("eating", 30.5),
+    ("greeting", 36.0),
+    ("phoning", 44.2),
+    ("posing", 44.4),
+    ("purchases", 95.5),
+    ("sitting", 76.2),
+    ("sittingdown", 99.1),
+    ("smoking", 45.4),
+    ("takingphoto", 67.5),
+    ("walking", 30.8),
+    ("walkingdog", 78.0),
+    ("walkingtogether", 15.2),
 ];
 
 /// The lean limit of `action` (degrees): its [`LEAN_P95_DEG`], or the largest of them for an

@@ -292,11 +292,13 @@ impl Measurer {
             lowest.push((DVec3::from_array(point) * 1e-3).as_vec3());
         }
         let floor = Floor::fit(&lowest).unwrap_or_else(|| Floor::level_at(0.0));
-        let on_floor = |p: [f64; 3]| {
-            (floor.to_floor_frame_f64(DVec3::from_array(p) * 1e-3) * 1e3).to_array()
-        };
+        let on_floor =
+            |p: [f64; 3]| (floor.to_floor_frame_f64(DVec3::from_array(p) * 1e-3) * 1e3).to_array();
         let lean_of = |m: &Self, pose: &RootPose| {
-            let (a, b) = (on_floor(m.world(HIPS, pose)), on_floor(m.world(TORSO_TOP, pose)));
+            let (a, b) = (
+                on_floor(m.world(HIPS, pose)),
+                on_floor(m.world(TORSO_TOP, pose)),
+            );
             let v = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
             (v[0] * v[0] + v[2] * v[2]).sqrt().atan2(v[1]).to_degrees()
         };
@@ -327,7 +329,8 @@ impl Measurer {
             out.hip_height_mm.push(hips);
             out.lean_deg.push(lean);
             let feet = FEET.map(|foot| foot.map(|j| on_floor(self.world(j, &pose))));
-            let low = |foot: &[[f64; 3]; 3]| foot.iter().map(|p| p[1]).fold(f64::INFINITY, f64::min);
+            let low =
+                |foot: &[[f64; 3]; 3]| foot.iter().map(|p| p[1]).fold(f64::INFINITY, f64::min);
             out.airborne
                 .push(feet.iter().all(|foot| low(foot) > FOOT_CLEARANCE_MM));
             out.lowest_foot_mm

@@ -70,6 +70,32 @@ pub struct DriftP95 {
     pub lean_deg: f64,
 }
 
+/// What real motion of an action does in the floor frame, over the first
+/// [`REAL_RANGE_FRAMES`] frames (2 s) after the seed of each of its real windows (every
+/// subject): the ranges a grounded prediction is held to. Later frames are left out because the
+/// data's own root, integrated from 25 Hz deltas, drifts (a few degrees of tilt and tens of cm
+/// of height over 12 s), which would widen the ranges with motion no person made.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct RealRanges {
+    /// 95th percentile of the torso lean (degrees).
+    pub lean_p95_deg: f64,
+    /// 5th percentile of the hip height above the floor (mm).
+    pub hip_height_p5_mm: f64,
+    /// 95th percentile of the hip height above the floor (mm).
+    pub hip_height_p95_mm: f64,
+    /// Fraction of frames whose lowest foot point is within `ON_FLOOR_MM` of the floor.
+    pub on_floor_fraction: f64,
+    /// Fraction of frames that penetrate the floor.
+    pub penetration_fraction: f64,
+    /// Fraction of frames that skate, every subject.
+    pub skating_fraction: f64,
+    /// Fraction of frames that skate, S5's windows only.
+    pub s5_skating_fraction: f64,
+}
+
+/// Frames after each real window's seed that [`RealRanges`] pools (2 s at 25 Hz).
+pub const REAL_RANGE_FRAMES: usize = 50;
+
 /// The reference statistics of one action.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ActionReference {
@@ -89,6 +115,8 @@ pub struct ActionReference {
     hip: Array2<f64>,
     /// Per real window and motion frame: the torso lean change (degrees).
     lean: Array2<f64>,
+    /// Floor-frame ranges of the real windows.
+    pub real: RealRanges,
 }
 
 /// One subject's take, read and downsampled.
@@ -205,6 +233,42 @@ impl ActionReference {
                 .zip(&t.lean_change_deg)
                 .for_each(|(d, v)| *d = *v);
         }
+        let pooled = |f: &dyn Fn(&super::SequenceMeasures) -> &[f64]| -> Vec<f64> {
+            traces
+                .iter()
+                .flat_map(|t| f(t)[..REAL_RANGE_FRAMES.min(t.frames())].iter().copied())
+                .collect()
+        };
+        let share = |keep: &dyn Fn(&super::SequenceMeasures, usize) -> bool, s5: bool| {
+            let (mut hit, mut all) = (0usize, 0usize);
+            for (t, &(i, _)) in traces.iter().zip(&starts) {
+                if s5 && takes[i].subject != TEST_SUBJECT {
+                    continue;
+                }
+                for k in 0..REAL_RANGE_FRAMES.min(t.frames()) {
+                    all += 1;
+                    hit += usize::from(keep(t, k));
+                }
+            }
+            hit as f64 / all.max(1) as f64
+        };
+        let mut leans = pooled(&|t| &t.lean_deg);
+        let mut hips = pooled(&|t| &t.hip_height_mm);
+        let real = RealRanges {
+            lean_p95_deg: percentile(&mut leans, 95.0),
+            hip_height_p5_mm: percentile(&mut hips, 5.0),
+            hip_height_p95_mm: percentile(&mut hips, 95.0),
+            on_floor_fraction: share(
+                &|t, k| t.lowest_foot_mm[k].abs() <= super::ON_FLOOR_MM,
+                false,
+            ),
+            penetration_fraction: share(
+                &|t, k| t.lowest_foot_mm[k] < -super::PENETRATION_MM,
+                false,
+            ),
+            skating_fraction: share(&|t, k| t.skating[k], false),
+            s5_skating_fraction: share(&|t, k| t.skating[k], true),
+        };
         let mut drift_files: Vec<PathBuf> =
             starts.iter().map(|&(i, _)| takes[i].path.clone()).collect();
         drift_files.dedup();
@@ -217,6 +281,7 @@ impl ActionReference {
             drift_files,
             hip,
             lean,
+            real,
         })
     }
 
@@ -298,6 +363,15 @@ impl ActionReference {
             drift_files: Vec::new(),
             hip,
             lean,
+            real: RealRanges {
+                lean_p95_deg: f64::NAN,
+                hip_height_p5_mm: f64::NAN,
+                hip_height_p95_mm: f64::NAN,
+                on_floor_fraction: f64::NAN,
+                penetration_fraction: f64::NAN,
+                skating_fraction: f64::NAN,
+                s5_skating_fraction: f64::NAN,
+            },
         }
     }
 }

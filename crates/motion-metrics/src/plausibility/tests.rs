@@ -70,8 +70,14 @@ fn naive(seed: &Array2<f64>, motion: &Array2<f64>) -> SequenceMeasures {
         out.lean_change_deg.push((lean(t) - lean(last)).abs());
         out.hip_height_mm.push(at(t, 0).y);
         out.lean_deg.push(lean(t));
-        let right = [3, 4, 5].map(|j| at(t, j).y).into_iter().fold(f64::INFINITY, f64::min);
-        let left = [8, 9, 10].map(|j| at(t, j).y).into_iter().fold(f64::INFINITY, f64::min);
+        let right = [3, 4, 5]
+            .map(|j| at(t, j).y)
+            .into_iter()
+            .fold(f64::INFINITY, f64::min);
+        let left = [8, 9, 10]
+            .map(|j| at(t, j).y)
+            .into_iter()
+            .fold(f64::INFINITY, f64::min);
         out.airborne.push(right > 100.0 && left > 100.0);
         out.lowest_foot_mm.push(right.min(left));
         out.skating.push(feet.iter().any(|&j| {
