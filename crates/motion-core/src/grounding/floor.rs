@@ -180,7 +180,7 @@ mod tests {
     #[test]
     fn tilt_is_limited() {
         let steep: Vec<Vec3> = (0..50)
-            .map(|i| Vec3::new(i as f32 * 0.1, i as f32 * 0.05, 0.0))
+            .map(|i| Vec3::new(i as f32 * 0.1, i as f32 * 0.1, 0.0))
             .collect();
         let floor = Floor::fit(&steep).unwrap();
         assert!((floor.tilt_deg() - MAX_TILT_DEG).abs() < 1e-6);
