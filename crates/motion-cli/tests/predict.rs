@@ -15,12 +15,22 @@ use motion_core::formats::npy::{read_npy_dyn, read_npy_frames};
 use motion_core::kinematics::channel_positions;
 use motion_core::skeleton::Skeleton;
 
-/// Runs `motion-cli predict --model FIXTURE ARGS`; returns (exit code, stdout, stderr).
+/// Runs `motion-cli predict --model FIXTURE --no-grounding ARGS` (the file-writing rules on the
+/// model's raw frames: seeds reproduced exactly, roots anchored); returns (exit code, stdout,
+/// stderr). `grounded_predictions_stand_on_the_seed_floor` runs it grounded.
 fn predict(args: &[&dyn AsRef<std::ffi::OsStr>]) -> (i32, String, String) {
+    predict_with(&[&"--no-grounding"], args)
+}
+
+fn predict_with(
+    extra: &[&dyn AsRef<std::ffi::OsStr>],
+    args: &[&dyn AsRef<std::ffi::OsStr>],
+) -> (i32, String, String) {
     let output = Command::new(env!("CARGO_BIN_EXE_motion-cli"))
         .arg("predict")
         .arg("--model")
         .arg(fixture_model())
+        .args(extra.iter().map(|a| a.as_ref()))
         .args(args.iter().map(|a| a.as_ref()))
         .output()
         .expect("runs motion-cli");
@@ -297,7 +307,11 @@ fn intention_model_samples_each_draw_their_own_z() {
     let model = repo().join("tests/fixtures/parity/intention.safetensors");
     let run = |out: &Path, samples: &str, rng_seed: &str, action: Option<&str>| {
         let mut command = Command::new(env!("CARGO_BIN_EXE_motion-cli"));
-        command.arg("predict").arg("--model").arg(&model);
+        command
+            .arg("predict")
+            .arg("--model")
+            .arg(&model)
+            .arg("--no-grounding");
         command
             .arg("--seed")
             .arg(walk_seed())
@@ -711,5 +725,61 @@ fn a_seed_on_another_rig_is_predicted_and_written_back_onto_it() {
     assert!(
         err.contains("map.json") && err.contains("LeftKnuckle"),
         "{err}"
+    );
+}
+
+#[test]
+fn grounded_predictions_stand_on_the_seed_floor() {
+    // The fixture's random weights float and tumble the body; grounded (the default), every
+    // predicted frame keeps its lowest foot point on the seed's floor, levelled to y = 0.
+    let dir = scratch("grounded");
+    let (pred, raw) = (dir.join("pred.bvh"), dir.join("raw.bvh"));
+    let (code, _, stderr) = predict_with(
+        &[],
+        &[
+            &"--seed",
+            &walk_seed(),
+            &"--action",
+            &"walking",
+            &"--frames",
+            &"100",
+            &"--out",
+            &pred,
+        ],
+    );
+    assert_eq!(code, 0, "{stderr}");
+    predict_ok(&[
+        &"--seed",
+        &walk_seed(),
+        &"--action",
+        &"walking",
+        &"--frames",
+        &"100",
+        &"--out",
+        &raw,
+    ]);
+    let lowest = |path: &Path| -> Vec<f64> {
+        let track = motion_core::any_format::read_positions(path, 25.0, 0).unwrap();
+        let p = track.positions;
+        (0..p.shape()[0])
+            .map(|t| {
+                [3, 4, 5, 8, 9, 10]
+                    .map(|j| p[[t, j, 1]])
+                    .into_iter()
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .collect()
+    };
+    let (grounded, raw) = (lowest(&pred), lowest(&raw));
+    for (t, y) in grounded.iter().enumerate().skip(50) {
+        assert!(y.abs() < 10.0, "frame {t}: lowest foot point {y} mm");
+    }
+    let raw_off = raw[50..]
+        .iter()
+        .map(|y| (y - raw[49]).abs())
+        .fold(0.0, f64::max);
+    assert!(
+        raw_off > 50.0,
+        "the raw fixture stays on the floor ({raw_off} mm): the test shows nothing"
     );
 }

@@ -351,11 +351,13 @@ impl Grounder {
         let reach =
             (self.positions[leg.knee] - hip).length() + (ankle - self.positions[leg.knee]).length();
         match state.lock {
-            Some(lock) if state.weight >= 1.0 => {
-                if !state.contact || (lock - hip).length() > reach * 1.02 {
-                    state.weight = 1.0 - dt / self.config.release_s.max(1e-3);
-                }
+            Some(lock)
+                if state.weight >= 1.0
+                    && (!state.contact || (lock - hip).length() > reach * 1.02) =>
+            {
+                state.weight = 1.0 - dt / self.config.release_s.max(1e-3);
             }
+            Some(_) if state.weight >= 1.0 => {}
             Some(_) => {
                 state.weight -= dt / self.config.release_s.max(1e-3);
             }
@@ -419,14 +421,14 @@ impl Grounder {
             self.offsets.len(),
             "one rotation per joint"
         );
-        for j in 0..rotations.len() {
+        for (j, &local) in rotations.iter().enumerate() {
             match self.parents[j] {
                 None => {
-                    self.rotations[j] = rotations[j];
+                    self.rotations[j] = local;
                     self.positions[j] = root;
                 }
                 Some(p) => {
-                    self.rotations[j] = self.rotations[p] * rotations[j];
+                    self.rotations[j] = self.rotations[p] * local;
                     self.positions[j] = self.positions[p] + self.rotations[p] * self.offsets[j];
                 }
             }
