@@ -309,7 +309,7 @@ fn plot_draws_every_action_and_a_bad_extension_fails_before_work() {
 }
 
 #[test]
-fn a_horizon_past_12_s_exits_2_in_one_line() {
+fn a_horizon_past_60_s_exits_2_in_one_line() {
     let root = empty_dataset("long-horizon");
     let (code, stdout, stderr) = eval(&[
         &"--data",
@@ -317,11 +317,11 @@ fn a_horizon_past_12_s_exits_2_in_one_line() {
         &"--model",
         &fixture_model(),
         &"--horizon",
-        &"301",
+        &"1501",
     ]);
     assert_eq!(code, 2, "{stderr}");
     assert!(stdout.is_empty());
-    assert!(stderr.contains("--horizon must be 1..=300"), "{stderr}");
+    assert!(stderr.contains("--horizon must be 1..=1500"), "{stderr}");
     assert_eq!(stderr.lines().count(), 1, "{stderr}");
 }
 

@@ -214,3 +214,51 @@ pub fn report(
 ) -> PlausibilityReport {
     PlausibilityReport::new(measures, horizon, reference)
 }
+
+/// The floor-frame rows of `eval`: per window, the model's raw and grounded predictions and the
+/// real continuation (lowest foot on the floor, penetration, skating, lean p95), with the real
+/// ranges of the action's first 2 s after a seed.
+pub fn ground_rows(
+    model: &PlausibilityReport,
+    grounded: &PlausibilityReport,
+    real: &PlausibilityReport,
+) -> String {
+    let ranges = &model.ground.real;
+    let mut out = format!(
+        "  floor frame (real, first 2 s after a seed: lean p95 {:.1} deg, hips {:.0}-{:.0} mm, on the floor {:.2}, skating {:.2})\n  {:<28} {:>8} {:>9} {:>8}\n",
+        ranges.lean_p95_deg,
+        ranges.hip_height_p5_mm,
+        ranges.hip_height_p95_mm,
+        ranges.on_floor_fraction,
+        ranges.skating_fraction,
+        "",
+        "model",
+        "grounded",
+        "real"
+    );
+    let rows: [(
+        &str,
+        fn(&motion_metrics::plausibility::GroundWindow) -> Option<f64>,
+        usize,
+    ); 4] = [
+        ("on the floor", |w| w.on_floor_fraction, 2),
+        ("penetrating", |w| w.penetration_fraction, 2),
+        ("skating", |w| w.skating_fraction, 2),
+        ("lean p95 deg", |w| w.lean_p95_deg, 1),
+    ];
+    for (label, pick, decimals) in rows {
+        for (i, w) in model.ground.windows.iter().enumerate() {
+            let at = |r: &PlausibilityReport| r.ground.windows.get(i).and_then(pick);
+            let line = format!(
+                "  {:<28} {:>8} {:>9} {:>8}",
+                format!("{label} {}", window_label(w.start_s, w.end_s)),
+                cell(pick(w), decimals),
+                cell(at(grounded), decimals),
+                cell(at(real), decimals)
+            );
+            out.push_str(line.trim_end());
+            out.push('\n');
+        }
+    }
+    out
+}

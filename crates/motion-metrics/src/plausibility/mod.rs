@@ -8,9 +8,11 @@
 //! (0-based) lies `(i + 1) / 25` s after the last seed frame.
 //!
 //! - **Windows** ([`horizon_windows`]): 0-2, 2-4, 4-8 and 8-12 s, i.e. motion frames
-//!   `[0, 50)`, `[50, 100)`, `[100, 200)`, `[200, 300)`; a window is cut at the horizon `T` (its
-//!   `end_s` says where) and left out when it starts at or after `T`. Frames past 12 s are in no
-//!   window ([`MAX_HORIZON_FRAMES`]).
+//!   `[0, 50)`, `[50, 100)`, `[100, 200)`, `[200, 300)`, then 12-20, 20-30, 30-40, 40-50 and
+//!   50-60 s for long horizons; a window is cut at the horizon `T` (its `end_s` says where) and
+//!   left out when it starts at or after `T`. Frames past 60 s are in no window
+//!   ([`MAX_HORIZON_FRAMES`]). Real windows (the drift p95) are 12 s long
+//!   ([`REAL_WINDOW_FRAMES`]).
 //! - **Root-frame positions** `q_t,j`: forward kinematics of all 32 joints with the root's
 //!   translation and rotation set to zero (identity root pose).
 //! - **Joint speed** of motion frame `i`: `v_i = 25 Hz · (1/32) · Σ_j |q_i,j − q_i−1,j|` in mm/s,
@@ -80,12 +82,24 @@ use motion_core::Skeleton;
 use crate::error::{check_finite, MetricError};
 
 pub use motion_core::protocol::ROOT_STEP_25HZ;
-pub use reference::{action_reference, ActionReference, ReferenceError};
+pub use reference::{action_reference, ActionReference, RealRanges, ReferenceError};
 
 /// The windows' bounds in seconds after the seed.
-pub const WINDOW_BOUNDS_S: [(u32, u32); 4] = [(0, 2), (2, 4), (4, 8), (8, 12)];
-/// The frames the windows cover at 25 Hz (12 s): paper 002's horizon.
-pub const MAX_HORIZON_FRAMES: usize = 300;
+pub const WINDOW_BOUNDS_S: [(u32, u32); 9] = [
+    (0, 2),
+    (2, 4),
+    (4, 8),
+    (8, 12),
+    (12, 20),
+    (20, 30),
+    (30, 40),
+    (40, 50),
+    (50, 60),
+];
+/// The frames the windows cover at 25 Hz (60 s).
+pub const MAX_HORIZON_FRAMES: usize = 1500;
+/// Motion frames of a real window of the drift reference (12 s: paper 002's horizon).
+pub const REAL_WINDOW_FRAMES: usize = 300;
 /// Both feet higher than this above the seed's floor: airborne (mm).
 pub const FOOT_CLEARANCE_MM: f64 = 100.0;
 /// The hip joint (height) and the root of the torso vector.
@@ -484,6 +498,39 @@ pub struct FootContactReport {
     pub windows: Vec<FootContactWindow>,
 }
 
+/// The floor-frame measures (lean, hip height, floor contact, penetration, skating) in one
+/// window: means over the sequences covering it of each one's value in the window.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct GroundWindow {
+    /// Window start (s after the seed).
+    pub start_s: f64,
+    /// Window end (s).
+    pub end_s: f64,
+    /// Sequences that cover the window.
+    pub sequences: usize,
+    /// 95th percentile of the torso lean (degrees).
+    pub lean_p95_deg: Option<f64>,
+    /// 5th percentile of the hip height above the floor (mm).
+    pub hip_height_p5_mm: Option<f64>,
+    /// 95th percentile of the hip height above the floor (mm).
+    pub hip_height_p95_mm: Option<f64>,
+    /// Fraction of frames with the lowest foot point within [`ON_FLOOR_MM`] of the floor.
+    pub on_floor_fraction: Option<f64>,
+    /// Fraction of frames penetrating the floor by more than [`PENETRATION_MM`].
+    pub penetration_fraction: Option<f64>,
+    /// Fraction of frames that skate.
+    pub skating_fraction: Option<f64>,
+}
+
+/// The floor-frame measures of a set of sequences, beside real motion's ranges.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct GroundReport {
+    /// What real motion of the action does ([`reference::RealRanges`]).
+    pub real: reference::RealRanges,
+    /// Per window.
+    pub windows: Vec<GroundWindow>,
+}
+
 /// The three measures of a set of sequences of one action, per window of a horizon.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct PlausibilityReport {
@@ -497,6 +544,8 @@ pub struct PlausibilityReport {
     pub drift: DriftReport,
     /// `foot_contact`.
     pub foot_contact: FootContactReport,
+    /// Floor-frame measures.
+    pub ground: GroundReport,
 }
 
 impl PlausibilityReport {
@@ -511,6 +560,7 @@ impl PlausibilityReport {
         let mut speed = Vec::new();
         let mut drift = Vec::new();
         let mut feet = Vec::new();
+        let mut ground = Vec::new();
         for w in &windows {
             let values: Vec<WindowMeasures> = measures.iter().filter_map(|m| m.window(w)).collect();
             let n = values.len();
@@ -551,6 +601,17 @@ impl PlausibilityReport {
                 sequences: n,
                 airborne_fraction: mean(|v| v.airborne_fraction),
             });
+            ground.push(GroundWindow {
+                start_s: w.start_s,
+                end_s: w.end_s,
+                sequences: n,
+                lean_p95_deg: mean(|v| v.lean_p95_deg),
+                hip_height_p5_mm: mean(|v| v.hip_height_p5_p95_mm.0),
+                hip_height_p95_mm: mean(|v| v.hip_height_p5_p95_mm.1),
+                on_floor_fraction: mean(|v| v.on_floor_fraction),
+                penetration_fraction: mean(|v| v.penetration_fraction),
+                skating_fraction: mean(|v| v.skating_fraction),
+            });
         }
         Self {
             horizon_frames,
@@ -568,6 +629,10 @@ impl PlausibilityReport {
             foot_contact: FootContactReport {
                 clearance_mm: FOOT_CLEARANCE_MM,
                 windows: feet,
+            },
+            ground: GroundReport {
+                real: reference.real,
+                windows: ground,
             },
         }
     }

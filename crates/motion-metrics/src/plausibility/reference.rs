@@ -23,7 +23,7 @@ use motion_core::formats::h36m_text::{downsample_protocol, read_expmap_text};
 use motion_core::protocol::{sequence_file, ACTIONS, SEED_FRAMES, SUBJECTS, TEST_SUBJECT};
 use motion_core::FormatError;
 
-use super::{HorizonWindow, Measurer, DRIFT_PERCENTILE, MAX_HORIZON_FRAMES};
+use super::{HorizonWindow, Measurer, DRIFT_PERCENTILE, REAL_WINDOW_FRAMES as MAX_HORIZON_FRAMES};
 use crate::error::MetricError;
 
 /// Frames between the starts of consecutive real drift windows (1 s at 25 Hz).
@@ -291,11 +291,15 @@ impl ActionReference {
     }
 
     /// The p95 over the real windows of the largest change within motion frames
-    /// `[window.start_frame, window.end_frame)` (frames past 300 are not in any real window and
-    /// are ignored).
+    /// `[window.start_frame, window.end_frame)`; a window past 12 s (no real window is longer)
+    /// is held to the 8-12 s window's p95.
     pub fn drift_p95(&self, window: &HorizonWindow) -> DriftP95 {
         let end = window.end_frame.min(MAX_HORIZON_FRAMES);
-        let start = window.start_frame.min(end);
+        let start = if window.start_frame >= end {
+            2 * MAX_HORIZON_FRAMES / 3
+        } else {
+            window.start_frame
+        };
         let p95 = |a: &Array2<f64>| {
             let mut maxima: Vec<f64> = a
                 .rows()

@@ -235,7 +235,17 @@ fn windows_follow_the_horizon() {
     assert_eq!((w[2].start_s, w[2].end_s, w[2].end_frame), (4.0, 6.0, 150));
     assert_eq!(horizon_windows(50).len(), 1);
     assert_eq!(horizon_windows(51).len(), 2);
-    assert_eq!(horizon_windows(400).len(), 4);
+    // Long horizons: 12-20 s (cut at 16 s here), then 10 s windows to 60 s.
+    let w = horizon_windows(400);
+    assert_eq!(w.len(), 5);
+    assert_eq!(
+        (w[4].start_frame, w[4].end_frame, w[4].end_s),
+        (300, 400, 16.0)
+    );
+    let w = horizon_windows(1500);
+    assert_eq!(w.len(), 9);
+    assert_eq!((w[8].start_frame, w[8].end_frame), (1250, 1500));
+    assert_eq!(horizon_windows(5000).len(), 9);
     assert!(horizon_windows(0).is_empty());
 }
 

@@ -78,6 +78,7 @@ mod tests {
             ndms_database_words: 1,
             model: scores.clone(),
             zero_velocity: scores.clone(),
+            model_grounded: scores.plausibility.clone(),
             ground_truth: GroundTruth {
                 mean_joint_speed_last_1s: None,
                 plausibility: scores.plausibility.clone(),

@@ -119,6 +119,9 @@ pub struct ActionResult {
     pub model: ActionScores,
     /// The zero-velocity baseline's scores.
     pub zero_velocity: ActionScores,
+    /// The plausibility of the model's predictions grounded (`motion_core::grounding`: what
+    /// `predict` and the engines show by default) beside the raw ones of `model`.
+    pub model_grounded: PlausibilityKeys,
     /// The real continuation.
     pub ground_truth: GroundTruth,
     /// Every published number for the action.
@@ -212,17 +215,18 @@ pub struct SpeedReport {
     pub pose: f64,
 }
 
-/// A [`PlausibilityReport`] written as the `speed_ratio`, `drift` and `foot_contact` keys of the
+/// A [`PlausibilityReport`] written as the `speed_ratio`, `drift`, `foot_contact` and `ground` keys of the
 /// report holding it (the shapes `score` prints); the table reads the whole report.
 #[derive(Debug, Clone)]
 pub struct PlausibilityKeys(pub PlausibilityReport);
 
 impl Serialize for PlausibilityKeys {
     fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
-        let mut keys = serializer.serialize_struct("PlausibilityKeys", 3)?;
+        let mut keys = serializer.serialize_struct("PlausibilityKeys", 4)?;
         keys.serialize_field("speed_ratio", &self.0.speed_ratio)?;
         keys.serialize_field("drift", &self.0.drift)?;
         keys.serialize_field("foot_contact", &self.0.foot_contact)?;
+        keys.serialize_field("ground", &self.0.ground)?;
         keys.end()
     }
 }
@@ -563,10 +567,15 @@ fn plausibility_rows(a: &ActionResult) -> String {
         _ => String::new(),
     };
     format!(
-        "{classifier}{}",
+        "{classifier}{}{}",
         super::super::plausibility::comparison_rows(
             &a.model.plausibility.0,
             &a.zero_velocity.plausibility.0,
+            &a.ground_truth.plausibility.0,
+        ),
+        super::super::plausibility::ground_rows(
+            &a.model.plausibility.0,
+            &a.model_grounded.0,
             &a.ground_truth.plausibility.0,
         )
     )
@@ -671,7 +680,9 @@ pub fn table(report: &EvalReport) -> String {
 #[cfg(test)]
 pub(super) mod fixtures {
     use super::*;
-    use motion_metrics::plausibility::{DriftReport, FootContactReport, SpeedRatioReport};
+    use motion_metrics::plausibility::{
+        DriftReport, FootContactReport, GroundReport, RealRanges, SpeedRatioReport,
+    };
 
     /// Scores with the given per-frame Euler error, NPSS reference windows and NDMS bins.
     pub fn scores(euler: &[f64], windows: &[(&str, f64)], bins: &[f64]) -> ActionScores {
@@ -690,6 +701,18 @@ pub(super) mod fixtures {
             },
             foot_contact: FootContactReport {
                 clearance_mm: 100.0,
+                windows: Vec::new(),
+            },
+            ground: GroundReport {
+                real: RealRanges {
+                    lean_p95_deg: 20.0,
+                    hip_height_p5_mm: 800.0,
+                    hip_height_p95_mm: 1000.0,
+                    on_floor_fraction: 1.0,
+                    penetration_fraction: 0.0,
+                    skating_fraction: 0.1,
+                    s5_skating_fraction: 0.1,
+                },
                 windows: Vec::new(),
             },
         };
@@ -726,8 +749,9 @@ pub(super) mod fixtures {
 mod tests {
     use super::*;
 
-    /// The scores of an action keep the keys `eval` has always written, the plausibility
-    /// measures beside the metrics (not nested), `apd` and `classifier` only when present.
+    /// The scores of an action keep the keys `eval` has always written plus `ground` (the
+    /// floor-frame measures), the plausibility measures beside the metrics (not nested), `apd`
+    /// and `classifier` only when present.
     #[test]
     fn scores_json_keys_are_the_former_ones() {
         let scores = fixtures::scores(&[0.1], &[("0-1 s", 0.2)], &[0.9]);
@@ -745,6 +769,7 @@ mod tests {
                 "euler_error_ms",
                 "euler_error_per_frame",
                 "foot_contact",
+                "ground",
                 "mean_joint_speed_last_1s",
                 "ndms",
                 "npss",
