@@ -215,6 +215,13 @@ pub fn report(
     PlausibilityReport::new(measures, horizon, reference)
 }
 
+/// One floor-frame row: label, the value of a window, decimals.
+type GroundRow = (
+    &'static str,
+    fn(&motion_metrics::plausibility::GroundWindow) -> Option<f64>,
+    usize,
+);
+
 /// The floor-frame rows of `eval`: per window, the model's raw and grounded predictions and the
 /// real continuation (lowest foot on the floor, penetration, skating, lean p95), with the real
 /// ranges of the action's first 2 s after a seed.
@@ -236,11 +243,7 @@ pub fn ground_rows(
         "grounded",
         "real"
     );
-    let rows: [(
-        &str,
-        fn(&motion_metrics::plausibility::GroundWindow) -> Option<f64>,
-        usize,
-    ); 4] = [
+    let rows: [GroundRow; 4] = [
         ("on the floor", |w| w.on_floor_fraction, 2),
         ("penetrating", |w| w.penetration_fraction, 2),
         ("skating", |w| w.skating_fraction, 2),

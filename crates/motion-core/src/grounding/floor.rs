@@ -4,10 +4,12 @@
 //! ## The rule (stated once; grounding and the plausibility measures use it)
 //! 1. Per seed frame, the lowest of both feet's foot points ([`super::legs`]), metres.
 //! 2. A plane `y = a·x + b·z + c` fitted by least squares to those points with a ridge penalty
-//!    [`SLOPE_RIDGE_M2`]` · n · (a² + b²)` (a seed standing on one spot gives a level floor; a
-//!    2 s walk of ~3 m keeps ~90 % of its measured slope), refitted once on the points no more
-//!    than [`AIRBORNE_M`] above the first fit (steps and swings are not floor), the slope then
-//!    limited to [`MAX_TILT_DEG`].
+//!    [`SLOPE_RIDGE_M2`]` · n · (a² + b²)` (a seed standing on one spot gives a level floor, a
+//!    seed walking straight no sideways slope; a slow 2 s walk of 0.8 m keeps ~90 % of its
+//!    measured slope), refitted once on the points no more
+//!    than [`AIRBORNE_M`] above the first fit (steps and swings are not floor); repeated in the
+//!    frame each round levels (4 rounds), so the ridge keeps a still seed level without
+//!    shrinking a walking seed's slope; the tilt then limited to [`MAX_TILT_DEG`].
 //! 3. The floor frame: the rotation taking the plane's normal to +y, about the point of the plane
 //!    under the last seed point, then that point moved to height 0. Integrated H3.6M roots start
 //!    from an unknown orientation (a few degrees of tilt are common in real data), which this
@@ -15,9 +17,11 @@
 use glam::{DQuat, DVec3, Quat, Vec3};
 
 /// Ridge weight on the floor's slope, m²: see the module docs.
-pub const SLOPE_RIDGE_M2: f64 = 0.05;
+pub const SLOPE_RIDGE_M2: f64 = 0.005;
 /// Points higher than this above the first fit are left out of the second (metres).
 pub const AIRBORNE_M: f64 = 0.03;
+/// Rounds of the fit (see [`Floor::fit`]).
+const FIT_ROUNDS: usize = 4;
 /// The largest floor tilt the fit may report (degrees).
 pub const MAX_TILT_DEG: f64 = 30.0;
 
@@ -51,31 +55,52 @@ impl Floor {
     /// Fits the floor to `points` (world, metres; the lowest foot point of each seed frame);
     /// the pivot lies under the last point. `None` without points or with non-finite ones.
     pub fn fit(points: &[Vec3]) -> Option<Floor> {
-        let last = *points.last()?;
+        let last = points.last()?.as_dvec3();
         if points.iter().any(|p| !p.is_finite()) {
             return None;
         }
-        let (mut a, mut b, mut c) = fit_plane(points.iter().map(|p| p.as_dvec3()), None)?;
-        if let Some(refit) = fit_plane(
-            points.iter().map(|p| p.as_dvec3()),
-            Some((a, b, c, AIRBORNE_M)),
-        ) {
-            (a, b, c) = refit;
+        // Fitted again in the frame the last fit levelled, so that the ridge's pull towards
+        // level leaves no slope behind (each round keeps the ridge's share of the last one's).
+        let mut level = DQuat::IDENTITY;
+        let mut height = 0.0;
+        for _ in 0..FIT_ROUNDS {
+            let moved = points.iter().map(|p| level * p.as_dvec3());
+            let (mut a, mut b, mut c) = fit_plane(moved.clone(), None)?;
+            if let Some(refit) = fit_plane(moved, Some((a, b, c, AIRBORNE_M))) {
+                (a, b, c) = refit;
+            }
+            let normal = DVec3::new(-a, 1.0, -b).normalize();
+            let here = level * last;
+            // The plane's height under the last point, in this round's frame.
+            height = a * here.x + b * here.z + c;
+            if a.abs() + b.abs() < 1e-12 {
+                break;
+            }
+            level = DQuat::from_rotation_arc(normal, DVec3::Y) * level;
+            // The new frame's height: the plane point under the last point, rotated.
+            let on_plane = DVec3::new(here.x, a * here.x + b * here.z + c, here.z);
+            height = (DQuat::from_rotation_arc(normal, DVec3::Y) * on_plane).y;
         }
-        let limit = MAX_TILT_DEG.to_radians().tan();
-        let slope = (a * a + b * b).sqrt();
-        if slope > limit {
-            a *= limit / slope;
-            b *= limit / slope;
+        let mut up = level.inverse() * DVec3::Y;
+        let max = MAX_TILT_DEG.to_radians();
+        let tilt = up.angle_between(DVec3::Y);
+        if tilt > max {
+            let axis = up.cross(DVec3::Y).normalize();
+            up = DQuat::from_axis_angle(axis, tilt - max) * up;
+            level = DQuat::from_rotation_arc(up, DVec3::Y);
+            let here = level * last;
+            let moved: Vec<DVec3> = points.iter().map(|p| level * p.as_dvec3()).collect();
+            let mean = moved.iter().map(|p| p.y).sum::<f64>() / moved.len() as f64;
+            height = mean.min(here.y);
         }
-        let last = last.as_dvec3();
-        let normal = DVec3::new(-a, 1.0, -b).normalize();
-        let level = DQuat::from_rotation_arc(normal, DVec3::Y);
-        let pivot = DVec3::new(last.x, a * last.x + b * last.z + c, last.z);
+        let here = level * last;
+        let pivot = level.inverse() * DVec3::new(here.x, height, here.z);
+        let a = -up.x / up.y;
+        let b = -up.z / up.y;
         Some(Floor {
             slope_x: a,
             slope_z: b,
-            height: c,
+            height: pivot.y - a * pivot.x - b * pivot.z,
             level: level.as_quat(),
             pivot: pivot.as_vec3(),
         })

@@ -9,14 +9,18 @@
 //! 2. **Lean**: the torso vector (root → torso top, [`legs`]) is held within the action's limit
 //!    ([`lean_limit_deg`]: the 95th percentile of real H3.6M motion) by tilting the root about
 //!    the hips, softly ([`LEAN_SOFTNESS_DEG`] below the limit it starts to give).
-//! 3. **Height**: the root moves vertically so that the lowest foot point is on the floor (the
-//!    character is always supported; there are no jumps in the training data).
-//! 4. **Foot locking**: a foot is in contact while its lowest point is below
+//! 3. **Height**: the root moves vertically so that the supporting foot's lowest point is on the
+//!    floor (the character is always supported; there are no jumps in the training data). The
+//!    supporting foot is the one moving slower horizontally, or the lower one when both are
+//!    slower than [`GroundingConfig::contact_speed_m_s`].
+//! 4. **Foot locking** (then the lowest foot point is put on the floor once more): a foot is in contact while its lowest point is below
 //!    [`GroundingConfig::contact_height_m`] and its ankle moves slower than
 //!    [`GroundingConfig::contact_speed_m_s`] horizontally; from the first frame of a contact its
 //!    ankle is held over where it was, the foot's lowest point on the floor, by two-bone IK of
-//!    hip and knee (the foot keeps its world orientation), released when the model lifts or speeds up the foot or the leg cannot reach,
-//!    blending back to the model's foot over [`GroundingConfig::release_s`].
+//!    hip and knee, and the foot keeps the world rotation it had then, released when the model lifts or speeds up the foot or the leg cannot reach,
+//!    blending back to the model's foot over [`GroundingConfig::release_s`]. A foot that is not
+//!    held is lifted by the same IK when it dips under the floor, and when it swings faster
+//!    than the contact speed, to [`GroundingConfig::swing_clearance_m`].
 //!
 //! Lengths are metres in the floor frame, +y up; thresholds hold for any rig because the
 //! skeleton's units are given ([`Grounder::new`]'s `metres_per_unit`).
@@ -108,6 +112,9 @@ pub struct GroundingConfig {
     pub foot_locking: bool,
     /// Seconds over which a released foot blends back to the model's.
     pub release_s: f32,
+    /// A foot moving faster than 1.25 x `contact_speed_m_s` keeps its lowest point at least
+    /// this high (metres): a swinging foot clears the floor.
+    pub swing_clearance_m: f32,
 }
 
 impl Default for GroundingConfig {
@@ -116,9 +123,10 @@ impl Default for GroundingConfig {
             enabled: true,
             max_lean_deg: None,
             contact_height_m: 0.05,
-            contact_speed_m_s: 0.5,
+            contact_speed_m_s: 1.0,
             foot_locking: true,
             release_s: 0.12,
+            swing_clearance_m: 0.06,
         }
     }
 }
@@ -138,6 +146,8 @@ impl GroundingConfig {
 struct FootState {
     /// Where the ankle is held.
     lock: Option<Vec3>,
+    /// The foot's world rotation held with it.
+    lock_rotation: Quat,
     /// 1 while held, falling to 0 while released.
     weight: f32,
     /// The model's ankle on the previous frame (floor frame, after the height correction).
@@ -160,10 +170,16 @@ pub struct Grounder {
     positions: Vec<Vec3>,
     rotations: Vec<Quat>,
     feet: [FootState; 2],
+    /// The horizontal offset held feet have added to the root so far.
+    held_offset: Vec3,
 }
 
 /// Seed frames kept for the floor fit (the last ones).
 const MAX_SEED_POINTS: usize = 4096;
+/// A held foot farther than this times its leg's reach from the hip is let go.
+const RELEASE_REACH: f32 = 1.3;
+/// The body is held back so that a held foot is at most this times its leg's reach away.
+const REACH_USED: f32 = 0.995;
 
 impl Grounder {
     /// A grounder for `skeleton`, whose offsets are in units of `metres_per_unit` metres (1e-3
@@ -196,6 +212,7 @@ impl Grounder {
             positions: vec![Vec3::ZERO; n],
             rotations: vec![Quat::IDENTITY; n],
             feet: [FootState::default(); 2],
+            held_offset: Vec3::ZERO,
         })
     }
 
@@ -214,6 +231,7 @@ impl Grounder {
         self.seed_points.clear();
         self.floor = None;
         self.feet = [FootState::default(); 2];
+        self.held_offset = Vec3::ZERO;
     }
 
     /// Sets the lean limit for `action` ([`lean_limit_deg`]) unless the configuration fixes one.
@@ -288,8 +306,9 @@ impl Grounder {
         if !(root.is_finite() && rotations.iter().all(|q| q.is_finite())) {
             return;
         }
-        // 1. Floor frame.
+        // 1. Floor frame, and where held feet have held the body back so far.
         self.level(root, &mut rotations[0]);
+        *root += self.held_offset;
         // 2. Lean.
         if let Some(top) = self.parts.torso_top {
             self.forward_kinematics(*root, rotations);
@@ -309,38 +328,73 @@ impl Grounder {
                 }
             }
         }
-        // 3. Height: the lowest foot point on the floor.
+        // 3. Height: the supporting foot's lowest point on the floor. It is the slower foot
+        // (horizontally), or the lower one when both are slow enough for contact: a swinging
+        // foot that dips is lifted over the floor in step 4 instead of holding the body.
         self.forward_kinematics(*root, rotations);
-        let lift = -self.lowest_foot_point().y;
-        root.y += lift;
-        for p in &mut self.positions {
-            p.y += lift;
-        }
-        // 4. Foot locking.
         let dt = if dt.is_finite() && dt > 0.0 {
             dt
         } else {
             1.0 / 25.0
         };
+        let mut heights = [0.0f32; 2];
+        let mut speeds = [0.0f32; 2];
         for side in 0..2 {
-            self.foot(side, rotations, dt);
+            let leg = &self.parts.legs[side];
+            heights[side] = leg
+                .foot_points
+                .iter()
+                .map(|&j| self.positions[j].y)
+                .fold(f32::INFINITY, f32::min);
+            let ankle = self.positions[leg.ankle];
+            speeds[side] = self.feet[side].previous.map_or(0.0, |p| {
+                let d = ankle - p;
+                (d.x * d.x + d.z * d.z).sqrt() / dt
+            });
+        }
+        let slow = self.config.contact_speed_m_s;
+        let support = if speeds[0] < slow && speeds[1] < slow {
+            usize::from(heights[1] < heights[0])
+        } else {
+            usize::from(speeds[1] < speeds[0])
+        };
+        let lift = -heights[support];
+        root.y += lift;
+        for p in &mut self.positions {
+            p.y += lift;
+        }
+        // 4. Foot locking: locks taken or released, the body held back (horizontally, for
+        // good: the character travels as far as its held feet allow) where a held foot would be
+        // out of reach, then the legs' IK; swing feet kept over the floor.
+        for side in 0..2 {
+            self.update_lock(side, dt, heights[side] + lift, speeds[side]);
+        }
+        if self.config.foot_locking {
+            let back = self.held_back();
+            self.held_offset += back;
+            *root += back;
+            for p in &mut self.positions {
+                *p += back;
+            }
+        }
+        for side in 0..2 {
+            let (height, speed) = (heights[side] + lift, speeds[side]);
+            self.place(side, rotations, height, speed, side == support);
+        }
+        // 5. The placed legs' lowest point on the floor (a held foot a straight leg could not
+        // bring down, or one pushed under the floor, moves the body instead).
+        if self.config.foot_locking {
+            self.forward_kinematics(*root, rotations);
+            root.y -= self.lowest_foot_point().y;
         }
     }
 
-    /// Contact detection and IK of one leg (positions are this frame's, before any IK).
-    fn foot(&mut self, side: usize, rotations: &mut [Quat], dt: f32) {
+    /// Contact detection and the lock of one leg (positions are this frame's, before any IK;
+    /// `height` of its lowest point over the floor, `speed` of its ankle horizontally).
+    fn update_lock(&mut self, side: usize, dt: f32, height: f32, speed: f32) {
         let leg = &self.parts.legs[side];
         let ankle = self.positions[leg.ankle];
-        let height = leg
-            .foot_points
-            .iter()
-            .map(|&j| self.positions[j].y)
-            .fold(f32::INFINITY, f32::min);
         let state = &mut self.feet[side];
-        let speed = state.previous.map_or(0.0, |p| {
-            let d = ankle - p;
-            (d.x * d.x + d.z * d.z).sqrt() / dt
-        });
         state.previous = Some(ankle);
         state.contact =
             height < self.config.contact_height_m && speed < self.config.contact_speed_m_s;
@@ -353,7 +407,7 @@ impl Grounder {
         match state.lock {
             Some(lock)
                 if state.weight >= 1.0
-                    && (!state.contact || (lock - hip).length() > reach * 1.02) =>
+                    && (!state.contact || (lock - hip).length() > reach * RELEASE_REACH) =>
             {
                 state.weight = 1.0 - dt / self.config.release_s.max(1e-3);
             }
@@ -368,24 +422,100 @@ impl Grounder {
         }
         if state.lock.is_none() && state.contact {
             state.lock = Some(ankle);
+            state.lock_rotation = self.rotations[leg.ankle];
             state.weight = 1.0;
         }
-        let Some(lock) = state.lock else {
-            return;
-        };
-        // Held: the ankle over its lock, the foot's lowest point on the floor (the foot keeps
-        // the model's world orientation, so its points move with the ankle); blended back to
-        // the model's while released.
-        let w = state.weight.clamp(0.0, 1.0);
-        let target = Vec3::new(
-            ankle.x + (lock.x - ankle.x) * w,
-            ankle.y - height.max(0.0) * w,
-            ankle.z + (lock.z - ankle.z) * w,
-        );
-        if (target - ankle).length_squared() < 1e-12 {
+    }
+
+    /// How far the root must move horizontally so that every fully held foot is within its
+    /// leg's reach (the mean over the held feet that need it).
+    fn held_back(&self) -> Vec3 {
+        let (mut sum, mut n) = (Vec3::ZERO, 0.0);
+        for (leg, state) in self.parts.legs.iter().zip(&self.feet) {
+            let Some(lock) = state.lock.filter(|_| state.weight >= 1.0) else {
+                continue;
+            };
+            let hip = self.positions[leg.hip];
+            let knee = self.positions[leg.knee];
+            let ankle = self.positions[leg.ankle];
+            let reach = ((knee - hip).length() + (ankle - knee).length()) * REACH_USED;
+            let d = lock - hip;
+            let horizontal = Vec3::new(d.x, 0.0, d.z);
+            let (h, v) = (horizontal.length(), d.y.abs());
+            if d.length() > reach && v < reach && h > 1e-6 {
+                let allowed = (reach * reach - v * v).sqrt();
+                sum += horizontal / h * (h - allowed);
+                n += 1.0;
+            }
+        }
+        if n > 0.0 {
+            sum / n
+        } else {
+            Vec3::ZERO
+        }
+    }
+
+    /// The IK of one leg after its lock is updated (`support`: the foot that holds the body,
+    /// which never gets the swing clearance).
+    fn place(
+        &mut self,
+        side: usize,
+        rotations: &mut [Quat],
+        height: f32,
+        speed: f32,
+        support: bool,
+    ) {
+        if !self.config.foot_locking {
             return;
         }
+        let leg = &self.parts.legs[side];
+        let ankle = self.positions[leg.ankle];
+        let state = &self.feet[side];
+        let Some(lock) = state.lock else {
+            // A swinging foot: its lowest point at least at the swing clearance (from nothing at
+            // the contact speed to all of it at 1.25 times that), never under the floor.
+            let over = ((speed - self.config.contact_speed_m_s)
+                / (0.25 * self.config.contact_speed_m_s).max(1e-6))
+            .clamp(0.0, 1.0);
+            let wanted = if support {
+                0.0
+            } else {
+                self.config.swing_clearance_m * over
+            };
+            if height < wanted {
+                let target = ankle + Vec3::Y * (wanted - height);
+                let rotation = self.rotations[leg.ankle];
+                self.solve_leg(side, rotations, target, rotation);
+            }
+            return;
+        };
+        // Held: the ankle over its lock with the foot's world rotation of that moment (toes do
+        // not slide round the ankle) and its lowest point on the floor; blended back to the
+        // model's foot while released.
+        let w = state.weight.clamp(0.0, 1.0);
+        let model_rotation = self.rotations[leg.ankle];
+        let foot_rotation = model_rotation.slerp(state.lock_rotation, w).normalize();
+        let turn = foot_rotation * model_rotation.inverse();
+        let below_ankle = leg
+            .foot_points
+            .iter()
+            .map(|&j| (turn * (self.positions[j] - ankle)).y)
+            .fold(0.0f32, f32::min);
+        let target = Vec3::new(
+            ankle.x + (lock.x - ankle.x) * w,
+            ankle.y + (-below_ankle - ankle.y) * w,
+            ankle.z + (lock.z - ankle.z) * w,
+        );
+        let target = Vec3::new(target.x, target.y.max(-below_ankle), target.z);
+        self.solve_leg(side, rotations, target, foot_rotation);
+    }
+
+    /// Two-bone IK of leg `side` bringing its ankle to `target` with the foot's world rotation
+    /// `foot_rotation` (scratch positions are this frame's, before any IK of this leg).
+    fn solve_leg(&self, side: usize, rotations: &mut [Quat], target: Vec3, foot_rotation: Quat) {
+        let leg = &self.parts.legs[side];
         let (hip_j, knee_j, ankle_j) = (leg.hip, leg.knee, leg.ankle);
+        let ankle = self.positions[ankle_j];
         let toe = *leg.foot_points.last().expect("the ankle at least");
         let parent = self.parents[hip_j].map_or(Quat::IDENTITY, |p| self.rotations[p]);
         let forward = {
@@ -397,7 +527,7 @@ impl Grounder {
             }
         };
         let chain = ik::Chain {
-            a: hip,
+            a: self.positions[hip_j],
             b: self.positions[knee_j],
             c: ankle,
             parent_rotation: parent,
@@ -405,13 +535,11 @@ impl Grounder {
             knee_rotation: self.rotations[knee_j],
             forward,
         };
-        let ankle_world = self.rotations[ankle_j];
         let (hip_local, knee_local) = ik::solve(&chain, rotations[knee_j], target);
         rotations[hip_j] = hip_local;
         rotations[knee_j] = knee_local;
-        // Keep the foot's world orientation.
         let knee_world = parent * hip_local * knee_local;
-        rotations[ankle_j] = (knee_world.inverse() * ankle_world).normalize();
+        rotations[ankle_j] = (knee_world.inverse() * foot_rotation).normalize();
     }
 
     /// World positions and rotations of every joint into the scratch.
