@@ -14,6 +14,7 @@ use std::sync::Arc;
 
 use bevy::prelude::*;
 use motion_core::formats::expmap_bvh::ExpMapTarget;
+use motion_core::grounding::{GroundingConfig, PoseGrounder};
 use motion_core::model::{BatchGenerator, MotionModel, Noise};
 use motion_core::pose::{root_motion_between, PoseDecoder, METRES_PER_MM};
 use motion_core::resample::PoseResampler;
@@ -52,6 +53,8 @@ struct Member {
     action: String,
     rng_seed: u64,
     decoder: PoseDecoder,
+    /// Grounding of each decoded pose (`motion_core::grounding`, on by default).
+    grounder: PoseGrounder,
     resampler: PoseResampler,
     /// Generated frames not yet decoded (`frame_dims` floats each).
     pending: VecDeque<f32>,
@@ -77,8 +80,16 @@ impl Member {
         for (dst, v) in self.scratch.iter_mut().zip(self.pending.drain(..dims)) {
             *dst = v;
         }
-        let pose = self.decoder.push(&self.scratch);
-        self.resampler.push(pose).map_err(|e| e.to_string())
+        let Member {
+            decoder,
+            grounder,
+            resampler,
+            scratch,
+            ..
+        } = self;
+        resampler
+            .push(grounder.ground(decoder.push(scratch)))
+            .map_err(|e| e.to_string())
     }
 
     /// Feeds the resampler from `pending` until it can advance by `dt` or `pending` runs out;
@@ -237,11 +248,20 @@ fn new_member(
     let skeleton = Arc::new(Skeleton::h36m());
     let step = ((H36M_SOURCE_FPS / cfg.fps).round() as usize).max(1);
     let mut decoder = PoseDecoder::new(Arc::clone(&skeleton), RootEncoding::Deltas, step);
+    let mut grounder = PoseGrounder::new(
+        &skeleton,
+        (1.0 / cfg.fps) as f32,
+        GroundingConfig::default(),
+    )
+    .map_err(|e| e.to_string())?;
+    grounder.reset(Some(&character.action));
     for row in window.rows() {
-        decoder.push(row.as_slice().expect("contiguous"));
+        grounder.observe_seed(decoder.push(row.as_slice().expect("contiguous")));
     }
     let mut resampler = PoseResampler::new(skeleton.len(), cfg.fps);
-    resampler.push(decoder.pose()).map_err(|e| e.to_string())?;
+    resampler
+        .push(grounder.ground(decoder.pose()))
+        .map_err(|e| e.to_string())?;
     resampler.advance(0.0).map_err(|e| e.to_string())?;
     let dims = cfg.frame_dims;
     Ok(Member {
@@ -249,6 +269,7 @@ fn new_member(
         action: character.action.clone(),
         rng_seed: character.rng_seed,
         decoder,
+        grounder,
         resampler,
         pending: VecDeque::with_capacity(8 * dims),
         history: window.mapv(|v| v as f32),
@@ -376,6 +397,7 @@ pub(crate) fn step_characters(
                     failed.push((m.entity, format!("{e}; carrying on with {:?}", m.action)));
                 }
                 m.action.clone_from(&character.action);
+                m.grounder.set_action(Some(&character.action));
             }
         }
         // The clock, walked through a model frame at a time (a long frame of the game's).

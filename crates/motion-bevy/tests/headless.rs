@@ -13,7 +13,6 @@ use motion_bevy::{
 };
 use motion_core::formats::bvh::parse_bvh;
 use motion_core::formats::expmap_bvh::ExpMapTarget;
-use motion_core::grounding::GroundingConfig;
 use motion_core::model::builtin::default_model;
 use motion_core::model::{Character, Noise};
 use motion_core::pose::Pose;
@@ -50,8 +49,8 @@ fn standalone(action: &str, rng_seed: u64) -> Character {
         None,
     )
     .unwrap();
-    // The plugin steps its characters' raw frames (the plugin does not ground them yet).
-    let mut c = Character::with_grounding(model, GroundingConfig::off()).unwrap();
+    // Grounded, as the plugin's characters are.
+    let mut c = Character::new(model).unwrap();
     c.start_from_clip(seed.frames.view(), Some(action), Noise::Seed(rng_seed))
         .unwrap();
     c

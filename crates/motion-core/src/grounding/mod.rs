@@ -45,6 +45,7 @@ pub mod clip;
 pub mod floor;
 mod ik;
 pub mod legs;
+mod pose;
 
 use glam::{Quat, Vec3};
 
@@ -52,6 +53,7 @@ use crate::skeleton::Skeleton;
 pub use clip::{ground_expmap_clip, ClipSpec, GroundedClip};
 pub use floor::Floor;
 pub use legs::{find_body_parts, BodyParts, Leg, LegsError};
+pub use pose::PoseGrounder;
 
 /// The lean limit starts to give this far below its value (degrees).
 pub const LEAN_SOFTNESS_DEG: f32 = 6.0;

@@ -15,9 +15,9 @@ use super::batch::Noise;
 use super::generate_error::GenerateError;
 use super::generator::Generator;
 use super::predictor::MotionModel;
-use crate::grounding::{Grounder, GroundingConfig, GroundingError};
+use crate::grounding::{Grounder, GroundingConfig, GroundingError, PoseGrounder};
 use crate::motion::{FrameScalar, RootEncoding};
-use crate::pose::{root_motion_between, Pose, PoseDecoder, RootMotion, METRES_PER_MM};
+use crate::pose::{Pose, PoseDecoder};
 use crate::resample::{PoseResampler, ResampleError};
 use crate::skeleton::{Skeleton, H36M_SOURCE_FPS};
 
@@ -45,13 +45,7 @@ pub struct Character {
     generator: Generator,
     decoder: PoseDecoder,
     resampler: PoseResampler,
-    grounder: Grounder,
-    /// The grounded pose of the last model frame.
-    grounded: Pose,
-    /// Its root motion (the next frame's deltas are taken against it).
-    previous: Option<RootMotion>,
-    /// Seconds per model frame.
-    frame_time: f32,
+    grounder: PoseGrounder,
 }
 
 impl Character {
@@ -81,11 +75,8 @@ impl Character {
         // H3.6M root deltas are per 50 Hz source frame: a 25 Hz model frame spans 2.
         let step = ((H36M_SOURCE_FPS / config.fps).round() as usize).max(1);
         let resampler = PoseResampler::new(skeleton.len(), config.fps);
-        let grounder = Grounder::new(&skeleton, METRES_PER_MM as f32, grounding)?;
+        let grounder = PoseGrounder::new(&skeleton, (1.0 / config.fps) as f32, grounding)?;
         Ok(Character {
-            frame_time: (1.0 / config.fps) as f32,
-            grounded: Pose::rest(skeleton.len()),
-            previous: None,
             grounder,
             generator: Generator::new(model),
             decoder: PoseDecoder::new(skeleton, RootEncoding::Deltas, step),
@@ -95,7 +86,7 @@ impl Character {
 
     /// The grounding in force (floor, contacts, lean limit).
     pub fn grounder(&self) -> &Grounder {
-        &self.grounder
+        self.grounder.grounder()
     }
 
     /// The skeleton the poses are on (joint order of [`Pose::local_rotations`]).
@@ -120,9 +111,7 @@ impl Character {
         self.generator.start(seed, action, noise)?;
         self.decoder.reset();
         self.resampler.reset();
-        self.grounder.reset();
-        self.grounder.set_action(action);
-        self.previous = None;
+        self.grounder.reset(action);
         for row in seed.rows() {
             let pose = match row.as_slice() {
                 Some(frame) => self.decoder.push(frame),
@@ -131,17 +120,10 @@ impl Character {
                     self.decoder.push(&owned)
                 }
             };
-            self.grounder
-                .observe_seed(pose.root_translation, &pose.local_rotations);
+            self.grounder.observe_seed(pose);
         }
-        let pose = ground(
-            &mut self.grounder,
-            &mut self.grounded,
-            &mut self.previous,
-            self.decoder.pose(),
-            self.frame_time,
-        );
-        self.resampler.push(pose)?;
+        self.resampler
+            .push(self.grounder.ground(self.decoder.pose()))?;
         Ok(self.resampler.advance(0.0)?)
     }
 
@@ -171,14 +153,11 @@ impl Character {
     /// A long `dt` (a hitch) is walked through frame by frame; the pose's root-motion deltas
     /// span all of it.
     pub fn advance(&mut self, dt: f64) -> Result<&Pose, CharacterError> {
-        let (generator, decoder) = (&mut self.generator, &mut self.decoder);
-        let (grounder, grounded, previous) =
-            (&mut self.grounder, &mut self.grounded, &mut self.previous);
-        let frame_time = self.frame_time;
+        let (generator, decoder, grounder) =
+            (&mut self.generator, &mut self.decoder, &mut self.grounder);
         self.resampler.advance_pulling(dt, |resampler| {
             let frame = generator.step()?;
-            let pose = decoder.push(frame);
-            resampler.push(ground(grounder, grounded, previous, pose, frame_time))?;
+            resampler.push(grounder.ground(decoder.push(frame)))?;
             Ok(())
         })
     }
@@ -190,35 +169,6 @@ impl Character {
         self.grounder.set_action(Some(action));
         Ok(())
     }
-}
-
-/// `decoded` grounded into `out` (its root motion against `previous`), or `decoded` itself when
-/// grounding is off. No allocation (`clone_from` reuses `out`'s buffer).
-fn ground<'a>(
-    grounder: &mut Grounder,
-    out: &'a mut Pose,
-    previous: &mut Option<RootMotion>,
-    decoded: &'a Pose,
-    frame_time: f32,
-) -> &'a Pose {
-    if !grounder.config().enabled {
-        return decoded;
-    }
-    out.root_translation = decoded.root_translation;
-    out.local_rotations
-        .copy_from_slice(&decoded.local_rotations);
-    grounder.ground(
-        &mut out.root_translation,
-        &mut out.local_rotations,
-        frame_time,
-    );
-    out.root_motion = root_motion_between(
-        out.root_translation.as_dvec3(),
-        out.local_rotations[0].as_dquat(),
-        *previous,
-    );
-    *previous = Some(out.root_motion);
-    out
 }
 
 #[cfg(test)]
