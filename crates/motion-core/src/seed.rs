@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use ndarray::{s, Array2};
+use ndarray::{s, Array2, ArrayView2};
 
 use crate::error::FormatError;
 use crate::formats::bvh::{read_bvh, Bvh};
@@ -14,6 +14,7 @@ use crate::formats::expmap_bvh::{bvh_to_expmap, expmap_to_bvh, ExpMapTarget};
 use crate::formats::h36m_text::read_expmap_text;
 use crate::formats::npy::read_npy_frames;
 use crate::formats::FileFormat;
+use crate::grounding::{ground_expmap_clip, ClipSpec, GroundingConfig, GroundingError};
 use crate::motion::{Motion, MotionLayout};
 use crate::resample::resample_bvh;
 use crate::retarget::{JointMap, Retargeter};
@@ -350,6 +351,65 @@ pub fn clip_window(
         }
     }
     window
+}
+
+/// How a front end turns a seed file's frames and a model's continuation into the frames it
+/// writes or returns (`predict`'s files, Python's arrays): one rule for all of them.
+#[derive(Debug, Clone)]
+pub struct WrittenClip<'a> {
+    /// The frames' layout.
+    pub target: ExpMapTarget,
+    /// Their rate.
+    pub fps: f64,
+    /// The seed window the model read, within the history.
+    pub seed: std::ops::Range<usize>,
+    /// The first row written (the seed window's start, or its end for the prediction only).
+    pub first_written: usize,
+    /// The action (the grounding's lean limit).
+    pub action: Option<&'a str>,
+    /// The grounding ([`GroundingConfig::off`]: the model's raw frames).
+    pub grounding: GroundingConfig,
+    /// Raw frames only: the history's known absolute root poses, to anchor a BVH's first
+    /// written frame ([`clip_window`]); `None` for exp-map outputs.
+    pub anchor: Option<Option<&'a [RootPose]>>,
+}
+
+impl WrittenClip<'_> {
+    /// The rows from `first_written` of `history` (the seed file's frames up to the seed's end)
+    /// followed by `continuation`: grounded on the seed window's floor ([`crate::grounding`];
+    /// with `predicted` false a real continuation is only moved onto that floor), or raw.
+    ///
+    /// # Errors
+    /// A skeleton without two legs (grounding on).
+    pub fn frames(
+        &self,
+        history: ArrayView2<'_, f64>,
+        continuation: ArrayView2<'_, f64>,
+        predicted: bool,
+    ) -> Result<Array2<f64>, GroundingError> {
+        let whole = ndarray::concatenate(ndarray::Axis(0), &[history, continuation])
+            .expect("frames of one layout");
+        let stop = whole.nrows();
+        if self.grounding.enabled {
+            let mut spec = ClipSpec::new(
+                self.target,
+                self.fps,
+                self.seed.clone(),
+                self.action,
+                self.grounding,
+            );
+            spec.ground_after_seed = predicted;
+            return Ok(ground_expmap_clip(whole.view(), &spec)?.window(self.first_written..stop));
+        }
+        Ok(clip_window(
+            &whole,
+            self.first_written,
+            stop,
+            self.target,
+            self.fps,
+            self.anchor,
+        ))
+    }
 }
 
 /// Sizes within this factor of the model's skeleton are taken as millimetres (people differ);

@@ -3,10 +3,11 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use motion_core::formats::expmap_bvh::ExpMapTarget;
+use motion_core::grounding::GroundingConfig;
 use motion_core::model::builtin::default_model;
 use motion_core::model::samples::check_sample_size;
 use motion_core::model::{generate_samples, Generator as CoreGenerator, MotionModel, Noise};
-use motion_core::seed::{load_seed, model_window, seed_from_expmap};
+use motion_core::seed::{load_seed, model_window, seed_from_expmap, WrittenClip};
 use ndarray::{Array2, Ix2};
 use numpy::{IntoPyArray, PyArray1, PyArray3};
 use pyo3::prelude::*;
@@ -125,8 +126,10 @@ impl Model {
     /// `samples x frames x dims` predictions after `seed` (a file path: BVH, exp-map text or
     /// `.npy`; or a `T x dims` array of exp-map frames at the model's rate unless `input_fps`),
     /// whose last `seed_frames` frames the model reads. Sample `i` draws noise from
-    /// `rng_seed + i`, as `motion-cli predict --samples` does.
-    #[pyo3(signature = (seed, action = None, frames = 100, samples = 1, rng_seed = 0, input_fps = None))]
+    /// `rng_seed + i`, as `motion-cli predict --samples` does. Grounded like
+    /// `motion-cli predict --prediction-only` (the first frame's root absolute, on the seed's
+    /// floor); `grounding=False` returns the model's raw frames.
+    #[pyo3(signature = (seed, action = None, frames = 100, samples = 1, rng_seed = 0, input_fps = None, grounding = true))]
     #[allow(clippy::too_many_arguments)]
     fn predict<'py>(
         &self,
@@ -137,6 +140,7 @@ impl Model {
         samples: usize,
         rng_seed: u64,
         input_fps: Option<f64>,
+        grounding: bool,
     ) -> PyResult<Bound<'py, PyArray3<f64>>> {
         if samples == 0 {
             return Err(value("samples must be at least 1"));
@@ -165,7 +169,26 @@ impl Model {
                 )
             })
             .map_err(|e| value(format!("seed: {e}")))?;
-        Ok(out.into_pyarray(py))
+        if !grounding {
+            return Ok(out.into_pyarray(py));
+        }
+        let rule = WrittenClip {
+            target,
+            fps: self.model.config().fps,
+            seed: total - needed..total,
+            first_written: total,
+            action,
+            grounding: GroundingConfig::default(),
+            anchor: None,
+        };
+        let mut grounded = out.clone();
+        for (k, sample) in out.outer_iter().enumerate() {
+            let rows = rule
+                .frames(all.view(), sample, true)
+                .map_err(|e| value(format!("seed: {e}")))?;
+            grounded.index_axis_mut(ndarray::Axis(0), k).assign(&rows);
+        }
+        Ok(grounded.into_pyarray(py))
     }
 
     /// A streaming generator on this model (`start`, then `step` per frame).

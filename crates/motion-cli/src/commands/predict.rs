@@ -7,7 +7,7 @@ use std::sync::Arc;
 
 use motion_core::formats::expmap_bvh::ExpMapTarget;
 use motion_core::formats::FileFormat;
-use motion_core::grounding::{ground_expmap_clip, ClipSpec, GroundingConfig};
+use motion_core::grounding::GroundingConfig;
 use motion_core::model::samples::check_sample_size;
 use motion_core::model::{
     generate_samples, ActionClassifier, GenerateError, ModelConfig, MotionModel,
@@ -20,7 +20,7 @@ use serde_json::{json, Value};
 use super::UsageError;
 use crate::model_source::{describe, load_model};
 use motion_core::clip::{check_not_an_input, check_output, write_clips, Clips};
-use motion_core::seed::{clip_window, load_seed, model_window};
+use motion_core::seed::{load_seed, model_window, WrittenClip};
 
 /// The long help after the options: formats, conventions, examples.
 const LONG_HELP: &str = "\
@@ -424,39 +424,26 @@ fn predict_one(
     // first predicted frame) to the last predicted frame, cut from the seed file's frames up to
     // `end` followed by a continuation (a prediction, or the file's own frames for --truth).
     let first_written = if job.prediction_only { end } else { start };
+    // Only the poses of the history anchor raw BVH output: a continuation's first frame is
+    // placed by its own delta.
+    let known = seed.poses.as_deref().map(|p| &p[..end.min(p.len())]);
+    let rule = |format: FileFormat| WrittenClip {
+        target: job.target,
+        fps: config.fps,
+        seed: start..end,
+        first_written,
+        action: action.as_deref(),
+        grounding: job.grounding,
+        anchor: (format == FileFormat::Bvh).then_some(known),
+    };
+    let history = seed.frames.slice(s![..end, ..]);
     let written = |continuation: ndarray::ArrayView2<'_, f64>,
                    format: FileFormat,
                    predicted: bool|
      -> anyhow::Result<Array2<f64>> {
-        let history = seed.frames.slice(s![..end, ..]);
-        let whole =
-            ndarray::concatenate(ndarray::Axis(0), &[history, continuation]).expect("same width");
-        let stop = whole.nrows();
-        if job.grounding.enabled {
-            // On the seed window's floor; a real continuation is only moved onto it.
-            let mut spec = ClipSpec::new(
-                job.target,
-                config.fps,
-                start..end,
-                action.as_deref(),
-                job.grounding,
-            );
-            spec.ground_after_seed = predicted;
-            let clip = ground_expmap_clip(whole.view(), &spec)
-                .with_context(|| format!("{}", seed_path.display()))?;
-            return Ok(clip.window(first_written..stop));
-        }
-        // Only the poses of the history: a continuation's first frame is placed by its own delta.
-        let known = seed.poses.as_deref().map(|p| &p[..end.min(p.len())]);
-        let anchor = (format == FileFormat::Bvh).then_some(known);
-        Ok(clip_window(
-            &whole,
-            first_written,
-            stop,
-            job.target,
-            config.fps,
-            anchor,
-        ))
+        rule(format)
+            .frames(history, continuation, predicted)
+            .with_context(|| format!("{}", seed_path.display()))
     };
     let samples: Vec<Array2<f64>> = predictions
         .outer_iter()
