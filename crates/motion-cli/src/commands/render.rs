@@ -201,9 +201,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
     }
     notices.iter().for_each(|n| args.reporting.notice(n));
-    let floor = floor_height(&tracks);
+    let floor = floor_height(&tracks, args.seed_frames);
+    // Grid lines every ~0.5 m of a person of the first track's size, in the file's units.
+    let unit = first.extent / 900.0;
     let picture = Picture {
-        grid: floor_grid(&tracks, floor, 500.0, 600.0),
+        grid: floor_grid(&tracks, floor, 500.0 * unit, 600.0 * unit),
         tracks,
         camera: Camera::three_quarter(35f64.to_radians(), 12f64.to_radians()),
         seed_frames: args.seed_frames,

@@ -4,6 +4,7 @@
 use std::path::Path;
 
 use motion_core::any_format::read_positions;
+use motion_core::grounding::find_body_parts;
 use motion_core::skeleton::Skeleton;
 use ndarray::Array3;
 
@@ -40,6 +41,10 @@ pub struct Track {
     pub bones: Vec<Bone>,
     /// Frames per second.
     pub fps: f64,
+    /// The foot points (`motion_core::grounding::legs`), empty when the rig has no two legs.
+    pub feet: Vec<usize>,
+    /// The body's size at frame 0 (largest joint distance from the root), in the file's units.
+    pub extent: f64,
 }
 
 impl Track {
@@ -73,16 +78,44 @@ pub fn load_track(path: &Path, input_fps: f64, sample: usize) -> anyhow::Result<
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
     let track = read_positions(path, input_fps, sample)?;
+    let p = &track.positions;
+    let extent = (0..p.dim().1)
+        .map(|j| {
+            (0..3)
+                .map(|a| (p[[0, j, a]] - p[[0, 0, a]]).powi(2))
+                .sum::<f64>()
+                .sqrt()
+        })
+        .fold(0.0, f64::max);
+    let bones = bones(&track.skeleton, p, extent);
+    if bones.is_empty() {
+        anyhow::bail!(
+            "{}: no bones of non-zero length at the first frame: nothing to draw",
+            path.display()
+        );
+    }
+    let feet = find_body_parts(&track.skeleton)
+        .map(|parts| {
+            parts
+                .legs
+                .iter()
+                .flat_map(|l| l.foot_points.clone())
+                .collect()
+        })
+        .unwrap_or_default();
     Ok(Track {
         name,
-        bones: bones(&track.skeleton, &track.positions),
+        bones,
         positions: track.positions,
         fps: track.fps,
+        feet,
+        extent,
     })
 }
 
-/// Bones of the skeleton whose length (at frame 0) is over 1 mm; sides from the joint names.
-fn bones(skeleton: &Skeleton, positions: &Array3<f64>) -> Vec<Bone> {
+/// Bones of the skeleton whose length (at frame 0) is over 1/2000 of the body's extent (about
+/// 1 mm of a person, in any units); sides from the joint names.
+fn bones(skeleton: &Skeleton, positions: &Array3<f64>, extent: f64) -> Vec<Bone> {
     let side = |j: usize| {
         let name = skeleton.joint(j).name.to_ascii_lowercase();
         if name.starts_with("left") || name.starts_with("l_") {
@@ -101,7 +134,7 @@ fn bones(skeleton: &Skeleton, positions: &Array3<f64>) -> Vec<Bone> {
                 .map(|a| (positions[[0, j, a]] - positions[[0, p, a]]).powi(2))
                 .sum::<f64>()
                 .sqrt();
-            (d > 1.0).then_some(Bone {
+            (d > extent / 2000.0).then_some(Bone {
                 from: p,
                 to: j,
                 side: side(j),
@@ -276,12 +309,36 @@ pub fn bounds(camera: &Camera, tracks: &[&Track]) -> ((f64, f64), (f64, f64)) {
     (min, max)
 }
 
-/// The lowest joint height over all frames of `tracks` (the floor).
-pub fn floor_height(tracks: &[&Track]) -> f64 {
-    tracks
-        .iter()
-        .flat_map(|t| t.positions.rows().into_iter().map(|p| p[1]))
-        .fold(f64::INFINITY, f64::min)
+/// Frames of the first track whose feet set the floor when no seed length is given (1 s at 25
+/// Hz).
+pub const FLOOR_FRAMES: usize = 25;
+
+/// The floor: the median over the first track's seed frames (its first `seed_frames`, else its
+/// first [`FLOOR_FRAMES`]) of the lowest foot point (the lowest joint for a rig without two
+/// legs). Fixed for the whole drawing, so a float or a sink after the seed shows in every frame.
+pub fn floor_height(tracks: &[&Track], seed_frames: Option<usize>) -> f64 {
+    let Some(first) = tracks.first() else {
+        return 0.0;
+    };
+    let frames = first.len();
+    let k = seed_frames.unwrap_or(FLOOR_FRAMES).clamp(1, frames.max(1));
+    let mut lows: Vec<f64> = (0..k.min(frames))
+        .map(|t| {
+            let joints: Box<dyn Iterator<Item = usize>> = if first.feet.is_empty() {
+                Box::new(0..first.positions.dim().1)
+            } else {
+                Box::new(first.feet.iter().copied())
+            };
+            joints
+                .map(|j| first.positions[[t, j, 1]])
+                .fold(f64::INFINITY, f64::min)
+        })
+        .collect();
+    if lows.is_empty() {
+        return 0.0;
+    }
+    lows.sort_by(f64::total_cmp);
+    lows[lows.len() / 2]
 }
 
 /// Floor grid lines (world segments on `y = floor`), every `spacing` mm, covering the roots'
@@ -368,6 +425,8 @@ mod tests {
             bones: Vec::new(),
             positions,
             fps: 25.0,
+            feet: Vec::new(),
+            extent: 1000.0,
         };
         let (r, degrees) = upright_rotation(&track, 3).unwrap();
         assert!((degrees - 20.0).abs() < 1e-9);
@@ -394,6 +453,8 @@ mod tests {
             bones: Vec::new(),
             positions,
             fps: 25.0,
+            feet: Vec::new(),
+            extent: 1000.0,
         }
     }
 
@@ -433,5 +494,33 @@ mod tests {
         let top = v.to_pixels((0.0, 1800.0));
         let bottom = v.to_pixels((0.0, 0.0));
         assert!((top.1 - 10.0).abs() < 1e-9 && (bottom.1 - 390.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn a_rig_in_metres_has_bones_and_the_floor_is_the_seed_feet() {
+        let skeleton = Skeleton::h36m();
+        let rest = motion_core::grounding::legs::rest_positions(&skeleton);
+        // Two frames in metres: standing, then floating 0.5 m up.
+        let positions = Array3::from_shape_fn((2, rest.len(), 3), |(f, j, a)| {
+            rest[j][a] * 1e-3 + if a == 1 { 1.0 + 0.5 * f as f64 } else { 0.0 }
+        });
+        let bones = bones(&skeleton, &positions, 0.9);
+        assert!(bones.len() > 20, "{}", bones.len());
+        let parts = find_body_parts(&skeleton).unwrap();
+        let track = Track {
+            name: "m".into(),
+            bones,
+            positions,
+            fps: 25.0,
+            feet: parts
+                .legs
+                .iter()
+                .flat_map(|l| l.foot_points.clone())
+                .collect(),
+            extent: 0.9,
+        };
+        // The seed (frame 0) stands with its toes at 1 - 0.897 m: the floor stays there.
+        let floor = floor_height(&[&track], Some(1));
+        assert!((floor - (1.0 - 0.8971)).abs() < 1e-3, "{floor}");
     }
 }

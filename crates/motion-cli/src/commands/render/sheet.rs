@@ -1,5 +1,6 @@
 //! The PNG contact sheet: evenly spaced moments of the motion in a grid of cells, each cell
-//! following the character (centred on the first motion's root) at one fixed scale, labelled
+//! following the character (centred on the floor point under the first motion's root, so the
+//! floor is at the same height in every cell) at one fixed scale, labelled
 //! with its time; seed cells have a grey bar, prediction cells a coloured one, and a red line
 //! marks where the prediction starts.
 use super::paint::Picture;
@@ -42,17 +43,23 @@ pub fn contact_sheet(picture: &Picture<'_>, times: &[f64], cells: usize, columns
         (f64::NEG_INFINITY, f64::NEG_INFINITY),
     );
     let floor = picture.grid.first().map_or(0.0, |l| l.0[1]);
+    // Each cell follows the point of the floor under the root: the floor sits at the same
+    // height in every cell (the camera's height is fixed), so a float or a sink shows.
+    let under_root = |f: usize| {
+        let r = first.root(f);
+        let (u, v, _) = picture.camera.project([r[0], floor, r[2]]);
+        (u, v)
+    };
     for f in 0..first.len() {
-        let (ru, _, _) = picture.camera.project(first.root(f));
+        let (ru, rv) = under_root(f);
         for j in 0..first.positions.dim().1 {
             let p = [0, 1, 2].map(|a| first.positions[[f, j, a]]);
             let (u, v, _) = picture.camera.project(p);
-            min = (min.0.min(u - ru), min.1.min(v));
-            max = (max.0.max(u - ru), max.1.max(v));
+            min = (min.0.min(u - ru), min.1.min(v - rv));
+            max = (max.0.max(u - ru), max.1.max(v - rv));
         }
     }
-    let (_, floor_v, _) = picture.camera.project([0.0, floor, 0.0]);
-    min.1 = min.1.min(floor_v);
+    min.1 = min.1.min(0.0);
     let half = (-min.0).max(max.0);
     let template = Viewport::fit(
         (-half, min.1),
@@ -76,10 +83,10 @@ pub fn contact_sheet(picture: &Picture<'_>, times: &[f64], cells: usize, columns
         let (col, row) = (i % columns, i / columns);
         let (x0, y0) = ((col * CELL_W) as f64, (HEADER + row * CELL_H) as f64);
         let f = first.frame_at(t);
-        let (ru, _, _) = picture.camera.project(first.root(f));
+        let (ru, rv) = under_root(f);
         let mut cell = Canvas::new(CELL_W, CELL_H, BACKGROUND);
         let local = Viewport {
-            centre: (ru, template.centre.1),
+            centre: (ru, rv + template.centre.1),
             pixel_centre: (
                 CELL_W as f64 / 2.0,
                 BAR as f64 + (CELL_H - BAR) as f64 / 2.0,
