@@ -75,6 +75,10 @@ pub struct MotionCharacter {
     pub rng_seed: u64,
     /// Playback rate: 1 is real time; characters with the same model and rate share a batch.
     pub playback_rate: f32,
+    /// Keep the character on its seed's floor, upright, planted feet locked
+    /// (`motion_core::grounding`; default `true`); `false` poses the model's raw motion. Read
+    /// when the character starts.
+    pub grounding: bool,
 }
 
 impl MotionCharacter {
@@ -86,6 +90,7 @@ impl MotionCharacter {
             action: action.into(),
             rng_seed,
             playback_rate: 1.0,
+            grounding: true,
         }
     }
 }

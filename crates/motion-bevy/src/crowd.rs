@@ -248,12 +248,13 @@ fn new_member(
     let skeleton = Arc::new(Skeleton::h36m());
     let step = ((H36M_SOURCE_FPS / cfg.fps).round() as usize).max(1);
     let mut decoder = PoseDecoder::new(Arc::clone(&skeleton), RootEncoding::Deltas, step);
-    let mut grounder = PoseGrounder::new(
-        &skeleton,
-        (1.0 / cfg.fps) as f32,
-        GroundingConfig::default(),
-    )
-    .map_err(|e| e.to_string())?;
+    let grounding = if character.grounding {
+        GroundingConfig::default()
+    } else {
+        GroundingConfig::off()
+    };
+    let mut grounder = PoseGrounder::new(&skeleton, (1.0 / cfg.fps) as f32, grounding)
+        .map_err(|e| e.to_string())?;
     grounder.reset(Some(&character.action));
     for row in window.rows() {
         grounder.observe_seed(decoder.push(row.as_slice().expect("contiguous")));

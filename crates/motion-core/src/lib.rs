@@ -15,6 +15,8 @@
 //! - Frames are stored row-major, `frames x channels`, in `f64` unless a model computes in `f32`.
 //! - The engine boundary is [`pose`]: f32 glam data, **metres**, rotations as unit quaternions on
 //!   **column vectors** (glam, Bevy, BVH); the H3.6M row-vector convention stays inside.
+//! - Generated motion is **grounded** by default ([`grounding`]: the seed's floor levelled to
+//!   `y = 0`, lean held to the action's real range, planted feet locked); switchable off.
 //!
 //! ## Example: a character in a game engine
 //! Load weights, seed from a BVH, tick at 60 Hz reading engine [`pose::Pose`]s (f32 glam,

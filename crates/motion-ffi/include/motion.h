@@ -109,6 +109,14 @@ int motion_generator_start_frames(struct motion_generator *generator,
                                   size_t frame_dims,
                                   const char *action);
 
+// Grounding of the poses after the next start: 1 (the default) keeps the character on the
+// seed's floor, upright, its planted feet locked (motion_core::grounding); 0 gives the model's
+// raw motion. The motion under way keeps its own until the next start.
+//
+// # Safety
+// `generator` is NULL or live.
+int motion_generator_set_grounding(struct motion_generator *generator, int enabled);
+
 // Changes the action from the next pose on, without re-seeding.
 //
 // # Safety

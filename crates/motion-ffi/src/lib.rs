@@ -27,6 +27,7 @@ use std::path::Path;
 use std::sync::Arc;
 
 use motion_core::formats::expmap_bvh::ExpMapTarget;
+use motion_core::grounding::GroundingConfig;
 use motion_core::model::{builtin, Character, MotionModel, Noise};
 use motion_core::seed::load_seed;
 use ndarray::ArrayView2;
@@ -341,6 +342,28 @@ pub unsafe extern "C" fn motion_generator_start_frames(
             .map_err(|e| invalid(&e.to_string()))?
             .mapv(f64::from);
         start(g, frames.view(), action)
+    })
+}
+
+/// Grounding of the poses after the next start: 1 (the default) keeps the character on the
+/// seed's floor, upright, its planted feet locked (motion_core::grounding); 0 gives the model's
+/// raw motion. The motion under way keeps its own until the next start.
+///
+/// # Safety
+/// `generator` is NULL or live.
+#[no_mangle]
+pub unsafe extern "C" fn motion_generator_set_grounding(
+    generator: *mut motion_generator,
+    enabled: c_int,
+) -> c_int {
+    guard(|| {
+        let g = unsafe { generator.as_mut() }.ok_or_else(|| invalid("generator is NULL"))?;
+        g.character.set_grounding(if enabled != 0 {
+            GroundingConfig::default()
+        } else {
+            GroundingConfig::off()
+        });
+        Ok(0)
     })
 }
 

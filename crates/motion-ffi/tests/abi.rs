@@ -51,6 +51,13 @@ fn statuses_messages_and_poses() {
         assert_eq!(step(generator), MotionStatus::State as i32);
         assert!(last_error().contains("before a start"), "{}", last_error());
         let frames = vec![0.1f32; 10 * 99];
+        // Grounding on by default; switched off (and back) for the next start, NULL refused.
+        assert_eq!(motion_generator_set_grounding(generator, 0), 0);
+        assert_eq!(motion_generator_set_grounding(generator, 1), 0);
+        assert_eq!(
+            motion_generator_set_grounding(null_mut(), 0),
+            MotionStatus::InvalidArgument as i32
+        );
         assert_eq!(
             motion_generator_start_frames(
                 generator,

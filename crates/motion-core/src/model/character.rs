@@ -46,6 +46,8 @@ pub struct Character {
     decoder: PoseDecoder,
     resampler: PoseResampler,
     grounder: PoseGrounder,
+    /// The grounding the next start uses ([`Character::set_grounding`]).
+    grounding: GroundingConfig,
 }
 
 impl Character {
@@ -78,10 +80,17 @@ impl Character {
         let grounder = PoseGrounder::new(&skeleton, (1.0 / config.fps) as f32, grounding)?;
         Ok(Character {
             grounder,
+            grounding,
             generator: Generator::new(model),
             decoder: PoseDecoder::new(skeleton, RootEncoding::Deltas, step),
             resampler,
         })
+    }
+
+    /// Grounds the frames after the next [`start`](Self::start) as `grounding` says
+    /// ([`GroundingConfig::off`]: the model's raw motion); the motion under way keeps its own.
+    pub fn set_grounding(&mut self, grounding: GroundingConfig) {
+        self.grounding = grounding;
     }
 
     /// The grounding in force (floor, contacts, lean limit).
@@ -109,6 +118,10 @@ impl Character {
         noise: Noise<'_>,
     ) -> Result<&Pose, CharacterError> {
         self.generator.start(seed, action, noise)?;
+        if *self.grounder.grounder().config() != self.grounding {
+            let frame_time = (1.0 / self.generator.model().config().fps) as f32;
+            self.grounder = PoseGrounder::new(self.decoder.skeleton(), frame_time, self.grounding)?;
+        }
         self.decoder.reset();
         self.resampler.reset();
         self.grounder.reset(action);
