@@ -275,7 +275,7 @@ fn load_windows(
     for window in test_windows(action) {
         if !loaded.iter().any(|(sub, _, _)| *sub == window.subaction) {
             let path = sequence_file(dataset, TEST_SUBJECT, action, window.subaction);
-            let frames = downsample_protocol(read_expmap_text(&path)?.view());
+            let frames = read_take(&path)?;
             loaded.push((window.subaction, path, frames));
         }
         let (_, path, frames) = loaded
@@ -293,6 +293,23 @@ fn load_windows(
     Ok(out)
 }
 
+/// One H3.6M take at the protocol's 25 Hz; a file whose frames are not 99 wide is refused
+/// (naming it) before anything indexes its columns.
+fn read_take(path: &Path) -> Result<Array2<f64>, FormatError> {
+    let frames = read_expmap_text(path)?;
+    if frames.ncols() != crate::skeleton::H36M_FRAME_DIMS {
+        return Err(FormatError::Invalid {
+            path: path.to_path_buf(),
+            problem: format!(
+                "{} columns per frame; H3.6M exp-map frames have {}",
+                frames.ncols(),
+                crate::skeleton::H36M_FRAME_DIMS
+            ),
+        });
+    }
+    Ok(downsample_protocol(frames.view()))
+}
+
 /// Both takes of `action` by `subject` at the protocol's 25 Hz (the even frames), those whose file
 /// exists (the NDMS word database of an action; paper 003 fills it from the test subject).
 pub fn load_subject_sequences(
@@ -304,7 +321,7 @@ pub fn load_subject_sequences(
     for sub in [1, 2] {
         let path = sequence_file(dataset, subject, action, sub);
         if path.is_file() {
-            out.push(downsample_protocol(read_expmap_text(&path)?.view()));
+            out.push(read_take(&path)?);
         }
     }
     Ok(out)
@@ -493,5 +510,30 @@ mod tests {
             load_action_windows(Path::new("/nonexistent/dataset"), "walking", 10).unwrap_err();
         assert!(matches!(err, FormatError::Io { .. }));
         assert!(err.to_string().contains("S5/walking_1.txt.gz"), "{err}");
+    }
+
+    #[test]
+    fn takes_of_another_width_are_refused_naming_the_file() {
+        for columns in [98, 100] {
+            let dataset = std::env::temp_dir().join(format!(
+                "motion-protocol-width-{columns}-{}",
+                std::process::id()
+            ));
+            std::fs::create_dir_all(dataset.join("S5")).unwrap();
+            let row = vec!["0.1"; columns].join(",");
+            let text = vec![row; 40].join("\n");
+            for sub in [1, 2] {
+                std::fs::write(dataset.join(format!("S5/walking_{sub}.txt")), &text).unwrap();
+            }
+            let e = load_subject_sequences(&dataset, "S5", "walking").unwrap_err();
+            assert!(
+                e.to_string().contains("walking_1.txt")
+                    && e.to_string().contains(&format!("{columns} columns")),
+                "{e}"
+            );
+            let e = load_action_windows_covered(&dataset, "walking", 100).unwrap_err();
+            assert!(e.to_string().contains("columns per frame"), "{e}");
+            std::fs::remove_dir_all(&dataset).unwrap();
+        }
     }
 }
