@@ -292,3 +292,21 @@ fn ndms_timing_scores_every_set_of_the_manifest() {
         assert!(!err.is_empty());
     }
 }
+
+#[test]
+fn sizes_past_the_memory_limits_exit_2_before_allocating() {
+    for (args, said) in [
+        (vec!["--batch", "1000000000"], "--batch 1000000000"),
+        (vec!["--hidden", "65536"], "--hidden 65536"),
+        (vec!["--steps", "1000000000000"], "--steps 1000000000000"),
+    ] {
+        let (code, stdout, stderr) = bench(&args);
+        assert_eq!(code, 2, "{args:?}: {stderr}");
+        assert!(stdout.is_empty());
+        assert!(
+            stderr.contains(said) && stderr.contains("limit"),
+            "{stderr}"
+        );
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    }
+}

@@ -433,3 +433,19 @@ fn a_12_s_horizon_scores_ground_truth_where_the_files_cover_it() {
         late("zero_velocity")
     );
 }
+
+#[test]
+fn too_many_samples_exit_2_before_allocating() {
+    let root = empty_dataset("too-many-samples");
+    let (code, _, stderr) = eval(&[
+        &"--data",
+        &root,
+        &"--model",
+        &fixture_model(),
+        &"--samples",
+        &"100000",
+    ]);
+    assert_eq!(code, 2, "{stderr}");
+    assert!(stderr.contains("over the limit"), "{stderr}");
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+}

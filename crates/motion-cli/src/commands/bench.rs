@@ -68,6 +68,13 @@ impl ArchArg {
     }
 }
 
+/// Most timed steps per batch size (each step's time is kept: 80 MB at the limit).
+pub const MAX_STEPS: usize = 10_000_000;
+/// Most units per layer of a random model (a 4096-unit GRU layer holds 200 MB of weights).
+pub const MAX_HIDDEN: usize = 4096;
+/// Most characters x units of state a batch may hold (about 1 GB of buffers at the limit).
+pub const MAX_BATCH_UNITS: usize = 1 << 24;
+
 /// Arguments of `motion-cli bench`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -165,6 +172,32 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     if args.repeats == 0 {
         return Err(UsageError("--repeats must be at least 1".into()).into());
+    }
+    // Sizes that decide memory, refused before anything is allocated.
+    if args.steps > MAX_STEPS {
+        return Err(UsageError(format!(
+            "--steps {} is over the limit of {MAX_STEPS} (each step's time is kept): time fewer steps",
+            args.steps
+        ))
+        .into());
+    }
+    if args.hidden > MAX_HIDDEN {
+        return Err(UsageError(format!(
+            "--hidden {} is over the limit of {MAX_HIDDEN} units (a layer's weights grow with its square): use a smaller model",
+            args.hidden
+        ))
+        .into());
+    }
+    if let Some(&batch) = args
+        .batch
+        .iter()
+        .find(|&&b| b.saturating_mul(args.hidden) > MAX_BATCH_UNITS)
+    {
+        return Err(UsageError(format!(
+            "--batch {batch} x --hidden {} is over the limit of {MAX_BATCH_UNITS} units of state: use smaller batches",
+            args.hidden
+        ))
+        .into());
     }
     if !args.npss.is_empty() {
         return run_npss(&args);

@@ -63,19 +63,19 @@ pub const LEAN_SOFTNESS_DEG: f32 = 6.0;
 /// windows every 1 s (`motion_metrics::plausibility::RealRanges`; its data test recomputes it).
 /// `discussion` and `waiting` have no S5 file and no reference: they get the widest limit.
 pub const LEAN_P95_DEG: [(&str, f32); 13] = [
-    ("directions", 20.4),
-    ("eating", 30.5),
-    ("greeting", 36.0),
-    ("phoning", 44.2),
-    ("posing", 44.4),
-    ("purchases", 95.5),
-    ("sitting", 76.2),
-    ("sittingdown", 99.1),
-    ("smoking", 45.4),
-    ("takingphoto", 67.5),
-    ("walking", 30.8),
-    ("walkingdog", 78.0),
-    ("walkingtogether", 15.2),
+    ("directions", 19.8),
+    ("eating", 31.9),
+    ("greeting", 36.9),
+    ("phoning", 46.5),
+    ("posing", 46.7),
+    ("purchases", 102.8),
+    ("sitting", 82.1),
+    ("sittingdown", 97.4),
+    ("smoking", 46.0),
+    ("takingphoto", 65.3),
+    ("walking", 30.9),
+    ("walkingdog", 81.0),
+    ("walkingtogether", 13.6),
 ];
 
 /// The lean limit of `action` (degrees): its [`LEAN_P95_DEG`], or the largest of them for an

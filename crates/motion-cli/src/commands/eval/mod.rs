@@ -150,6 +150,14 @@ pub fn run(args: Args) -> Result<()> {
         ))
         .into());
     }
+    // The predictions of one action (8 windows x samples x horizon x 99 values) are held at
+    // once: refused before anything is allocated when they would pass the sample limit.
+    motion_core::model::samples::check_sample_size(
+        WINDOWS_PER_ACTION.saturating_mul(args.samples),
+        args.horizon,
+        H36M_FRAME_DIMS,
+    )
+    .map_err(|e| UsageError(format!("--samples {} x 8 windows: {e}", args.samples)))?;
     if args.samples == 0 {
         return Err(UsageError("--samples must be at least 1".into()).into());
     }
