@@ -732,3 +732,132 @@ fn only_regular_files_are_read() {
         &["zero.safetensors", "not a regular file"],
     );
 }
+
+/// A FIFO named as weights, a motion or a joint map is refused at once (opening one for reading
+/// blocks until a writer comes).
+#[cfg(unix)]
+#[test]
+fn fifos_as_inputs_are_refused_not_waited_on() {
+    let dir = scratch("fifo-inputs");
+    for name in ["w.safetensors", "m.npy", "map.json"] {
+        let made = Command::new("mkfifo").arg(dir.join(name)).status();
+        if !made.is_ok_and(|s| s.success()) {
+            eprintln!("SKIPPED: mkfifo is not available");
+            return;
+        }
+    }
+    let out = dir.join("o.bvh");
+    bad_input(
+        &dir,
+        &[
+            &"predict",
+            &"--seed",
+            &walk_seed(),
+            &"--model",
+            &dir.join("w.safetensors"),
+            &"--out",
+            &out,
+        ],
+        &["w.safetensors", "not a regular file"],
+    );
+    bad_input(
+        &dir,
+        &[
+            &"score",
+            &"--gt",
+            &dir.join("m.npy"),
+            &"--pred",
+            &dir.join("m.npy"),
+            &"--metric",
+            &"euler",
+        ],
+        &["m.npy", "not a regular file"],
+    );
+    bad_input(
+        &dir,
+        &[
+            &"predict",
+            &"--seed",
+            &walk_seed(),
+            &"--joint-map",
+            &dir.join("map.json"),
+            &"--out",
+            &out,
+        ],
+        &["map.json", "not a regular file"],
+    );
+}
+
+/// An output that is (after symlinks) one of the command's inputs is refused, and the input is
+/// left as it was.
+#[test]
+fn outputs_that_are_inputs_are_refused_for_every_command() {
+    let dir = scratch("outputs-are-inputs");
+    let text = dir.join("a.txt");
+    let row = vec!["0.01"; 99].join(",");
+    std::fs::write(&text, vec![row; 60].join("\n")).unwrap();
+    let model = dir.join("m.npy");
+    std::fs::copy(fixture_model(), &model).unwrap();
+    let map = dir.join("map.txt");
+    std::fs::write(&map, "{}").unwrap();
+    #[cfg(unix)]
+    std::os::unix::fs::symlink(&text, dir.join("link.txt")).unwrap();
+    let before: Vec<Vec<u8>> = [&text, &model, &map]
+        .iter()
+        .map(|p| std::fs::read(p).unwrap())
+        .collect();
+    bad_input(&dir, &[&"convert", &text, &text], &["also an input"]);
+    bad_input(
+        &dir,
+        &[&"convert", &"--fps", &"25", &text, &text],
+        &["also an input"],
+    );
+    #[cfg(unix)]
+    bad_input(
+        &dir,
+        &[&"convert", &text, &dir.join("link.txt")],
+        &["also an input"],
+    );
+    bad_input(
+        &dir,
+        &[
+            &"predict",
+            &"--seed",
+            &walk_seed(),
+            &"--joint-map",
+            &map,
+            &"--out",
+            &map,
+        ],
+        &["map.txt", "also an input"],
+    );
+    bad_input(
+        &dir,
+        &[
+            &"eval",
+            &"--data",
+            &dir,
+            &"--model",
+            &model,
+            &"--save-predictions",
+            &model,
+        ],
+        &["m.npy", "also an input"],
+    );
+    bad_input(
+        &dir,
+        &[
+            &"eval",
+            &"--data",
+            &dir,
+            &"--save-predictions",
+            &dir.join("p.txt"),
+        ],
+        &["p.txt", ".npy"],
+    );
+    let after: Vec<Vec<u8>> = [&text, &model, &map]
+        .iter()
+        .map(|p| std::fs::read(p).unwrap())
+        .collect();
+    assert!(before == after, "an input was changed");
+}

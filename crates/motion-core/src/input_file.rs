@@ -5,10 +5,17 @@ use std::fs::File;
 use std::io::{Error, ErrorKind, Read};
 use std::path::Path;
 
-/// Opens `path` (following symlinks) if it is a regular file.
+/// Opens `path` (following symlinks) if it is a regular file. The kind is checked before the
+/// file is opened (opening a FIFO for reading blocks until a writer comes) and again on the open
+/// file.
 pub fn open_regular(path: &Path) -> std::io::Result<File> {
+    check_kind(std::fs::metadata(path)?.file_type())?;
     let file = File::open(path)?;
-    let kind = file.metadata()?.file_type();
+    check_kind(file.metadata()?.file_type())?;
+    Ok(file)
+}
+
+fn check_kind(kind: std::fs::FileType) -> std::io::Result<()> {
     if !kind.is_file() {
         let what = if kind.is_dir() {
             "a directory"
@@ -20,7 +27,7 @@ pub fn open_regular(path: &Path) -> std::io::Result<File> {
             format!("not a regular file ({what})"),
         ));
     }
-    Ok(file)
+    Ok(())
 }
 
 /// Reads all of `path` if it is a regular file ([`open_regular`]).
@@ -55,6 +62,13 @@ mod tests {
         assert_eq!(read_regular_text(&file).unwrap(), "x");
         #[cfg(unix)]
         {
+            // A FIFO with no writer: refused at once instead of blocking in open().
+            let fifo = dir.join("pipe.txt");
+            let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+            if made.is_ok_and(|s| s.success()) {
+                let e = read_regular(&fifo).unwrap_err();
+                assert!(e.to_string().contains("FIFO"), "{e}");
+            }
             let link = dir.join("zero.bvh");
             std::os::unix::fs::symlink("/dev/zero", &link).unwrap();
             assert_eq!(

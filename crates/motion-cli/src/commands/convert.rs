@@ -92,6 +92,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
     }
 
+    motion_core::clip::check_not_an_input(&args.output, &[&args.input])?;
     let mut loaded = read_any(&args.input, args.input_fps)?;
     let input = Described::of(&loaded);
     let mut notices = Vec::new();

@@ -190,10 +190,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             return Err(UsageError(format!("{}: no such file", args.seed.display())).into());
         }
         check_output(&args.out)?;
-        check_not_an_input(&args.out, &[&args.seed])?;
+        // Every file the command reads: none may be overwritten.
+        let mut inputs: Vec<&Path> = vec![&args.seed];
+        inputs.extend(
+            [&args.joint_map, &args.model, &args.classifier]
+                .into_iter()
+                .flatten()
+                .map(PathBuf::as_path),
+        );
+        check_not_an_input(&args.out, &inputs)?;
         if let Some(truth) = &args.truth {
             check_output(truth)?;
-            check_not_an_input(truth, &[&args.seed, &args.out])?;
+            inputs.push(&args.out);
+            check_not_an_input(truth, &inputs)?;
         }
     } else if args.truth.is_some() {
         return Err(UsageError("--truth takes one seed file, not a directory".into()).into());

@@ -124,6 +124,10 @@ fn kind_of(out: &Path) -> anyhow::Result<Kind> {
 /// Runs the command.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let kind = kind_of(&args.out)?;
+    let inputs: Vec<&Path> = std::iter::once(args.input.as_path())
+        .chain(args.compare.as_deref())
+        .collect();
+    motion_core::clip::check_not_an_input(&args.out, &inputs)?;
     let dir = match args.out.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),

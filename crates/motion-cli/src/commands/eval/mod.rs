@@ -161,6 +161,21 @@ pub fn run(args: Args) -> Result<()> {
     if args.samples == 0 {
         return Err(UsageError("--samples must be at least 1".into()).into());
     }
+    if let Some(out) = &args.save_predictions {
+        if out.extension().and_then(|e| e.to_str()) != Some("npy") {
+            return Err(UsageError(format!(
+                "--save-predictions {}: the predictions are written as .npy; name the file FILE.npy",
+                out.display()
+            ))
+            .into());
+        }
+        let inputs: Vec<&std::path::Path> = [&args.model, &args.classifier]
+            .into_iter()
+            .flatten()
+            .map(PathBuf::as_path)
+            .collect();
+        motion_core::clip::check_not_an_input(out, &inputs)?;
+    }
     if let Some(plot) = &args.plot {
         crate::plot::check_extension(plot)?;
     }
