@@ -41,8 +41,56 @@ enum Command {
     Bench(commands::bench::Args),
 }
 
+/// `text` with its control characters escaped (`\u{7}`), so that a name a user typed is never
+/// sent raw to the terminal; line breaks between causes are kept.
+fn printable(text: &str) -> String {
+    text.chars()
+        .flat_map(|c| {
+            if c.is_control() && c != '\n' {
+                c.escape_default().collect::<Vec<_>>()
+            } else {
+                vec![c]
+            }
+        })
+        .collect()
+}
+
+/// Help and version print as clap writes them (exit 0); a usage error prints one line, clap's
+/// message without its usage block and tip, and exits 2 like every other bad input.
+fn usage_error(e: &clap::Error) -> ExitCode {
+    use clap::error::ErrorKind;
+    if matches!(
+        e.kind(),
+        ErrorKind::DisplayHelp
+            | ErrorKind::DisplayVersion
+            | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
+    ) {
+        let _ = e.print();
+        return if e.kind() == ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand {
+            ExitCode::from(2)
+        } else {
+            ExitCode::SUCCESS
+        };
+    }
+    let text = e.render().to_string();
+    // The message is everything before clap's usage block and tip, on one line.
+    let message: Vec<&str> = text
+        .lines()
+        .map(str::trim)
+        .take_while(|l| !l.starts_with("Usage:") && !l.starts_with("For more information"))
+        .filter(|l| !l.is_empty() && !l.starts_with("tip:"))
+        .collect();
+    let message = message.join(" ");
+    let message = message.strip_prefix("error: ").unwrap_or(&message);
+    eprintln!("error: {} (see --help)", printable(message));
+    ExitCode::from(2)
+}
+
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => return usage_error(&e),
+    };
     // SIGINT / SIGTERM: remove the temporary files of outputs being written, then exit 1 (an
     // interruption is the environment's doing, not bad input). A handler that cannot be
     // installed (another one is) changes nothing else.
@@ -54,7 +102,7 @@ fn main() -> ExitCode {
     // MOTION_SIMD=avx512|avx2|neon|portable picks the kernels; a bad value is bad input.
     if let Err(err) = motion_core::nn::simd::init_from_env() {
         let err = anyhow::Error::new(err);
-        eprintln!("error: {}", commands::error_chain(&err));
+        eprintln!("error: {}", printable(&commands::error_chain(&err)));
         return ExitCode::from(commands::exit_code(&err));
     }
     let verbose = cli.verbose;
@@ -70,11 +118,11 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) if verbose => {
-            eprintln!("{}", commands::error_causes(&err));
+            eprintln!("{}", printable(&commands::error_causes(&err)));
             ExitCode::from(commands::exit_code(&err))
         }
         Err(err) => {
-            eprintln!("error: {}", commands::error_chain(&err));
+            eprintln!("error: {}", printable(&commands::error_chain(&err)));
             ExitCode::from(commands::exit_code(&err))
         }
     }

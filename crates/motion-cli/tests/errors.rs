@@ -861,3 +861,63 @@ fn outputs_that_are_inputs_are_refused_for_every_command() {
         .collect();
     assert!(before == after, "an input was changed");
 }
+
+/// Usage errors are one line and exit 2; typed control characters come back escaped; numbers
+/// are printed short.
+#[test]
+fn error_lines_are_one_short_printable_line() {
+    let dir = scratch("error-lines");
+    bad_input(
+        &dir,
+        &[&"predict", &"--bogus"],
+        &["unexpected argument '--bogus'", "--help"],
+    );
+    bad_input(
+        &dir,
+        &[&"predict"],
+        &["required arguments", "--seed", "--out"],
+    );
+    let out = dir.join("o.bvh");
+    let (seed, model) = (walk_seed(), fixture_model());
+    bad_input(
+        &dir,
+        &[
+            &"predict",
+            &"--seed",
+            &seed,
+            &"--model",
+            &model,
+            &"--action",
+            &"walk\u{7}ing",
+            &"--out",
+            &out,
+        ],
+        &["walk\\u{7}ing"],
+    );
+    bad_input(
+        &dir,
+        &[
+            &"predict",
+            &"--seed",
+            &walk_seed(),
+            &"--input-fps",
+            &"1e300",
+            &"--out",
+            &out,
+        ],
+        &["--input-fps", "1.000e300"],
+    );
+    let output = Command::new(env!("CARGO_BIN_EXE_motion-cli"))
+        .args(["predict", "--action", "walk\u{7}ing", "--seed"])
+        .arg(walk_seed())
+        .arg("--model")
+        .arg(fixture_model())
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(
+        !output.stderr.contains(&7u8),
+        "a raw BEL reached the terminal"
+    );
+}

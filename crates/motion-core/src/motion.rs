@@ -24,8 +24,23 @@ pub fn check_fps(fps: f64) -> Result<(), String> {
         Ok(())
     } else {
         Err(format!(
-            "{fps} fps is outside {MIN_FPS} ..= {MAX_FPS} frames per second"
+            "{} fps is outside {MIN_FPS} ..= {MAX_FPS} frames per second",
+            compact_number(fps)
         ))
+    }
+}
+
+/// `x` for an error line: as written when it is of everyday size, else in scientific notation
+/// with four significant digits (`1.000e300`, never three hundred digits).
+pub fn compact_number(x: f64) -> String {
+    if x == 0.0 || (x.is_finite() && (1e-4..1e7).contains(&x.abs())) {
+        let short = format!("{x:.6}");
+        let short = short.trim_end_matches('0').trim_end_matches('.');
+        short.to_string()
+    } else if x.is_finite() {
+        format!("{x:.3e}")
+    } else {
+        format!("{x}")
     }
 }
 
@@ -34,8 +49,9 @@ pub fn check_fps(fps: f64) -> Result<(), String> {
 pub fn check_frame_time(frame_time: f64) -> Result<(), String> {
     check_fps(1.0 / frame_time).map_err(|_| {
         format!(
-            "Frame Time {frame_time} s is {:.4} fps, outside {MIN_FPS} ..= {MAX_FPS} fps{}",
-            1.0 / frame_time,
+            "Frame Time {} s is {} fps, outside {MIN_FPS} ..= {MAX_FPS} fps{}",
+            compact_number(frame_time),
+            compact_number(1.0 / frame_time),
             if frame_time >= 1.0 {
                 " (is it in milliseconds? BVH frame times are seconds)"
             } else {
@@ -320,5 +336,15 @@ mod tests {
         )
         .unwrap();
         assert_eq!(c.positions(), p);
+    }
+
+    #[test]
+    fn numbers_in_error_lines_are_short() {
+        assert_eq!(compact_number(25.0), "25");
+        assert_eq!(compact_number(0.04), "0.04");
+        assert_eq!(compact_number(1e300), "1.000e300");
+        assert_eq!(compact_number(1e-38), "1.000e-38");
+        assert!(compact_number(f64::MAX).len() < 12);
+        assert_eq!(compact_number(f64::INFINITY), "inf");
     }
 }

@@ -177,12 +177,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             .into());
         }
     }
-    if !(args.input_fps.is_finite() && args.input_fps > 0.0) {
-        return Err(UsageError(format!(
-            "--input-fps must be positive, got {}",
-            args.input_fps
-        ))
-        .into());
+    // The one frame-rate rule, whatever the seed's format.
+    if let Err(problem) = motion_core::motion::check_fps(args.input_fps) {
+        return Err(UsageError(format!("--input-fps: {problem}")).into());
     }
     let batch = args.seed.is_dir();
     if !batch {
