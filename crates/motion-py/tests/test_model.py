@@ -29,7 +29,8 @@ def test_a_generator_streams_what_predict_returns():
     seed = clip[-model.seed_frames:]
     # predict reads the clip's last seed_frames frames (a clip's first frame is its absolute
     # start, so the whole 75-frame clip is passed: its window starts mid-clip).
-    batch = model.predict(clip, action="eating", frames=12, rng_seed=9)[0]
+    # The generator streams the model's raw frames: predict's without grounding.
+    batch = model.predict(clip, action="eating", frames=12, rng_seed=9, grounding=False)[0]
     g = model.generator(rng_seed=9)
     g.start(seed, "eating")
     streamed = np.stack([g.step() for _ in range(12)])

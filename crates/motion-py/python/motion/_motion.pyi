@@ -103,6 +103,7 @@ class Model:
         samples: int = 1,
         rng_seed: int = 0,
         input_fps: Optional[float] = None,
+        grounding: bool = True,
     ) -> F64: ...
     def generator(self, rng_seed: int = 0) -> "Generator": ...
 
