@@ -559,6 +559,27 @@ fn zero_std_on_a_used_dim_is_rejected() {
 }
 
 #[test]
+fn a_std_or_mean_that_overflows_is_rejected() {
+    for (tensor, value) in [
+        ("norm.std", 1e-38f32),
+        ("norm.mean", 3e38),
+        ("norm.std", f32::NAN),
+    ] {
+        let (_dir, path) = edited("gru_d.safetensors", |(t, _)| {
+            let entry = t.iter_mut().find(|(n, _, _)| n == tensor).unwrap();
+            entry.2[6] = value; // dim 6 is used
+        });
+        let (err, msg) = load_error(&path);
+        // NaN is caught when the tensor is read, the others by the normalization's range.
+        assert!(
+            value.is_nan() || matches!(err, WeightsError::InvalidTensor { .. }),
+            "{msg}"
+        );
+        assert!(msg.contains(tensor) && msg.contains(" 6"), "{msg}");
+    }
+}
+
+#[test]
 fn action_classifier_matches_pytorch() {
     use motion::core::model::ActionClassifier;
     let classifier = ActionClassifier::load(fixture("action_classifier.safetensors")).unwrap();

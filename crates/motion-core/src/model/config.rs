@@ -215,6 +215,23 @@ impl ModelConfig {
             limits::PLAN_VALUES,
         )?;
         validate_dims_used(&self.dims_used, self.frame_dims)?;
+        if self.seed_frames == 0 {
+            return Err("seed_frames is 0: the model needs at least one seed frame".into());
+        }
+        for (i, name) in self.actions.iter().enumerate() {
+            if name.trim().is_empty() {
+                return Err(format!("action label {i} is empty"));
+            }
+            if self.actions[..i].contains(name) {
+                return Err(format!(
+                    "action label {name:?} appears twice (labels {} and {i})",
+                    self.actions[..i]
+                        .iter()
+                        .position(|a| a == name)
+                        .unwrap_or(0)
+                ));
+            }
+        }
         if self.hidden == 0 {
             return Err("hidden is 0".into());
         }
@@ -543,5 +560,20 @@ mod tests {
             let e = c.validate().unwrap_err();
             assert!(e.contains(needle), "{needle}: {e}");
         }
+    }
+
+    #[test]
+    fn zero_seed_frames_and_repeated_or_empty_labels_are_refused() {
+        let good = ModelConfig::paper(Architecture::VgruD);
+        assert!(good.validate().is_ok());
+        let mut c = good.clone();
+        c.seed_frames = 0;
+        assert!(c.validate().unwrap_err().contains("seed_frames is 0"));
+        let mut c = good.clone();
+        c.actions[1] = c.actions[0].clone();
+        assert!(c.validate().unwrap_err().contains("appears twice"));
+        let mut c = good;
+        c.actions[2] = " ".into();
+        assert!(c.validate().unwrap_err().contains("empty"));
     }
 }

@@ -80,6 +80,17 @@ pub enum GenerateError {
     /// A plan horizon of 0 steps.
     #[error("plan horizon must be at least 1 step")]
     ZeroHorizon,
+    /// The model produced a value that is not finite (weights that overflow on this seed):
+    /// nothing is written.
+    #[error("the model produced a non-finite value at frame {frame}, dim {dim} of sample {sample}: its weights overflow on this seed")]
+    NonFiniteOutput {
+        /// The sample.
+        sample: usize,
+        /// The predicted frame (0-based).
+        frame: usize,
+        /// The dim.
+        dim: usize,
+    },
     /// A batch row that does not exist.
     #[error("character {row} does not exist: the batch has {batch}")]
     NoSuchRow {

@@ -13,8 +13,15 @@ pub struct Normalization {
     dims_used: Vec<usize>,
 }
 
+/// The smallest std of a used dim a weights file may carry (motion dims vary by far more).
+pub const MIN_STD: f32 = 1e-6;
+/// The largest mean of a used dim, in size (millimetres and radians stay far below).
+pub const MAX_MEAN: f32 = 1e7;
+
 impl Normalization {
-    /// Reads `norm.mean` and `norm.std` (`[frame_dims]`); rejects a zero std on a used dim.
+    /// Reads `norm.mean` and `norm.std` (`[frame_dims]`); rejects, on a used dim, a std that is
+    /// not finite or below [`MIN_STD`] (dividing by it overflows f32) and a mean that is not
+    /// finite or larger than [`MAX_MEAN`] in size.
     pub fn load(
         store: &WeightStore,
         frame_dims: usize,
@@ -22,12 +29,34 @@ impl Normalization {
     ) -> Result<Self, WeightsError> {
         let mean = store.tensor("norm.mean", &[frame_dims])?;
         let std = store.tensor("norm.std", &[frame_dims])?;
-        if let Some(&d) = dims_used.iter().find(|&&d| std[d] == 0.0) {
-            return Err(WeightsError::InvalidTensor {
-                path: store.path().to_path_buf(),
-                tensor: "norm.std".into(),
-                problem: format!("std of used dim {d} is 0"),
-            });
+        let bad = |tensor: &str, problem: String| WeightsError::InvalidTensor {
+            path: store.path().to_path_buf(),
+            tensor: tensor.into(),
+            problem,
+        };
+        if let Some(&d) = dims_used
+            .iter()
+            .find(|&&d| !(std[d].is_finite() && std[d].abs() >= MIN_STD))
+        {
+            return Err(bad(
+                "norm.std",
+                format!(
+                    "std of used dim {d} is {:e}, outside {MIN_STD:e} ..= finite",
+                    std[d]
+                ),
+            ));
+        }
+        if let Some(&d) = dims_used
+            .iter()
+            .find(|&&d| !(mean[d].is_finite() && mean[d].abs() <= MAX_MEAN))
+        {
+            return Err(bad(
+                "norm.mean",
+                format!(
+                    "mean of used dim {d} is {:e}, larger than {MAX_MEAN:e} in size",
+                    mean[d]
+                ),
+            ));
         }
         Ok(Self {
             mean,

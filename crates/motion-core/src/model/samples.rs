@@ -64,6 +64,13 @@ pub fn generate_samples(
         for (i, row) in step.outer_iter().enumerate() {
             out.slice_mut(s![i, t, ..])
                 .zip_mut_with(&row, |o, &v| *o = f64::from(v));
+            if let Some(dim) = row.iter().position(|v| !v.is_finite()) {
+                return Err(GenerateError::NonFiniteOutput {
+                    sample: i,
+                    frame: t,
+                    dim,
+                });
+            }
         }
     }
     Ok(out)
