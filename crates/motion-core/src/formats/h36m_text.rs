@@ -23,6 +23,14 @@ fn io_error(path: &Path, source: std::io::Error) -> FormatError {
     }
 }
 
+/// The most text (decompressed) one exp-map file may hold: 256 MiB (the H3.6M files are a
+/// few MiB).
+pub const MAX_TEXT_BYTES: u64 = 256 << 20;
+/// The longest line: 1 MiB (a frame of 99 values is about 2 KiB).
+pub const MAX_LINE_BYTES: u64 = 1 << 20;
+/// The most values one file may give (512 MiB of f64).
+pub const MAX_VALUES: usize = 1 << 26;
+
 /// Reads an exp-map text file (`.txt` or `.txt.gz`) into `frames x columns`.
 ///
 /// Errors: missing/unreadable file ([`FormatError::Io`]); a non-number, NaN/infinite value or a
@@ -50,18 +58,56 @@ pub fn parse_expmap_text(reader: impl BufRead, path: &Path) -> Result<Array2<f64
         line,
         problem,
     };
-    for (index, line) in reader.lines().enumerate() {
-        let line_no = index + 1;
-        let line = line.map_err(|e| match e.kind() {
-            std::io::ErrorKind::InvalidData => parse_err(
+    // Bounded before it is read: the whole text (a gzip bomb expands without end) and each line.
+    let mut reader = reader.take(MAX_TEXT_BYTES + 1);
+    let mut bytes = Vec::new();
+    let mut line_no = 0usize;
+    loop {
+        bytes.clear();
+        let read = (&mut reader)
+            .take(MAX_LINE_BYTES + 1)
+            .read_until(b'\n', &mut bytes)
+            .map_err(|e| match e.kind() {
+                std::io::ErrorKind::InvalidData => {
+                    parse_err(line_no + 1, format!("not a valid gzip stream ({e})"))
+                }
+                _ => io_error(path, e),
+            })?;
+        if read == 0 {
+            break;
+        }
+        line_no += 1;
+        if reader.limit() == 0 {
+            return Err(FormatError::Invalid {
+                path: path.to_path_buf(),
+                problem: format!(
+                    "more than {} MiB of text (decompressed): over the limit of this reader; split the file",
+                    MAX_TEXT_BYTES >> 20
+                ),
+            });
+        }
+        if bytes.len() as u64 > MAX_LINE_BYTES {
+            return Err(parse_err(
                 line_no,
-                format!("not UTF-8 text or not a valid gzip stream ({e})"),
-            ),
-            _ => io_error(path, e),
-        })?;
+                format!(
+                    "a line longer than {} KiB (a frame is a few KiB): not exp-map text",
+                    MAX_LINE_BYTES >> 10
+                ),
+            ));
+        }
+        let line = std::str::from_utf8(&bytes)
+            .map_err(|_| parse_err(line_no, "not UTF-8 text".to_string()))?;
         let trimmed = line.trim();
         if trimmed.is_empty() {
             continue;
+        }
+        if values.len() >= MAX_VALUES {
+            return Err(FormatError::Invalid {
+                path: path.to_path_buf(),
+                problem: format!(
+                    "more than {MAX_VALUES} values: over the limit of this reader; split the file"
+                ),
+            });
         }
         let mut count = 0usize;
         for (col, field) in trimmed.split(',').enumerate() {
@@ -265,5 +311,40 @@ pub(crate) mod tests {
             downsample_protocol(x.slice(ndarray::s![..6, ..])).nrows(),
             3
         );
+    }
+
+    /// An endless stream of one byte pattern.
+    struct Endless(&'static [u8], usize);
+
+    impl std::io::Read for Endless {
+        fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+            for b in buf.iter_mut() {
+                *b = self.0[self.1 % self.0.len()];
+                self.1 += 1;
+            }
+            Ok(buf.len())
+        }
+    }
+
+    #[test]
+    fn endless_text_is_cut_at_the_limits_not_read_until_memory_runs_out() {
+        let path = Path::new("bomb.txt.gz");
+        let read = |pattern: &'static [u8]| {
+            parse_expmap_text(BufReader::new(Endless(pattern, 0)), path)
+                .unwrap_err()
+                .to_string()
+        };
+        // One line without end.
+        let e = read(b"0.1,");
+        assert!(
+            e.contains("bomb.txt.gz:1") && e.contains("line longer"),
+            "{e}"
+        );
+        // Blank lines without end: the whole text's limit.
+        let e = read(b"\n");
+        assert!(e.contains("MiB of text"), "{e}");
+        // Values without end: the values' limit.
+        let e = read(b"0\n");
+        assert!(e.contains("values"), "{e}");
     }
 }
