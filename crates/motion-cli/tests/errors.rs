@@ -921,3 +921,25 @@ fn error_lines_are_one_short_printable_line() {
         "a raw BEL reached the terminal"
     );
 }
+
+/// A BVH whose offsets overflow gives no NaN or infinite positions with exit 0.
+#[test]
+fn offsets_that_overflow_are_refused() {
+    let dir = scratch("overflowing-offsets");
+    let mut text = std::fs::read_to_string(walk_seed()).unwrap();
+    let mut from = 0;
+    for _ in 0..3 {
+        let joint = from + text[from..].find("JOINT").unwrap();
+        let at = joint + text[joint..].find("OFFSET").unwrap();
+        let end = at + text[at..].find('\n').unwrap();
+        text.replace_range(at..end, "OFFSET 0 1e308 1e308");
+        from = at + 1;
+    }
+    let bvh = dir.join("big.bvh");
+    std::fs::write(&bvh, text).unwrap();
+    bad_input(
+        &dir,
+        &[&"convert", &"--positions", &bvh, &dir.join("p.npy")],
+        &["big.bvh", "not finite"],
+    );
+}

@@ -254,13 +254,24 @@ pub fn format_name(format: FileFormat) -> &'static str {
 }
 
 /// World joint positions (`frames x joints x 3`, the file's units) of `loaded`.
+/// Positions that are not finite (offsets or translations so large that they overflow) are
+/// refused, naming the first frame and joint.
 pub fn positions(loaded: &AnyMotion, input: &Path) -> Result<Array3<f64>, AnyMotionError> {
-    Ok(match loaded {
+    let positions = match loaded {
         AnyMotion::ExpMap(motion) => motion.positions(),
         AnyMotion::Bvh(bvh) => channel_positions(&bvh.skeleton, bvh.frames.view())
             .map_err(|e| invalid(input, format!("forward kinematics: {e}")))?,
         AnyMotion::Unknown { frames, .. } => return Err(no_skeleton(input, frames.ncols())),
-    })
+    };
+    if let Some(((frame, joint, _), _)) = positions.indexed_iter().find(|(_, v)| !v.is_finite()) {
+        return Err(invalid(
+            input,
+            format!(
+                "frame {frame}, joint {joint}: the position is not finite (offsets or translations too large to add up)"
+            ),
+        ));
+    }
+    Ok(positions)
 }
 
 fn no_skeleton(input: &Path, columns: usize) -> AnyMotionError {
