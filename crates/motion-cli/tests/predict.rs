@@ -582,7 +582,8 @@ fn write_rig_walk(path: &Path, rename: Option<(&str, &str)>) {
     let mut bvh = resample_bvh(
         &retargeter.to_rig(&read_bvh(walk_seed()).unwrap(), rest.view()),
         120.0,
-    );
+    )
+    .unwrap();
     if let Some((from, to)) = rename {
         let joints = bvh
             .skeleton
@@ -625,7 +626,7 @@ fn a_seed_on_another_rig_is_predicted_and_written_back_onto_it() {
     );
     assert!((pred.fps() - 25.0).abs() < 1e-9);
     // The seed part (the fixture model reads 10 frames) is the input at 25 Hz, unchanged.
-    let at25 = motion_core::resample::resample_bvh(&input, 25.0);
+    let at25 = motion_core::resample::resample_bvh(&input, 25.0).unwrap();
     let (n, k) = (at25.frames.nrows(), 10);
     assert_eq!(pred.frames.nrows(), k + 20);
     let mut worst: f64 = 0.0;

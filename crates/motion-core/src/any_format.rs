@@ -146,7 +146,7 @@ pub fn resample_any(
         }
     };
     Ok((
-        AnyMotion::Bvh(resample_bvh(&bvh, target)),
+        AnyMotion::Bvh(resample_bvh(&bvh, target).map_err(|e| invalid(input, e))?),
         "interpolating (rotations by slerp, positions linearly)".into(),
     ))
 }

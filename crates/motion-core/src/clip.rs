@@ -160,7 +160,10 @@ pub fn write_clips(
                     None => bvh,
                 };
                 let bvh = match clips.out_fps {
-                    Some(fps) => resample_bvh(&bvh, fps),
+                    Some(fps) => resample_bvh(&bvh, fps).map_err(|e| ClipError::Output {
+                        path: path.clone(),
+                        problem: e.to_string(),
+                    })?,
                     None => bvh,
                 };
                 write_bvh(&path, &bvh)?;

@@ -5,6 +5,8 @@ use std::fs::File;
 use std::io::{Error, ErrorKind, Read};
 use std::path::Path;
 
+use crate::limits::MAX_INPUT_BYTES;
+
 /// Opens `path` (following symlinks) if it is a regular file. The kind is checked before the
 /// file is opened (opening a FIFO for reading blocks until a writer comes) and again on the open
 /// file.
@@ -30,12 +32,32 @@ fn check_kind(kind: std::fs::FileType) -> std::io::Result<()> {
     Ok(())
 }
 
-/// Reads all of `path` if it is a regular file ([`open_regular`]).
+/// Reads all of `path` if it is a regular file ([`open_regular`]) of at most
+/// [`MAX_INPUT_BYTES`] bytes (a larger file is refused before it is read; a file that grows
+/// while read is cut off at the limit and refused).
 pub fn read_regular(path: &Path) -> std::io::Result<Vec<u8>> {
-    let mut file = open_regular(path)?;
-    let mut bytes = Vec::new();
-    file.read_to_end(&mut bytes)?;
+    let file = open_regular(path)?;
+    let size = file.metadata()?.len();
+    if size > MAX_INPUT_BYTES {
+        return Err(too_large(size));
+    }
+    let mut bytes = Vec::with_capacity(size as usize);
+    file.take(MAX_INPUT_BYTES + 1).read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > MAX_INPUT_BYTES {
+        return Err(too_large(bytes.len() as u64));
+    }
     Ok(bytes)
+}
+
+fn too_large(size: u64) -> Error {
+    Error::new(
+        ErrorKind::InvalidData,
+        format!(
+            "{} MiB is over the {} MiB limit for a file read whole (MAX_INPUT_BYTES)",
+            size >> 20,
+            MAX_INPUT_BYTES >> 20
+        ),
+    )
 }
 
 /// Reads all of `path` as UTF-8 text if it is a regular file ([`open_regular`]).

@@ -87,6 +87,7 @@ pub mod formats;
 pub mod grounding;
 pub mod input_file;
 pub mod kinematics;
+pub mod limits;
 pub mod model;
 pub mod motion;
 pub mod nn;

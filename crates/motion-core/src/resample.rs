@@ -9,6 +9,7 @@ use ndarray::Array2;
 
 use crate::formats::bvh::Bvh;
 use crate::formats::expmap_bvh::{bvh_euler_to_quat, continuous_euler_degrees};
+use crate::limits::{check_clip, ClipTooLarge};
 use crate::pose::{root_motion_between, Pose};
 use crate::rotation::EulerOrder;
 use crate::skeleton::Skeleton;
@@ -58,12 +59,20 @@ pub fn resampled_len(frames: usize, from: f64, to: f64) -> usize {
 }
 
 /// `bvh` resampled to `fps` (see the module docs). Frame `k` of the result is at time `k / fps`.
-pub fn resample_bvh(bvh: &Bvh, fps: f64) -> Bvh {
+///
+/// # Errors
+/// A result over [`crate::limits::MAX_CLIP_VALUES`], refused before it is allocated.
+pub fn resample_bvh(bvh: &Bvh, fps: f64) -> Result<Bvh, ClipTooLarge> {
     let skeleton = &bvh.skeleton;
     let source_fps = bvh.fps();
     let frames_in = bvh.frames.nrows();
     let frames_out = resampled_len(frames_in, source_fps, fps);
     let channels = skeleton.channel_count();
+    check_clip(
+        frames_out,
+        channels,
+        "ask for a lower frame rate or fewer frames",
+    )?;
     let plans: Vec<JointPlan> = (0..skeleton.len()).map(|j| plan(skeleton, j)).collect();
     let mut rotation_columns = vec![false; channels];
     for p in &plans {
@@ -98,11 +107,11 @@ pub fn resample_bvh(bvh: &Bvh, fps: f64) -> Bvh {
             }
         }
     }
-    Bvh {
+    Ok(Bvh {
         skeleton: skeleton.clone(),
         frames: out,
         frame_time: 1.0 / fps,
-    }
+    })
 }
 
 /// How many source poses a [`PoseResampler`] holds (the two it interpolates and look-ahead).
@@ -351,7 +360,7 @@ mod tests {
     #[test]
     fn whole_ratio_keeps_the_source_frames() {
         let bvh = clip(41, 50.0);
-        let half = resample_bvh(&bvh, 25.0);
+        let half = resample_bvh(&bvh, 25.0).unwrap();
         assert_eq!(half.frames.nrows(), 21);
         let p_in = channel_positions(&bvh.skeleton, bvh.frames.view()).unwrap();
         let p_out = channel_positions(&half.skeleton, half.frames.view()).unwrap();
@@ -367,7 +376,7 @@ mod tests {
     #[test]
     fn in_between_frames_lie_between_their_neighbours() {
         let bvh = clip(13, 120.0);
-        let out = resample_bvh(&bvh, 50.0);
+        let out = resample_bvh(&bvh, 50.0).unwrap();
         assert_eq!(out.frames.nrows(), 6);
         let p_in = channel_positions(&bvh.skeleton, bvh.frames.view()).unwrap();
         let p_out = channel_positions(&out.skeleton, out.frames.view()).unwrap();

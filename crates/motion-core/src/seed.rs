@@ -216,7 +216,7 @@ fn bvh_frames(
         let frames = if same_rate(bvh.fps(), fps) {
             bvh.frames.clone()
         } else {
-            resample_bvh(&bvh, fps).frames
+            resample_bvh(&bvh, fps).map_err(|e| usage(path, e))?.frames
         };
         let model_bvh = retargeter.to_model(bvh.frames.view(), bvh.frame_time);
         *rig = Some(RigSeed { retargeter, frames });
@@ -229,7 +229,7 @@ fn bvh_frames(
             round_rate(bvh.fps()),
             round_rate(fps)
         ));
-        bvh = resample_bvh(&bvh, fps);
+        bvh = resample_bvh(&bvh, fps).map_err(|e| usage(path, e))?;
     }
     Ok(bvh_to_expmap(&bvh, target)
         .map_err(|e| usage(path, e))?
@@ -291,7 +291,7 @@ fn resample_expmap(
     )
     .map_err(|e| usage(path, e))?;
     let bvh = expmap_to_bvh(&motion).map_err(|e| usage(path, e))?;
-    let bvh = resample_bvh(&bvh, to);
+    let bvh = resample_bvh(&bvh, to).map_err(|e| usage(path, e))?;
     Ok(bvh_to_expmap(&bvh, target)
         .map_err(|e| usage(path, e))?
         .into_frames())

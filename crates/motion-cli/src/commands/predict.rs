@@ -8,10 +8,13 @@ use std::sync::Arc;
 use motion_core::formats::expmap_bvh::ExpMapTarget;
 use motion_core::formats::FileFormat;
 use motion_core::grounding::GroundingConfig;
+use motion_core::limits::check_clip;
 use motion_core::model::samples::check_sample_size;
 use motion_core::model::{
     generate_samples, ActionClassifier, GenerateError, ModelConfig, MotionModel,
 };
+use motion_core::motion::compact_number;
+use motion_core::resample::resampled_len;
 use motion_core::skeleton::H36M_SOURCE_FPS;
 use ndarray::{s, Array2, Array3};
 use rayon::prelude::*;
@@ -217,6 +220,23 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             args.samples, args.frames
         ))
     })?;
+    if let Some(fps) = args.fps {
+        // BVH output at --fps: refused before anything is generated if it would be too long.
+        let config = model.config();
+        let written = resampled_len(config.seed_frames + args.frames, config.fps, fps);
+        check_clip(
+            written,
+            config.frame_dims,
+            "ask for fewer --frames or a lower --fps",
+        )
+        .map_err(|e| {
+            UsageError(format!(
+                "--fps {} --frames {}: {e}",
+                compact_number(fps),
+                args.frames
+            ))
+        })?;
+    }
     let action = choose_action(model.config(), args.action.as_deref())?;
     let infer = if args.action.is_none() && model.config().actions.len() > 1 {
         inference_classifier(&model, args.classifier.as_deref())?

@@ -95,6 +95,9 @@ pub struct Args {
 pub const MAX_CELLS: usize = 400;
 /// Most frames of an animation (20 minutes at 25 fps); a longer one is refused up front.
 pub const MAX_FRAMES: usize = 30_000;
+/// Most pixels a GIF paints over all its frames (2^31: about 45 s of drawing on a 2-core VM at
+/// ~20 ns a pixel; 8,192 frames at the default 640 x 400); more is refused before drawing.
+pub const MAX_GIF_PIXELS: u64 = 1 << 31;
 
 /// What the output extension asks for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -223,7 +226,27 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     })?;
     let bytes = match kind {
         Kind::Svg => svg_anim::animate(&picture, &times, args.width, args.height).into_bytes(),
-        Kind::Gif => gif_anim::animate(&picture, &times, args.width, args.height)?,
+        Kind::Gif => {
+            let drawn = gif_anim::drawn_frames(&picture, &times);
+            let pixels = drawn as u64 * (args.width * args.height) as u64;
+            if pixels > MAX_GIF_PIXELS {
+                return Err(UsageError(format!(
+                    "{}: {drawn} GIF frames of {} x {} pixels is {} pixels to paint, over the limit of {} (MAX_GIF_PIXELS): lower --width/--height or render a shorter clip",
+                    args.input.display(),
+                    args.width,
+                    args.height,
+                    pixels,
+                    MAX_GIF_PIXELS
+                ))
+                .into());
+            }
+            let bar = args
+                .reporting
+                .progress_bar(drawn as u64, "GIF frames {bar:40} {pos}/{len} {eta}");
+            let bytes = gif_anim::animate(&picture, &times, args.width, args.height, &bar)?;
+            bar.finish_and_clear();
+            bytes
+        }
         Kind::Png => {
             sheet::contact_sheet(&picture, &times, args.cells, args.columns).encode_png()?
         }

@@ -6,7 +6,7 @@
 pub enum GenerateError {
     /// The predictions asked for would not fit in memory (see
     /// [`crate::model::samples::MAX_SAMPLE_VALUES`]).
-    #[error("{samples} samples x {frames} frames x {frame_dims} values is over the limit of {limit} values (1 GiB): ask for fewer, in several runs")]
+    #[error("{samples} samples x {frames} frames x {frame_dims} values is over the limit of {limit} values (MAX_SAMPLE_VALUES, 256 MiB of f64): ask for fewer, in several runs")]
     TooLarge {
         /// Samples asked for.
         samples: usize,

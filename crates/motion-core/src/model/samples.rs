@@ -8,9 +8,10 @@ use super::batch::{BatchGenerator, Noise};
 use super::generate_error::GenerateError;
 use super::predictor::MotionModel;
 
-/// The most values `samples x frames x frame_dims` one [`generate_samples`] call returns (1 GiB
-/// of f64): more is refused up front ([`GenerateError::TooLarge`]); generate in several calls.
-pub const MAX_SAMPLE_VALUES: usize = 1 << 27;
+/// The most values `samples x frames x frame_dims` one [`generate_samples`] call returns
+/// ([`crate::limits::MAX_CLIP_VALUES`], 256 MiB of f64): more is refused up front
+/// ([`GenerateError::TooLarge`]); generate in several calls.
+pub const MAX_SAMPLE_VALUES: usize = crate::limits::MAX_CLIP_VALUES;
 
 /// Checks that `samples` predictions of `frames` frames of `frame_dims` values fit
 /// [`MAX_SAMPLE_VALUES`] (with no overflow on the way).

@@ -55,16 +55,28 @@ fn quantize(canvas: &Canvas, palette: &[Rgb], cache: &mut HashMap<[u8; 3], u8>) 
         .collect()
 }
 
-/// Encodes the animation of `picture` over `times` as GIF bytes, `width x height` pixels.
+/// One drawn frame in this many of `fps`: browsers slow delays under 2/100 s down to 1/10 s, so
+/// a GIF keeps at most 25 frames per second.
+fn frame_step(fps: f64) -> usize {
+    (fps / 25.0).ceil().max(1.0) as usize
+}
+
+/// How many frames [`animate`] draws for `times`.
+pub fn drawn_frames(picture: &Picture<'_>, times: &[f64]) -> usize {
+    times.len().div_ceil(frame_step(picture.tracks[0].fps))
+}
+
+/// Encodes the animation of `picture` over `times` as GIF bytes, `width x height` pixels,
+/// advancing `bar` by one per drawn frame.
 pub fn animate(
     picture: &Picture<'_>,
     times: &[f64],
     width: usize,
     height: usize,
+    bar: &indicatif::ProgressBar,
 ) -> anyhow::Result<Vec<u8>> {
     let fps = picture.tracks[0].fps;
-    // Browsers slow delays under 2/100 s down to 1/10 s: keep at most 25 frames per second.
-    let every = (fps / 25.0).ceil().max(1.0) as usize;
+    let every = frame_step(fps);
     let delay = ((every as f64 / fps) * 100.0).round().max(2.0) as u16;
     let (min, max) = bounds(&picture.camera, &picture.tracks);
     let viewport = Viewport::fit(
@@ -111,6 +123,7 @@ pub fn animate(
             };
             frame.dispose = gif::DisposalMethod::Keep;
             encoder.write_frame(&frame)?;
+            bar.inc(1);
         }
     }
     Ok(bytes)

@@ -60,6 +60,13 @@ pub fn compute(
             NnChoice::PcaKdTree => NnMethod::PcaKdTree,
             NnChoice::PoseBound => NnMethod::PoseBound,
         };
+        if *space == InputSpace::Raw && pred.joints.is_none() {
+            return Err(usage(format!(
+                "NDMS in the raw space needs positions (N x T x J x 3); {} has {} numbers per frame (exp-map frames are read without --input-space raw)",
+                pred.what,
+                pred.data.dim().3
+            )));
+        }
         report.ndms = Some(score_ndms(
             &args.db,
             pred,

@@ -1,12 +1,13 @@
 //! Reading the inputs of `score` and classifying them by rank and input space into
 //! `sequences x samples x frames x width`.
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 use ndarray::{concatenate, Array4, ArrayD, Axis, Ix2, Ix3, Ix4, Ix5};
 
 use motion_core::any_format::read_array;
 use motion_core::file_sets::{check_paired_by_name, expand};
+use motion_core::formats::FileFormat;
 use motion_core::motion::expmap_layout_for_width;
 
 use super::{usage, Args, InputSpace};
@@ -46,6 +47,9 @@ pub fn inputs(args: &Args) -> Result<Inputs> {
     let pred_raw = load_group(&args.pred, "--pred")?;
     let space = args.input_space.unwrap_or_else(|| default_space(&pred_raw));
     let pred = classify_group(pred_raw, space, "--pred")?;
+    if let Some(path) = &args.skeleton {
+        check_skeleton_file(path, &pred)?;
+    }
     let gt = if args.gt.is_empty() {
         None
     } else {
@@ -177,6 +181,25 @@ fn classify(array: ArrayD<f64>, space: InputSpace, what: &str) -> Result<Batch> 
         }
     }
     Ok(batch)
+}
+
+/// `--skeleton` names the joints of raw positions: it must be a BVH that reads, and the
+/// predictions must be positions (anything else would ignore it silently).
+fn check_skeleton_file(path: &Path, pred: &Batch) -> Result<()> {
+    if !matches!(FileFormat::from_path(path), Ok(FileFormat::Bvh)) {
+        return Err(usage(format!(
+            "{}: --skeleton takes a .bvh file (its hierarchy names the joints)",
+            path.display()
+        )));
+    }
+    motion_core::formats::bvh::read_bvh(path)?;
+    if pred.joints.is_none() {
+        return Err(usage(format!(
+            "--skeleton names the joints of raw positions (N x T x J x 3), but {} is not positions; leave --skeleton out",
+            pred.what
+        )));
+    }
+    Ok(())
 }
 
 /// All files of a flag classified and stacked along the sequence axis.

@@ -10,6 +10,7 @@ use std::path::Path;
 use ndarray::Array2;
 
 use crate::error::FormatError;
+use crate::limits::MAX_CLIP_VALUES;
 use crate::skeleton::{Channel, Joint, Skeleton};
 
 use super::Bvh;
@@ -513,7 +514,8 @@ fn parse_motion(
     let mut values: Vec<f64> = Vec::with_capacity(
         declared
             .saturating_mul(channel_count)
-            .min(remaining_bytes / 2 + channel_count),
+            .min(remaining_bytes / 2 + channel_count)
+            .min(MAX_CLIP_VALUES),
     );
     let mut found = 0usize;
     let mut last_line = time_line;
@@ -551,6 +553,13 @@ fn parse_motion(
             ));
         }
         found += 1;
+        if values.len() > MAX_CLIP_VALUES {
+            let hint = "cut the file into shorter clips";
+            let problem = crate::limits::check_clip(found, channel_count, hint)
+                .err()
+                .map_or_else(String::new, |e| e.to_string());
+            return Err(cursor.error(line_no, format!("frame {found}: {problem}")));
+        }
     }
     if found != declared {
         return Err(cursor.error(

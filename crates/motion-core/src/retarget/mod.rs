@@ -30,6 +30,8 @@ use crate::kinematics::local_transform;
 use crate::rotation::EulerOrder;
 use crate::skeleton::Skeleton;
 
+mod map_check;
+
 /// The H3.6M joints a rig must provide, in skeleton order (the thumbs, wrist ends and sites are
 /// left at rest).
 pub const MAPPED_JOINTS: [&str; 21] = [
@@ -198,6 +200,47 @@ pub enum RetargetError {
     /// A rig joint whose rotation channels are not three about distinct axes.
     #[error("rig joint {0:?} needs 3 rotation channels about distinct axes")]
     Channels(String),
+    /// A joint map gives one H3.6M joint twice (a repeated JSON key, or two spellings of it).
+    #[error("the joint map gives H3.6M {model:?} twice (to {first:?} and to {second:?}); keep one entry")]
+    MapRepeated {
+        /// The H3.6M joint.
+        model: String,
+        /// Its first rig joint.
+        first: String,
+        /// Its second.
+        second: String,
+    },
+    /// A joint map sends two H3.6M joints to one rig joint.
+    #[error("the joint map sends both H3.6M {first:?} and {second:?} to rig joint {rig_joint:?}; each needs its own")]
+    MapShared {
+        /// The rig joint.
+        rig_joint: String,
+        /// The first H3.6M joint sent there.
+        first: String,
+        /// The second.
+        second: String,
+    },
+    /// A joint map breaks the H3.6M hierarchy: a joint's rig joint is not below the rig joint
+    /// its H3.6M parent goes to (swapped hips and head, an arm sent to a leg).
+    #[error("the joint map sends H3.6M {model:?} to {rig_joint:?}, which is not below {parent_rig:?} (where its H3.6M parent {parent:?} goes) in the rig's hierarchy")]
+    MapHierarchy {
+        /// The H3.6M joint.
+        model: String,
+        /// Its rig joint.
+        rig_joint: String,
+        /// Its nearest mapped H3.6M ancestor.
+        parent: String,
+        /// That ancestor's rig joint.
+        parent_rig: String,
+    },
+    /// A joint map puts the left arm on the side of the right leg.
+    #[error("the joint map's LeftArm ({left:?}) is on the side of its RightUpLeg and its RightArm ({right:?}) on the side of its LeftUpLeg: left and right are swapped in the arms or the legs")]
+    MapSides {
+        /// The rig joint of LeftArm.
+        left: String,
+        /// The rig joint of RightArm.
+        right: String,
+    },
     /// The rig's rest pose is degenerate (bones of zero length where a direction is needed).
     #[error("the rig's rest pose gives no direction for {0:?} (zero-length bones)")]
     Degenerate(String),
@@ -264,6 +307,7 @@ impl JointMap {
         rig: &Skeleton,
         pairs: &[(String, String)],
     ) -> Result<JointMap, RetargetError> {
+        map_check::repeated_entry(pairs)?;
         let mut user = [usize::MAX; 21];
         for (model, rig_name) in pairs {
             let slot = MAPPED_JOINTS
@@ -284,6 +328,9 @@ impl JointMap {
                 MAPPED_JOINTS[missing].to_string(),
             ));
         }
+        let model = Skeleton::h36m();
+        let model_index = MAPPED_JOINTS.map(|n| find(&model, n).expect("H3.6M joint"));
+        map_check::check_map(rig, &model, &model_index, &user, &rest_positions(rig))?;
         Ok(JointMap {
             user,
             name: "joint map".into(),
@@ -293,12 +340,10 @@ impl JointMap {
     /// A map from JSON text `{"Hips": "pelvis", "LeftArm": "upperarm_l", ...}` (H3.6M name → rig
     /// name, every one of [`MAPPED_JOINTS`]).
     pub fn from_json(rig: &Skeleton, text: &str) -> Result<JointMap, RetargetError> {
-        let value: serde_json::Value =
+        let entries: map_check::Entries =
             serde_json::from_str(text).map_err(|e| RetargetError::MapSyntax(e.to_string()))?;
-        let object = value
-            .as_object()
-            .ok_or_else(|| RetargetError::MapSyntax("not an object".into()))?;
-        let pairs = object
+        let pairs = entries
+            .0
             .iter()
             .map(|(k, v)| {
                 v.as_str()
@@ -428,6 +473,7 @@ impl Retargeter {
                 at(p, idx, "LeftUpLeg") - at(p, idx, "RightUpLeg"),
             )
         };
+        map_check::check_map(rig, &model, &model_index, &map.user, &pu)?;
         let (mu, ms) = span(&pm, &model_index);
         let (uu, us) = span(&pu, &map.user);
         let fm = frame(mu, ms).expect("the H3.6M rest pose has a frame");
