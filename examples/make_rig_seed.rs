@@ -27,7 +27,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // No rig-only joint moves: references of zeros (the rig's rest for its extra bones).
     let rest = Array2::zeros((1, rig.channel_count()));
     let on_rig = retargeter.to_rig(&walk, rest.view());
-    write_bvh(&out, &resample_bvh(&on_rig, 120.0))?;
+    write_bvh(&out, &resample_bvh(&on_rig, 120.0)?)?;
     println!("wrote {}", out.display());
     Ok(())
 }
