@@ -6,3 +6,8 @@
 
 pub use motion_core as core;
 pub use motion_metrics as metrics;
+
+/// The README's Rust snippets, compiled and run as doc tests (`cargo test --doc -p motion`).
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;

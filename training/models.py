@@ -478,7 +478,7 @@ class IntentionLabels(nn.Module):
 
 
 class IntentionModel(MotionModel):
-    """The intention-based stochastic model of paper 003, section 3 (weights/README.md, "intention").
+    """The intention-based stochastic model of paper 003, section 3 (docs/models.md, "Intention model").
 
     - ``labels``: the seed's frames labelled with intentions (3.3, ``IntentionLabels``).
     - Intention forecaster (3.1, eq. 3): ``label_encoder`` (GRU, ``label_hidden`` units) over the seed, each
