@@ -532,7 +532,7 @@ fn weights_are_shareable_and_generators_movable() {
 
 #[test]
 fn parameter_counts_at_paper_size() {
-    // Paper 000 Table 1 reports GRU-d 2,735,670 and VGRU-d 3,413,047 (TensorFlow 1 cells, whose
+    // Gopalakrishnan et al. 2019 Table 1 reports GRU-d 2,735,670 and VGRU-d 3,413,047 (TensorFlow 1 cells, whose
     // bias layout differs from PyTorch's two bias vectors); these are the PyTorch-layout counts.
     let grud = MotionModel::random(&ModelConfig::paper(Architecture::GruD), 1).unwrap();
     let (i, h, o) = (216, 512, 54);

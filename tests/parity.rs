@@ -303,7 +303,7 @@ fn dae_lstm() {
     check_model("dae_lstm");
 }
 
-/// Runs an intention fixture (paper 003) through the single-character Generator with the
+/// Runs an intention fixture (Tanke et al. 2021) through the single-character Generator with the
 /// fixture's explicit `z`: the seed's labels and the closed-loop frames (the model makes no
 /// teacher-forced predictions). Returns the largest difference from PyTorch.
 fn check_intention(name: &str) -> f32 {

@@ -1,4 +1,4 @@
-"""Action classifier of paper 002 (section 4.5, Figures 4-5): the evaluation instrument for long horizons.
+"""Action classifier of Ghosh et al. 2017 (section 4.5, Figures 4-5): the evaluation instrument for long horizons.
 
 Ghosh, Song, Aksan, Hilliges. Learning Human Motion Models for Long-term Predictions (3DV 2017), section 4.5:
 "we leverage a pre-trained activity classifier for the evaluation of synthetic motion sequences ... a high

@@ -142,7 +142,7 @@ def normalization_stats(sequences_50hz) -> NormStats:
 
 
 def minmax_stats(sequences_50hz) -> NormStats:
-    """Min-max scaling to [0, 1] (paper 002, section 4.1) in the NormStats form: ``mean`` holds the
+    """Min-max scaling to [0, 1] (Ghosh et al. 2017, section 4.1) in the NormStats form: ``mean`` holds the
     per-dim minimum and ``std`` the range (max - min) over all given 50 Hz frames, so ``normalize``
     maps the training range onto [0, 1]. The used dims are those of ``normalization_stats`` (std
     >= 1e-4); dropped dims get range 1 and are restored to their minimum (their constant value)."""

@@ -151,7 +151,7 @@ LATE_MODEL_SPECS = {
     "dae_lstm": ("dae-lstm", {"layers": 2, "dae_hidden": 24, "dae_layers": 2}, torch.float32, "walking"),
 }
 
-# Intention fixtures (paper 003), drawn after every file above so those stay byte-identical:
+# Intention fixtures (Tanke et al. 2021), drawn after every file above so those stay byte-identical:
 # file stem -> look-ahead gamma (3: the general case; 1 and 2: the edges of the engine's ring of
 # intention probabilities, no forecast ahead of the first pose step).
 INTENTION_SPECS = {"intention": 3, "intention_lookahead1": 1, "intention_lookahead2": 2}

@@ -1,4 +1,4 @@
-"""Intention labels of paper 003 (Salzmann et al., section 3.3): k-means on training poses, then cycles merged.
+"""Intention labels of Tanke et al. 2021 (Salzmann et al., section 3.3): k-means on training poses, then cycles merged.
 
 The paper clusters the training poses with k-means, assigns each frame to a cluster and then "sequentially
 generates intention labels by detecting cycles of cluster ids", so that labels change slowly, with 8 labels for

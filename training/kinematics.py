@@ -6,7 +6,7 @@ j)``. *Body frame*: the root's rotation and translation are left out (``W_0 = I`
 they are per-frame deltas, and what this module measures (how the limbs move relative to the body) does not need
 them. Units: millimetres, y up, as the skeleton's offsets.
 
-Why: NDMS (paper 003, ``metrics.md``) compares the frame-to-frame velocities of 12 joint *positions* with those
+Why: NDMS (Tanke et al. 2021, ``metrics.md``) compares the frame-to-frame velocities of 12 joint *positions* with those
 of the nearest real motion word. The exp-map speed and acceleration terms of ``long_horizon`` pool every angle,
 and real data's small joints are rough at 25 Hz (their second difference is 0.8-1.2 times their first), so a
 generator whose legs and arms jitter (successive position velocities 0.75 cosine-similar against real motion's

@@ -8,7 +8,7 @@ Two conventions exist for the GRU candidate state and both are supported, becaus
 names the one it was trained with:
 
 - ``"pytorch"``: ``n = tanh(W_n x + b_in + r * (U_n h + b_hn))`` (``torch.nn.GRUCell``)
-- ``"paper"``:   ``n = tanh(W_n x + b_in + U_n (r * h) + b_hn)`` (paper 000 eq. 3)
+- ``"paper"``:   ``n = tanh(W_n x + b_in + U_n (r * h) + b_hn)`` (Gopalakrishnan et al. 2019 eq. 3)
 
 Parameter names and gate order (r, z, n) are those of ``torch.nn.GRUCell``; the update is
 ``h' = (1 - z) * n + z * h``. The Rust engine reads these tensors by the same names.
@@ -104,7 +104,7 @@ class GRUCell(nn.Module):
 
 
 class BodyGRUCell(nn.Module):
-    """Body GRU of paper 000 (eqs. 1-4): every gate (r, z, n) also reads the guide ``V p``.
+    """Body GRU of Gopalakrishnan et al. 2019 (eqs. 1-4): every gate (r, z, n) also reads the guide ``V p``.
 
     ``weight_ph [3H, P]`` holds ``V_r, V_z, V``; the guide term has no bias of its own.
     The paper's convention (``U (r * h)``) is the default; ``"pytorch"`` is supported too.
@@ -153,7 +153,7 @@ class BodyGRUCell(nn.Module):
 class LSTMCell(nn.Module):
     """LSTM cell, PyTorch convention: gate order i, f, g, o; ``c' = f c + i g``, ``h' = o tanh(c')``.
 
-    For paper 002's DAE-LSTM (LSTM-3LR).
+    For Ghosh et al. 2017's DAE-LSTM (LSTM-3LR).
     """
 
     def __init__(self, input_size: int, hidden_size: int):

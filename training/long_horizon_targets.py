@@ -13,7 +13,7 @@ was scored against them:
 - **classifier**: the mean probability of the seed's action over the window ends in (8, 12] s is above
   zero-velocity's, for every action the classifier can tell apart: those whose real S5 continuation
   scores >= 0.3 there (`CLASSIFIER_REAL_MIN`);
-- **npss**: reference-variant NPSS over 4 s (the horizon-100 run's `whole`) within paper 000's VGRU-d numbers
+- **npss**: reference-variant NPSS over 4 s (the horizon-100 run's `whole`) within Gopalakrishnan et al. 2019's VGRU-d numbers
   (walking 0.887, eating 0.846, smoking 0.943 as the issue sets them);
 - **ndms**: NDMS in every 0.4 s bin starting at 2 s or later above zero-velocity's.
 """

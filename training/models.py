@@ -58,11 +58,11 @@ def make_config(architecture: str, dims_used: list[int], **overrides) -> dict:
     if architecture == "vgru-d":
         config["plan_hidden"] = 512
     if architecture == "dae-lstm":
-        # Paper 002: plain poses (no derivatives), min-max scaling, direct (not residual) output,
+        # Ghosh et al. 2017: plain poses (no derivatives), min-max scaling, direct (not residual) output,
         # a 3 x 3000 ReLU autoencoder; sizes are overridable (weights/README.md says what ships).
         config.update(derivative_order=0, residual=False, normalization="min-max", dae_hidden=3000, dae_layers=3)
     if architecture == "intention":
-        # Paper 003: unconditioned (the intentions replace the action), plain poses, residual output;
+        # Tanke et al. 2021: unconditioned (the intentions replace the action), plain poses, residual output;
         # 8 intentions, look-ahead gamma = 10; the other sizes are this project's (weights/README.md).
         config.update(derivative_order=0, residual=True, hidden=256, noise_dims=32, label_hidden=128,
                       intentions=8, clusters=32, lookahead=10, intention_features=32)
@@ -283,7 +283,7 @@ class PlanRNN(nn.Module):
 
 
 class VGRUD(MotionModel):
-    """VGRU-d (VTLN-RNN with derivative inputs): plan GRU + body GRU (paper 000 eqs. 1-4) + decoder."""
+    """VGRU-d (VTLN-RNN with derivative inputs): plan GRU + body GRU (Gopalakrishnan et al. 2019 eqs. 1-4) + decoder."""
 
     def __init__(self, config: dict, dropout: float = 0.3):
         super().__init__(config, dropout)
@@ -381,7 +381,7 @@ def joint_groups(dims_used: list[int]) -> list[list[int]]:
 
 
 class DAELSTM(MotionModel):
-    """DAE-LSTM (paper 002, section 3): LSTM-3LR over the pose (⊕ the action one-hot when the config
+    """DAE-LSTM (Ghosh et al. 2017, section 3): LSTM-3LR over the pose (⊕ the action one-hot when the config
     names actions), a linear decoder to the next pose, and the dropout autoencoder ``dae`` (an MLP
     ``O -> dae_hidden x dae_layers -> O``, ReLU) that filters every prediction. The filtered pose is
     both the output and what is fed back. ``filter_enabled = False`` gives the bare LSTM-3LR (its
@@ -462,7 +462,7 @@ class DAELSTM(MotionModel):
 
 
 class IntentionLabels(nn.Module):
-    """The intention labelling of paper 003, 3.3 (``training/intention_labels.py``): buffers ``centroids
+    """The intention labelling of Tanke et al. 2021, 3.3 (``training/intention_labels.py``): buffers ``centroids
     [clusters, O]`` (normalized used dims) and ``merge [clusters]`` (the intention of each cluster, as floats)."""
 
     def __init__(self, clusters: int, dims: int):
@@ -478,7 +478,7 @@ class IntentionLabels(nn.Module):
 
 
 class IntentionModel(MotionModel):
-    """The intention-based stochastic model of paper 003, section 3 (docs/models.md, "Intention model").
+    """The intention-based stochastic model of Tanke et al. 2021, section 3 (docs/models.md, "Intention model").
 
     - ``labels``: the seed's frames labelled with intentions (3.3, ``IntentionLabels``).
     - Intention forecaster (3.1, eq. 3): ``label_encoder`` (GRU, ``label_hidden`` units) over the seed, each

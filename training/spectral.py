@@ -1,6 +1,6 @@
 """A differentiable NPSS (reference variant) for training: the evaluation's metric as an auxiliary loss.
 
-Paper 000 (Gopalakrishnan et al., CVPR 2019), section 5, defines NPSS as an evaluation metric; the published
+Gopalakrishnan et al. 2019 (CVPR), section 5, defines NPSS as an evaluation metric; the published
 numbers use the reference code's variant (power = Re(DFT)^2, ../shared/reference/metrics.md). Squared error on
 the closed loop pulls long predictions towards the conditional mean (a slowing, smoothed motion); this term scores
 the spectrum of the whole predicted window instead. It mirrors `evaluate.npss(..., "reference")` on the Euler

@@ -1,4 +1,4 @@
-"""Train VGRU-d / GRU-d on H3.6M with the multi-objective loss of paper 000 (section 3.4, equation 6).
+"""Train VGRU-d / GRU-d on H3.6M with the multi-objective loss of Gopalakrishnan et al. 2019 (section 3.4, equation 6).
 
 Gopalakrishnan et al., A Neural Temporal Model for Human Motion Prediction (CVPR 2019), sections 3.4 and 4.1:
 open-loop squared error over all steps + lambda x closed-loop squared error over the horizon, lambda on the
@@ -224,7 +224,7 @@ def init_residual_decoder(model) -> None:
     """Residual models predict a per-step change: start near zero velocity. With the generic init (orthogonal,
     bias 0.1) the closed loop drifts by ~0.1-0.5 std per step (closed-loop loss ~10^3 at 100 steps), and RMSprop,
     whose steps are ~lr, needs ~500 iterations to unlearn a 0.1 bias. Uniform(-0.04, 0.04) weights and zero bias,
-    as in the residual model of Martinez et al. (CVPR 2017) that paper 000 builds on."""
+    as in the residual model of Martinez et al. (CVPR 2017) that Gopalakrishnan et al. 2019 builds on."""
     with torch.no_grad():
         model.decoder.weight.uniform_(-0.04, 0.04)
         model.decoder.bias.zero_()

@@ -1,4 +1,4 @@
-"""Train, evaluate and export the action classifier of paper 002 (section 4.5); see ``classifier.py``.
+"""Train, evaluate and export the action classifier of Ghosh et al. 2017 (section 4.5); see ``classifier.py``.
 
     python -m training.train_classifier --run-dir training/runs/classifier [--iterations N] [--device cuda]
     python -m training.train_classifier --run-dir training/runs/clf_val --val-subject 11   # choose a config
@@ -44,7 +44,7 @@ CHECKPOINT_KEYS = ("config", "args", "model", "optimizer", "iteration", "numpy_r
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="python -m training.train_classifier",
-        description="Train / evaluate / export the action classifier of paper 002 (section 4.5).",
+        description="Train / evaluate / export the action classifier of Ghosh et al. 2017 (section 4.5).",
     )
     p.add_argument("--run-dir", type=Path, help="where last.pt, train.log and metrics.jsonl go")
     p.add_argument("--iterations", type=int, default=3000)

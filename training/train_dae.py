@@ -1,4 +1,4 @@
-"""Train and export the DAE-LSTM of paper 002 (Ghosh et al., 3DV 2017, sections 3 and 4.1) in its three stages.
+"""Train and export the DAE-LSTM of Ghosh et al. 2017 (3DV, sections 3 and 4.1) in its three stages.
 
     python -m training.train_dae --stage dae  --run-dir training/runs/dae      # the dropout autoencoder alone
     python -m training.train_dae --stage lstm --run-dir training/runs/lstm     # LSTM-3LR alone (teacher forcing)
@@ -6,7 +6,7 @@
         --init-dae training/runs/dae/last.pt --init-lstm training/runs/lstm/last.pt
     python -m training.train_dae --export weights/dae_lstm.safetensors --from training/runs/ft/best.pt
 
-The stages (paper 002, 3.1-3.3 and 4.1):
+The stages (Ghosh et al. 2017, 3.1-3.3 and 4.1):
 
 - **dae**: the autoencoder reconstructs single poses from corrupted copies: whole joints removed (dims set to 0)
   with the dropout schedule and Gaussian noise with the noise schedule, both stepped up as a curriculum over the
@@ -71,7 +71,7 @@ NOISE_SCHEDULE = (0.01, 0.05, 0.1)
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="python -m training.train_dae",
-        description="Train (in stages) and export the DAE-LSTM of paper 002.",
+        description="Train (in stages) and export the DAE-LSTM of Ghosh et al. 2017.",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     p.add_argument("--stage", choices=STAGES, help="dae, lstm or finetune (see the module doc)")

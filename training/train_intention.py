@@ -1,4 +1,4 @@
-"""Train and export the intention-based stochastic model of paper 003 (Tanke, Zaveri, Gall, 3DV 2021, section 3).
+"""Train and export the intention-based stochastic model of Tanke et al. 2021 (3DV, section 3).
 
     python -m training.train_intention --run-dir training/runs/intention --iterations 6000
     python -m training.train_intention --run-dir training/runs/intention --resume --iterations 9000
@@ -43,7 +43,7 @@ What is trained (``models.IntentionModel`` holds the exported parts):
   pools every angle, and real data's small joints are rough at 25 Hz, so it lets the limbs jitter; NDMS compares
   position velocities, which jitter turns in random directions.
 - **Word realism** (this project's addition, ``--word-weight``, 0 = the paper): ``word_realism.word_realism_loss``
-  of the same frames: paper 003's plausibility measure (eq. 10) as a training signal on training data only, ``1 −
+  of the same frames: Tanke et al. 2021's plausibility measure (eq. 10) as a training signal on training data only, ``1 −
   NDMS`` of each generated 8-frame word against its nearest word of the *training* subjects' motion of the
   window's action (the search is not differentiated). The terms above match overall speed and smoothness; this
   one pulls each stretch of motion toward the velocities real motion has in that pose.
@@ -102,7 +102,7 @@ VAL_NOISE_SEED = 20261202
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="python -m training.train_intention",
-        description="Train and export the intention-based stochastic model of paper 003.",
+        description="Train and export the intention-based stochastic model of Tanke et al. 2021.",
         formatter_class=argparse.RawDescriptionHelpFormatter,
         epilog=__doc__,
     )

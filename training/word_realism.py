@@ -1,6 +1,6 @@
-"""Paper 003's motion words in torch, and a word-realism term built on them (issue 20).
+"""Tanke et al. 2021's motion words in torch, and a word-realism term built on them (issue 20).
 
-NDMS (paper 003, section 4; ``../shared/reference/metrics.md``; ``motion_metrics::ndms``) cuts a forecast into
+NDMS (Tanke et al. 2021, section 4; ``../shared/reference/metrics.md``; ``motion_metrics::ndms``) cuts a forecast into
 words of ``KAPPA`` = 8 frames of 12 joint positions, finds each word's nearest real word (Euclidean distance of the
 normalized words) in a database of real motion of the same action, and scores the pair's frame-to-frame velocities:
 ``½(1 + cos) · min(|v|, |v'|) / max(|v|, |v'|)`` per joint and step. It measures whether short stretches of the
@@ -8,7 +8,7 @@ forecast move as real motion does *there*, not whether they follow the truth. Me
 windows, D = S5's sequences of the action, 2.0-4.0 s): real motion of the training subjects S1 and S6 scores 0.348,
 the generator 0.27; the joint-angle speed, smoothness and root terms left that gap (weights/README.md).
 
-``word_realism_loss`` is paper 003's plausibility measure (its eq. 10) used as a training signal, on training data
+``word_realism_loss`` is Tanke et al. 2021's plausibility measure (its eq. 10) used as a training signal, on training data
 only: each generated word is matched to its nearest word of the *training* subjects' motion of the window's action
 (``WordBank``; the search is not differentiated) and the loss is ``1 − NDMS`` of the pair, whose gradient pulls
 the word's velocities toward those of the real motion nearest to it. The test subject S5 is never in the bank.
@@ -28,7 +28,7 @@ import torch
 from .kinematics import body_positions, skeleton
 from .root_drift import root_poses
 
-KAPPA = 8  # frames per motion word at 25 Hz (paper 003)
+KAPPA = 8  # frames per motion word at 25 Hz (Tanke et al. 2021)
 LEFT_HIP, RIGHT_HIP, LEFT_SHOULDER, RIGHT_SHOULDER = 6, 1, 17, 25  # H3.6M joints (motion_core::skeleton)
 AXES = [0, 2, 1]  # y-up H3.6M reordered to (x, z, y): the vertical last, as NdmsConfig::axis_order
 EPSILON = 1e-7  # lower clamp of velocity magnitudes (motion_metrics::ndms::similarity::EPSILON)

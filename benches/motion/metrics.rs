@@ -4,7 +4,7 @@
 //! words of a few actions) queried by 100 words, and, when MOTION_DATA_DIR holds H3.6M, the S5
 //! walking words queried by the 8 zero-velocity forecasts.
 //!
-//! Paper 002's action-classifier protocol on one action of a 12 s `eval` (40 x 300 frames).
+//! Ghosh et al. 2017's action-classifier protocol on one action of a 12 s `eval` (40 x 300 frames).
 //!
 //! Run: `cargo bench --bench motion -- metrics`
 use std::hint::black_box;
@@ -202,7 +202,7 @@ fn bench_ndms_h36m(c: &mut Criterion) {
     bench_ndms_pair(c, "s5_all_actions", &all, &queries);
 }
 
-/// Paper 002's classifier protocol on one action of `eval --horizon 300 --samples 5`: 40
+/// Ghosh et al. 2017's classifier protocol on one action of `eval --horizon 300 --samples 5`: 40
 /// predictions of 300 frames after 50-frame seeds (12 windows each), with the built-in-size
 /// classifier when `weights/action_classifier.safetensors` exists (else the small fixture). Compare
 /// with `motion-cli eval --actions all --horizon 300 --samples 5 [--no-classifier]` times.

@@ -7,7 +7,7 @@
 //! `MOTION_DEFAULT_WEIGHTS_FILE=PATH` at build time embeds another file instead (to try a
 //! candidate, or to test the embedding without touching `weights/`).
 //!
-//! The action classifier (`weights/action_classifier.safetensors`, paper 002's evaluation
+//! The action classifier (`weights/action_classifier.safetensors`, Ghosh et al. 2017's evaluation
 //! instrument) is embedded the same way: `cfg(default_classifier)` and `MOTION_DEFAULT_CLASSIFIER`.
 use std::path::{Path, PathBuf};
 

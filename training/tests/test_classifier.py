@@ -1,4 +1,4 @@
-"""The action classifier (paper 002, section 4.5): config, features, invariances, reports, checkpoints."""
+"""The action classifier (Ghosh et al. 2017, section 4.5): config, features, invariances, reports, checkpoints."""
 
 import numpy as np
 import pytest

@@ -1,4 +1,4 @@
-"""DAE-LSTM (paper 002) training pieces: the model against a hand-written step loop, min-max scaling, the joint
+"""DAE-LSTM (Ghosh et al. 2017) training pieces: the model against a hand-written step loop, min-max scaling, the joint
 dropout, the schedules, the speed term, and a smoke run of all three stages with exact resume and export."""
 
 import numpy as np

@@ -144,7 +144,7 @@ def test_missing_files_are_reported_not_fatal(tmp_path):
 
 
 def test_zero_velocity_reproduces_the_published_baseline_on_walking():
-    # Metric check only (paper 000 Table 6 / issue 5: zero-velocity walking NPSS 1.141, Euler 0.39 at 80 ms).
+    # Metric check only (Gopalakrishnan et al. 2019 Table 6 / issue 5: zero-velocity walking NPSS 1.141, Euler 0.39 at 80 ms).
     d = dataset_or_skip()
     seqs = data.load_sequences(d, [5], ["walking"], log=lambda m: None)
     rows = [r for r in data.read_test_windows() if r["action"] == "walking"]

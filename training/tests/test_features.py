@@ -1,4 +1,4 @@
-"""Derivative features (paper 000 eq. 5, repeat-first padding) and normalization."""
+"""Derivative features (Gopalakrishnan et al. 2019 eq. 5, repeat-first padding) and normalization."""
 
 import torch
 

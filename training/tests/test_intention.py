@@ -1,4 +1,4 @@
-"""The intention-based model of paper 003: labels (k-means, cycle merging), the model's time indexing against a
+"""The intention-based model of Tanke et al. 2021: labels (k-means, cycle merging), the model's time indexing against a
 hand-written step loop, the losses, and a smoke run with exact resume and export."""
 
 import json

@@ -102,7 +102,7 @@ def test_state_dict_names_follow_the_schema():
     assert gru["rnn.0.weight_ih"].shape == (36, 216) and gru["rnn.1.weight_ih"].shape == (36, 12)
 
 
-# Paper 000 Table 1: GRU-d 2,735,670; VGRU-d 3,413,047. Ours at the paper's sizes (512 units,
+# Gopalakrishnan et al. 2019 Table 1: GRU-d 2,735,670; VGRU-d 3,413,047. Ours at the paper's sizes (512 units,
 # 216 inputs, 54 outputs, 15 actions); training/README.md explains the differences.
 PAPER_SIZES = {"gru-d": (2_724_918, 2_735_670), "vgru-d": (2_748_982, 3_413_047)}
 
@@ -112,5 +112,5 @@ def test_parameter_count_at_paper_sizes(architecture):
     model = build_model(make_config(architecture, H36M_DIMS_USED))
     ours, paper = PAPER_SIZES[architecture]
     count = parameter_count(model)
-    print(f"{architecture}: {count:,} parameters (paper 000 Table 1: {paper:,})")
+    print(f"{architecture}: {count:,} parameters (Gopalakrishnan et al. 2019 Table 1: {paper:,})")
     assert count == ours

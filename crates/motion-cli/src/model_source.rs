@@ -1,6 +1,6 @@
 //! Where the CLI gets its model: a weights file given with `--model PATH`, or the default weights
 //! built into the binary (`weights/vgru_d_multi.safetensors`, embedded by `build.rs` when the
-//! file existed at build time); and where it gets the action classifier of paper 002 (`--classifier
+//! file existed at build time); and where it gets the action classifier of Ghosh et al. 2017 (`--classifier
 //! PATH`, or the built-in `weights/action_classifier.safetensors`).
 use std::path::Path;
 use std::sync::Arc;

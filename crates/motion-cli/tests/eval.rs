@@ -132,7 +132,7 @@ fn walking_with_the_fixture_model_reproduces_the_zero_velocity_row() {
         0.887
     );
 
-    // The zero-velocity baseline reproduces paper 000 Table 6 (printed with 2 decimals) and the
+    // The zero-velocity baseline reproduces Gopalakrishnan et al. 2019 Table 6 (printed with 2 decimals) and the
     // reference-variant NPSS the issue quotes (1.141).
     let zv = &walking["zero_velocity"];
     let table6 = &walking["published"]["paper000_table6_zero_velocity_euler"];
@@ -405,7 +405,7 @@ fn a_12_s_horizon_scores_ground_truth_where_the_files_cover_it() {
     assert!(num(&real["speed_ratio"]["windows"][0]["ratio"]) > 0.3);
     // The last-second speed of the truth: over the windows covering the whole horizon.
     assert!(num(&real["mean_joint_speed_last_1s"]["pose"]) > 1.0);
-    // Paper 002's classifier curve (the built-in classifier): a window ending every second of the
+    // Ghosh et al. 2017's classifier curve (the built-in classifier): a window ending every second of the
     // 12 s, the real continuation counting the windows whose file reaches each end.
     for who in ["model", "zero_velocity", "ground_truth"] {
         let curve = &greeting[who]["classifier"];

@@ -300,7 +300,7 @@ fn output_is_deterministic_for_a_noise_seed() {
 
 #[test]
 fn intention_model_samples_each_draw_their_own_z() {
-    // The intention fixture (paper 003, unconditioned): --samples N gives N different
+    // The intention fixture (Tanke et al. 2021, unconditioned): --samples N gives N different
     // predictions, sample i from --rng-seed + i, reproducibly; an action is refused as for any
     // unconditioned model.
     let dir = scratch("intention");

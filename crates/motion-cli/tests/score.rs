@@ -55,7 +55,7 @@ fn data_root() -> PathBuf {
         .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data"))
 }
 
-/// Paper 000 Table 6, zero-velocity row: Euler error at 80, 160, 320, 400 ms.
+/// Gopalakrishnan et al. 2019 Table 6, zero-velocity row: Euler error at 80, 160, 320, 400 ms.
 const TABLE_6_ZERO_VELOCITY: [(&str, [f64; 4]); 3] = [
     ("walking", [0.39, 0.68, 0.99, 1.15]),
     ("eating", [0.27, 0.48, 0.73, 0.86]),

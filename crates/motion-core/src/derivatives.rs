@@ -1,4 +1,4 @@
-//! Motion-derivative features (paper 000, section 3.3, equation 5): backward differences with
+//! Motion-derivative features (Gopalakrishnan et al. 2019, section 3.3, equation 5): backward differences with
 //! `h = 1`, `∇ⁿ x_t = Σ_{i=0..n} (-1)^i C(n, i) x_{t-i}`, appended to the frame:
 //! `[x, ∇¹x, ..., ∇^order x]` (width `D * (order + 1)`).
 //!

@@ -2,7 +2,7 @@
 //!
 //! The data model and inference engine of the `motion` project: skeletons, rotations and forward
 //! kinematics; H3.6M exp-map text, BVH and `.npy` in and out; motion-derivative features; GRU and
-//! LSTM cells; the VTLN-RNN (VGRU-d) and GRU-d predictors of paper 000; closed-loop generation
+//! LSTM cells; the VTLN-RNN (VGRU-d) and GRU-d predictors of Gopalakrishnan et al. 2019; closed-loop generation
 //! from self-describing safetensors weights.
 //!
 //! ## Conventions (stated once)

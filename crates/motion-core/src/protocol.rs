@@ -311,7 +311,7 @@ fn read_take(path: &Path) -> Result<Array2<f64>, FormatError> {
 }
 
 /// Both takes of `action` by `subject` at the protocol's 25 Hz (the even frames), those whose file
-/// exists (the NDMS word database of an action; paper 003 fills it from the test subject).
+/// exists (the NDMS word database of an action; Tanke et al. 2021 fills it from the test subject).
 pub fn load_subject_sequences(
     dataset: &Path,
     subject: &str,
@@ -344,7 +344,7 @@ pub fn protocol_positions(
 /// The zero-velocity baseline of the angle protocols (Euler error, NPSS): the last seed frame
 /// repeated `horizon` times, dims 0..5 included.
 ///
-/// Those protocols drop dims 0..5, so this is paper 000 Table 6's baseline exactly. Do not use it
+/// Those protocols drop dims 0..5, so this is Gopalakrishnan et al. 2019 Table 6's baseline exactly. Do not use it
 /// where the root is integrated (world positions, NDMS, speed, drift): in the H3.6M encoding
 /// dims 0..5 are per-frame root **deltas**, so repeating them keeps the seed's last root velocity
 /// and yaw rate — a frozen pose gliding and turning. Use [`zero_velocity_held_root`] there.

@@ -44,6 +44,11 @@ pub const MIN_SEED_FPS: f64 = crate::motion::MIN_FPS;
 /// The fastest BVH seed rate accepted: [`crate::motion::MAX_FPS`].
 pub const MAX_SEED_FPS: f64 = crate::motion::MAX_FPS;
 
+/// The rate an exp-map file (which stores none) is read at unless the caller gives one: H3.6M's
+/// 50 Hz. The one default of every front end: `motion-cli --input-fps`, Python's `input_fps`, the
+/// C ABI's `motion_generator_start_bvh` (which reads any seed file) and [`load_model_seed`].
+pub const DEFAULT_EXPMAP_FILE_FPS: f64 = crate::skeleton::H36M_SOURCE_FPS;
+
 /// Two frame rates closer than this (relative) are the same: BVH frame times are rounded in files.
 const SAME_RATE: f64 = 1e-3;
 
@@ -77,6 +82,33 @@ fn usage(path: &Path, problem: impl std::fmt::Display) -> SeedError {
         path: path.to_path_buf(),
         problem: problem.to_string(),
     }
+}
+
+/// [`load_seed`] with the front ends' defaults for a model whose frames have `frame_dims` values
+/// at `fps`: the built-in skeleton of that width, exp-map files at `input_fps` or else
+/// [`DEFAULT_EXPMAP_FILE_FPS`], a foreign BVH rig retargeted by its built-in map.
+///
+/// # Errors
+/// A width no built-in skeleton has, and everything [`load_seed`] refuses.
+pub fn load_model_seed(
+    path: &Path,
+    frame_dims: usize,
+    fps: f64,
+    input_fps: Option<f64>,
+) -> Result<Seed, SeedError> {
+    let target = ExpMapTarget::for_frame_dims(frame_dims).ok_or_else(|| {
+        usage(
+            path,
+            format!("the model's frames of {frame_dims} values fit no built-in skeleton (99 = H3.6M, 117 = CMU)"),
+        )
+    })?;
+    load_seed(
+        path,
+        target,
+        fps,
+        input_fps.unwrap_or(DEFAULT_EXPMAP_FILE_FPS),
+        None,
+    )
 }
 
 /// Loads `path` as a seed for a model on `target` running at `fps`. Exp-map files (which carry no

@@ -26,10 +26,9 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::Path;
 use std::sync::Arc;
 
-use motion_core::formats::expmap_bvh::ExpMapTarget;
 use motion_core::grounding::GroundingConfig;
 use motion_core::model::{builtin, Character, MotionModel, Noise};
-use motion_core::seed::load_seed;
+use motion_core::seed::load_model_seed;
 use ndarray::ArrayView2;
 
 /// Status codes (negative on failure).
@@ -301,8 +300,9 @@ pub unsafe extern "C" fn motion_generator_start_bvh(
         let path =
             unsafe { text(bvh_path, "bvh_path") }?.ok_or_else(|| invalid("bvh_path is NULL"))?;
         let action = unsafe { text(action, "action") }?;
-        let fps = g.model.config().fps;
-        let seed = load_seed(Path::new(path), ExpMapTarget::H36m, fps, fps, None).map_err(bad)?;
+        let config = g.model.config();
+        let seed =
+            load_model_seed(Path::new(path), config.frame_dims, config.fps, None).map_err(bad)?;
         start(g, seed.frames.view(), action)
     })
 }

@@ -127,3 +127,38 @@ fn statuses_messages_and_poses() {
         motion_model_free(null_mut());
     }
 }
+
+/// Exp-map files given to `motion_generator_start_bvh` (which reads any seed file) are read at
+/// the front ends' one rate, `motion_core::seed::DEFAULT_EXPMAP_FILE_FPS` (50 Hz), as the CLI and
+/// Python read them: 19 rows at 50 Hz are 10 frames at the fixture's 25 Hz (its seed length),
+/// 18 rows are 9 (too few).
+#[test]
+fn expmap_seed_files_are_read_at_the_front_ends_rate() {
+    let dir = std::env::temp_dir().join(format!("motion-ffi-rate-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let row = vec!["0.01"; 99].join(",");
+    unsafe {
+        let fixture = c(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../tests/fixtures/parity/vgru_d.safetensors"
+        ));
+        let model = motion_model_load(fixture.as_ptr());
+        let generator = motion_generator_new(model, 1);
+        for (rows, expected) in [(19, 0), (18, MotionStatus::BadInput as i32)] {
+            let path = dir.join(format!("seed_{rows}.txt"));
+            std::fs::write(&path, vec![row.as_str(); rows].join("\n")).unwrap();
+            let status = motion_generator_start_bvh(
+                generator,
+                c(path.to_str().unwrap()).as_ptr(),
+                c("walking").as_ptr(),
+            );
+            assert_eq!(status, expected, "{rows} rows: {}", last_error());
+            if status != 0 {
+                assert!(last_error().contains("9 seed frames"), "{}", last_error());
+            }
+        }
+        motion_generator_free(generator);
+        motion_model_free(model);
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

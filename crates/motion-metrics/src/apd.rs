@@ -1,4 +1,4 @@
-//! APD, the average pairwise distance of a set of samples of one forecast (paper 003, Table 5):
+//! APD, the average pairwise distance of a set of samples of one forecast (Tanke et al. 2021, Table 5):
 //! the mean over ordered pairs `i != j` of the Euclidean distance between the flattened samples.
 use ndarray::{ArrayView2, ArrayView3, Axis};
 use rayon::prelude::*;

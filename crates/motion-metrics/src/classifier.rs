@@ -1,4 +1,4 @@
-//! The action-classifier protocol of paper 002 (section 4.5, Figures 4-5): a separately trained
+//! The action-classifier protocol of Ghosh et al. 2017 (section 4.5, Figures 4-5): a separately trained
 //! classifier ([`ActionClassifier`]) slides over generated motion of any length; the probability it
 //! gives the seed's action, second by second, is the quality curve. Real motion keeps it high;
 //! motion that freezes or degrades loses it.
@@ -33,7 +33,7 @@ use ndarray::{Array2, ArrayView2, Axis};
 use ndarray::{Array3, ArrayView3};
 use serde::Serialize;
 
-/// The classifier's probability of one action over the horizon (paper 002, Figure 4).
+/// The classifier's probability of one action over the horizon (Ghosh et al. 2017, Figure 4).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ClassifierCurve {
     /// The action whose probability is reported.
@@ -70,7 +70,7 @@ impl ClassifierCurve {
     }
 }
 
-/// The protocol's hop between window ends, in seconds (paper 002's curves are sampled per second).
+/// The protocol's hop between window ends, in seconds (Ghosh et al. 2017's curves are sampled per second).
 pub const HOP_SECONDS: f64 = 1.0;
 
 /// [`classifier_curve`] with the protocol's hop of [`HOP_SECONDS`] (25 frames at 25 Hz).

@@ -1,7 +1,7 @@
 //! # motion-metrics
 //!
-//! NPSS (paper 000), the Euler-angle error of the standard H3.6M protocol, NDMS (paper 003),
-//! APD, the action-classifier protocol of paper 002, plausibility measures without ground
+//! NPSS (Gopalakrishnan et al. 2019), the Euler-angle error of the standard H3.6M protocol, NDMS (Tanke et al. 2021),
+//! APD, the action-classifier protocol of Ghosh et al. 2017, plausibility measures without ground
 //! truth and the whole H3.6M test protocol of one action ([`protocol::ActionTruth`]), in `f64`, exact to their definitions (`metrics.md`, `h36m.md`).
 //!
 //! Every metric takes ndarray views of the caller's data, checks shapes and finiteness (typed

@@ -1,4 +1,4 @@
-//! NPSS, the normalized power spectrum similarity of paper 000 (section 3.5), exactly as
+//! NPSS, the normalized power spectrum similarity of Gopalakrishnan et al. 2019 (section 3.5), exactly as
 //! `metrics.md` defines it: per sequence and dim, the earth mover's distance between the
 //! normalized power spectra (the L1 distance of their **cumulative** sums), averaged with the
 //! ground truth's total power as weight.
@@ -22,7 +22,7 @@ pub enum SpectrumPower {
     RealPart,
 }
 
-/// A time window of the prediction on which NPSS is computed with its own DFT (paper 000 Table 5).
+/// A time window of the prediction on which NPSS is computed with its own DFT (Gopalakrishnan et al. 2019 Table 5).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct NpssWindow {
     /// Human-readable name, e.g. `"0-1 s"`.
@@ -52,7 +52,7 @@ pub const NPSS_WINDOWS_25HZ: [NpssWindow; 3] = [
     },
 ];
 
-/// Windows past the paper's 4 s for 12 s horizons (paper 002): 4-8 s and 8-12 s at 25 Hz, frames
+/// Windows past the paper's 4 s for 12 s horizons (Ghosh et al. 2017): 4-8 s and 8-12 s at 25 Hz, frames
 /// 100-199 and 200-299.
 pub const NPSS_LONG_WINDOWS_25HZ: [NpssWindow; 2] = [
     NpssWindow {

@@ -7,7 +7,7 @@
 //!   `8 x K` sequences (= the mean over samples of the per-sample means over windows).
 //! - NPSS: sample index `k` of the 8 windows is one set of 8 sequences, scored as the metric
 //!   defines (power-weighted over sequences and dims); the mean over `k`.
-//! - NDMS: f_sim over all words of all `8 x K` forecasts (paper 003 eq. 9).
+//! - NDMS: f_sim over all words of all `8 x K` forecasts (Tanke et al. 2021 eq. 9).
 //! - APD: per window over its `K` samples, then the mean over windows.
 //! - Joint speed (mm per frame of the 12 NDMS joints over the last second): the mean over all
 //!   `8 x K` forecasts.
@@ -293,7 +293,7 @@ impl ActionTruth {
 
     /// The zero-velocity baseline of every window, root held
     /// ([`motion_core::protocol::zero_velocity_held_root`]): `windows x 1 x horizon x 99`. Its
-    /// angles are the protocol's repeated last frame, so its Euler error and NPSS are paper 000
+    /// angles are the protocol's repeated last frame, so its Euler error and NPSS are Gopalakrishnan et al. 2019
     /// Table 6's baseline.
     pub fn zero_velocity(&self) -> Array4<f64> {
         let width = self.skeleton.expmap_width();

@@ -6,7 +6,7 @@ use ndarray::ArrayView3;
 
 /// NPSS of `pred` against `gt` (`sequences x frames x features`) from the definition with a
 /// naive DFT `X[f] = Σ_t x[t] e^{-2πi f t / T}` over all `T` frequencies: `|X|²` as the power
-/// (paper 000), or `Re(X)²` with `real_only` (the published code). Per feature, the earth
+/// (Gopalakrishnan et al. 2019), or `Re(X)²` with `real_only` (the published code). Per feature, the earth
 /// mover's distance between the cumulative normalized spectra, weighted by the ground truth's
 /// total power; a spectrum of zero power normalizes to zeros.
 pub fn npss_naive(gt: ArrayView3<'_, f64>, pred: ArrayView3<'_, f64>, real_only: bool) -> f64 {

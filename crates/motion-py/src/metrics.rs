@@ -24,7 +24,7 @@ fn power(variant: &str) -> PyResult<SpectrumPower> {
         "paper" => Ok(SpectrumPower::Modulus),
         "reference" => Ok(SpectrumPower::RealPart),
         other => Err(value(format!(
-            "variant {other:?}: expected \"paper\" (|DFT|^2, paper 000) or \"reference\" (Re(DFT)^2, the published code)"
+            "variant {other:?}: expected \"paper\" (|DFT|^2, Gopalakrishnan et al. 2019) or \"reference\" (Re(DFT)^2, the published code)"
         ))),
     }
 }
@@ -56,7 +56,7 @@ fn on_pair<R: Send>(
     }
 }
 
-/// NPSS (paper 000) of `pred` against `gt`, both `N x T x D`.
+/// NPSS (Gopalakrishnan et al. 2019) of `pred` against `gt`, both `N x T x D`.
 #[pyfunction]
 #[pyo3(signature = (gt, pred, variant = "paper", input_space = "raw"))]
 fn npss(
@@ -161,7 +161,7 @@ fn apd_of<'py>(
     }
 }
 
-/// An NDMS database (paper 003) of reference motions: every motion word of the given
+/// An NDMS database (Tanke et al. 2021) of reference motions: every motion word of the given
 /// positions, with an exact nearest-neighbour index; `score` scores forecasts against it.
 #[pyclass(module = "motion._motion", frozen)]
 pub struct NdmsDatabase {
@@ -207,7 +207,7 @@ fn position_sequences(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<Array3
     }
 }
 
-/// Paper 003's H3.6M setting with κ = `word_len`.
+/// Tanke et al. 2021's H3.6M setting with κ = `word_len`.
 fn ndms_config(word_len: usize) -> PyResult<NdmsConfig> {
     if word_len < 2 {
         return Err(value(format!("word_len {word_len}: at least 2 frames")));

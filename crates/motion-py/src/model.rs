@@ -7,7 +7,9 @@ use motion_core::grounding::GroundingConfig;
 use motion_core::model::builtin::default_model;
 use motion_core::model::samples::check_sample_size;
 use motion_core::model::{generate_samples, Generator as CoreGenerator, MotionModel, Noise};
-use motion_core::seed::{load_seed, model_window, seed_from_expmap, WrittenClip};
+use motion_core::seed::{
+    load_seed, model_window, seed_from_expmap, WrittenClip, DEFAULT_EXPMAP_FILE_FPS,
+};
 use ndarray::{Array2, Ix2};
 use numpy::{IntoPyArray, PyArray1, PyArray3};
 use pyo3::prelude::*;
@@ -53,8 +55,8 @@ fn seed_frames(
         }
     }
     let loaded = if let Ok(path) = seed.extract::<PathBuf>() {
-        // Exp-map files carry no rate: H3.6M's 50 Hz unless input_fps says otherwise.
-        let input = input_fps.unwrap_or(50.0);
+        // Exp-map files carry no rate: the front ends' one default unless input_fps says otherwise.
+        let input = input_fps.unwrap_or(DEFAULT_EXPMAP_FILE_FPS);
         py.detach(|| load_seed(&path, target, config.fps, input, None))
     } else {
         let array = f64_array(seed, "seed")?;

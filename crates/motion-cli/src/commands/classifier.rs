@@ -1,4 +1,4 @@
-//! The action-classifier protocol of paper 002 (definition in `motion_metrics::classifier`) as
+//! The action-classifier protocol of Ghosh et al. 2017 (definition in `motion_metrics::classifier`) as
 //! `score` and `eval` print it: errors as usage errors, the text table and the chart. No score is
 //! computed here.
 use anyhow::Result;
@@ -33,7 +33,7 @@ fn most_likely(curve: &ClassifierCurve, k: usize) -> &str {
 /// The table of `score`: one row per window end.
 pub fn table(curve: &ClassifierCurve) -> String {
     let mut out = format!(
-        "action classifier (paper 002): p({}) over {} predictions, {} s windows every second\n  {:>8} {:>10} {:>8}   most likely (mean p)\n",
+        "action classifier (Ghosh et al. 2017): p({}) over {} predictions, {} s windows every second\n  {:>8} {:>10} {:>8}   most likely (mean p)\n",
         curve.action, curve.sequences, curve.window_s, "end (s)", "p(action)", "top-1"
     );
     for (k, t) in curve.times_s.iter().enumerate() {
@@ -51,7 +51,7 @@ pub fn table(curve: &ClassifierCurve) -> String {
     out
 }
 
-/// Paper 002 Figure 4 style: the probability of the action and the top-1 rate vs time.
+/// Ghosh et al. 2017 Figure 4 style: the probability of the action and the top-1 rate vs time.
 pub fn chart(curve: &ClassifierCurve) -> Chart {
     let points = |values: &[f64]| -> Vec<(f64, f64)> {
         curve

@@ -8,7 +8,6 @@ use motion_core::any_format::{
 use motion_core::formats::npy::write_npy;
 use motion_core::formats::FileFormat;
 use motion_core::motion::check_fps;
-use motion_core::skeleton::H36M_SOURCE_FPS;
 use serde_json::json;
 
 use super::UsageError;
@@ -64,7 +63,7 @@ pub struct Args {
     #[arg(long, value_name = "HZ")]
     pub fps: Option<f64>,
     /// Frame rate of exp-map input (.txt, .txt.gz, .npy), which files do not store.
-    #[arg(long, value_name = "HZ", default_value_t = H36M_SOURCE_FPS)]
+    #[arg(long, value_name = "HZ", default_value_t = motion_core::seed::DEFAULT_EXPMAP_FILE_FPS)]
     pub input_fps: f64,
     /// Write world joint positions (frames x joints x 3, millimetres for H3.6M) to OUT.npy
     /// instead of converting the channels. For BVH input, End Sites are included, in file order.

@@ -75,7 +75,7 @@ fn text_summary(model: &MotionModel) -> String {
         Architecture::VgruD => {
             line(
                 "architecture",
-                "vgru-d (VTLN-RNN: plan GRU + body GRU + linear decoder, paper 000)".into(),
+                "vgru-d (VTLN-RNN: plan GRU + body GRU + linear decoder, Gopalakrishnan et al. 2019)".into(),
             );
             format!(
                 "body GRU {} units, plan GRU {} units",
@@ -86,7 +86,7 @@ fn text_summary(model: &MotionModel) -> String {
         Architecture::GruD => {
             line(
                 "architecture",
-                "gru-d (stacked GRU + linear decoder, paper 000)".into(),
+                "gru-d (stacked GRU + linear decoder, Gopalakrishnan et al. 2019)".into(),
             );
             format!("{} GRU layers x {} units", c.layers, c.hidden)
         }
@@ -94,7 +94,7 @@ fn text_summary(model: &MotionModel) -> String {
             line(
                 "architecture",
                 "dae-lstm (stacked LSTM + linear decoder, each output filtered by a dropout \
-                 autoencoder before it is fed back, paper 002)"
+                 autoencoder before it is fed back, Ghosh et al. 2017)"
                     .into(),
             );
             format!(
@@ -113,7 +113,7 @@ fn text_summary(model: &MotionModel) -> String {
                 "architecture",
                 "intention (seed labelled with intentions, intention forecaster GRU, stacked GRU \
                  pose generator on noise z and the intentions forecast ahead + linear decoder, \
-                 paper 003)"
+                 Tanke et al. 2021)"
                     .into(),
             );
             let n = c.noise_dims.unwrap_or(0);
@@ -282,7 +282,7 @@ fn classifier_text(classifier: &ActionClassifier) -> String {
     line("file", classifier.path().display().to_string());
     line(
         "architecture",
-        "action-classifier (LSTM over windows + linear head, paper 002 section 4.5)".into(),
+        "action-classifier (LSTM over windows + linear head, Ghosh et al. 2017 section 4.5)".into(),
     );
     line(
         "sizes",
@@ -386,7 +386,7 @@ mod tests {
         let text = text_summary(&model);
         for needle in [
             "intention (",
-            "paper 003",
+            "Tanke et al. 2021",
             "1,410,654",
             "8 intentions from 32 pose clusters",
             "128 units",

@@ -15,7 +15,6 @@ use motion_core::model::{
 };
 use motion_core::motion::compact_number;
 use motion_core::resample::resampled_len;
-use motion_core::skeleton::H36M_SOURCE_FPS;
 use ndarray::{s, Array2, Array3};
 use rayon::prelude::*;
 use serde_json::{json, Value};
@@ -68,7 +67,7 @@ pub struct Args {
     #[arg(long, value_name = "W")]
     pub model: Option<PathBuf>,
     /// Action label to condition on. Default: the seed's action as the built-in action classifier
-    /// (paper 002) sees it in the seed's last 2 s, said in a notice and in --json.
+    /// (Ghosh et al. 2017) sees it in the seed's last 2 s, said in a notice and in --json.
     #[arg(long, value_name = "NAME")]
     pub action: Option<String>,
     /// Action classifier weights used to infer the seed's action when --action is not given
@@ -102,7 +101,7 @@ pub struct Args {
     #[arg(long, value_name = "EXT", default_value = "bvh", value_parser = ["bvh", "npy", "txt"])]
     pub format: String,
     /// Frame rate of exp-map seeds (.txt, .txt.gz, .npy), which files do not store.
-    #[arg(long, value_name = "HZ", default_value_t = H36M_SOURCE_FPS)]
+    #[arg(long, value_name = "HZ", default_value_t = motion_core::seed::DEFAULT_EXPMAP_FILE_FPS)]
     pub input_fps: f64,
     /// A JSON file mapping the H3.6M body joints to a BVH seed's own joint names
     /// (`{"Hips": "pelvis", "LeftArm": "upperarm_l", ...}`, all 21 of them), for rigs the

@@ -9,7 +9,6 @@ mod svg_anim;
 
 use std::path::{Path, PathBuf};
 
-use motion_core::skeleton::H36M_SOURCE_FPS;
 use serde_json::json;
 
 use super::UsageError;
@@ -62,7 +61,7 @@ pub struct Args {
     /// Frame rate of exp-map inputs (.txt, .txt.gz, .npy), which files do not store (1 to
     /// 10,000; a BVH's Frame Time must give a rate in that range too). Animations are limited
     /// to 30,000 frames.
-    #[arg(long, value_name = "HZ", default_value_t = H36M_SOURCE_FPS)]
+    #[arg(long, value_name = "HZ", default_value_t = motion_core::seed::DEFAULT_EXPMAP_FILE_FPS)]
     pub input_fps: f64,
     /// Which sample of a samples x frames x dims .npy to draw.
     #[arg(long, default_value_t = 0)]

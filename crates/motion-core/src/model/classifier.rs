@@ -1,4 +1,4 @@
-//! The action classifier of paper 002, section 4.5 (Ghosh, Song, Aksan, Hilliges, "Learning Human
+//! The action classifier of Ghosh et al. 2017, section 4.5 (Ghosh, Song, Aksan, Hilliges, "Learning Human
 //! Motion Models for Long-term Predictions", 3DV 2017): a separately trained recurrent classifier
 //! that scores generated motion of any length — the longer a prediction keeps the seed's action
 //! label, the better it is. Trained by `training/train_classifier.py`; schema `action-classifier`

@@ -15,18 +15,18 @@ pub const DERIVATIVE_PADDING: &str = "repeat-first";
 /// Which predictor a weights file holds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Architecture {
-    /// VTLN-RNN with derivative inputs: plan GRU + body GRU + decoder (paper 000, 3.2).
+    /// VTLN-RNN with derivative inputs: plan GRU + body GRU + decoder (Gopalakrishnan et al. 2019, 3.2).
     #[serde(rename = "vgru-d")]
     VgruD,
-    /// Stacked GRU layers with derivative inputs + decoder (paper 000, GRU-d).
+    /// Stacked GRU layers with derivative inputs + decoder (Gopalakrishnan et al. 2019, GRU-d).
     #[serde(rename = "gru-d")]
     GruD,
     /// Stacked LSTM layers + decoder whose every output is filtered by a dropout autoencoder
-    /// before it is fed back (paper 002, section 3).
+    /// before it is fed back (Ghosh et al. 2017, section 3).
     #[serde(rename = "dae-lstm")]
     DaeLstm,
     /// Intention forecaster + noise-conditioned stacked GRU pose generator reading the
-    /// intentions forecast ahead (paper 003, section 3).
+    /// intentions forecast ahead (Tanke et al. 2021, section 3).
     #[serde(rename = "intention")]
     Intention,
 }
@@ -70,7 +70,7 @@ pub struct ModelConfig {
     /// Units of each hidden layer of the dropout autoencoder (`dae-lstm` only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub dae_hidden: Option<usize>,
-    /// Hidden layers of the dropout autoencoder (`dae-lstm` only; paper 002: 3).
+    /// Hidden layers of the dropout autoencoder (`dae-lstm` only; Ghosh et al. 2017: 3).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub dae_layers: Option<usize>,
     /// Width `N` of the noise `z ~ N(0, I)` appended to the pose decoder's initial state and to
@@ -86,14 +86,14 @@ pub struct ModelConfig {
     /// Units of the intention forecaster's encoder and decoder GRUs (`intention` only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub label_hidden: Option<usize>,
-    /// Number of intention labels `C` (`intention` only; paper 003: 8).
+    /// Number of intention labels `C` (`intention` only; Tanke et al. 2021: 8).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub intentions: Option<usize>,
     /// Pose clusters `K` whose centroids label the seed frames (`intention` only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub clusters: Option<usize>,
     /// Look-ahead `γ`: intention probabilities of frames `τ-1 .. τ+γ-2` are read by the step
-    /// producing frame `τ` (`intention` only; paper 003: 10).
+    /// producing frame `τ` (`intention` only; Tanke et al. 2021: 10).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub lookahead: Option<usize>,
     /// Output channels `Fe` of the temporal convolution over those probabilities (`intention`

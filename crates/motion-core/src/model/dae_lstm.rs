@@ -2,7 +2,7 @@
 //! that filters every prediction before it is fed back.
 //!
 //! Citation: Ghosh, Song, Aksan, Hilliges, "Learning Human Motion Models for Long-term
-//! Predictions", 3DV 2017 — paper 002, section 3 (3.1 the dropout autoencoder, 3.2 the LSTM-3LR,
+//! Predictions", 3DV 2017 — Ghosh et al. 2017, section 3 (3.1 the dropout autoencoder, 3.2 the LSTM-3LR,
 //! 3.3 stacking them at inference). Tensors as in `training/models.py` (`DAELSTM`):
 //! `rnn.{k}.weight_ih/weight_hh/bias_ih/bias_hh` (PyTorch LSTM cells, gate order i, f, g, o),
 //! `dae.layers.{k}.weight/bias` (ReLU between layers, none after the last); the decoder and the

@@ -1,7 +1,7 @@
 //! GRU-d: stacked GRU layers over motion-derivative features, then a linear decoder.
 //!
 //! Citation: Gopalakrishnan, Mali, Kifer, Giles, Ororbia, "A Neural Temporal Model for Human
-//! Motion Prediction", CVPR 2019 — paper 000, sections 3.2-3.3 (the GRU-d baseline: two layers of
+//! Motion Prediction", CVPR 2019 — Gopalakrishnan et al. 2019, sections 3.2-3.3 (the GRU-d baseline: two layers of
 //! 512 units with derivative inputs). Tensors `rnn.{k}.*` as in `training/models.py`.
 use super::config::ModelConfig;
 use super::weights::{WeightStore, WeightsError};

@@ -3,7 +3,7 @@
 //! generator conditioned on a noise vector `z` reads the intentions forecast ahead of it.
 //!
 //! Citation: Tanke, Zaveri, Gall, "Intention-based Long-Term Human Motion Anticipation", 3DV
-//! 2021 — paper 003, section 3 (3.1 the intention forecaster, eq. 3; 3.2 the pose generator,
+//! 2021 — Tanke et al. 2021, section 3 (3.1 the intention forecaster, eq. 3; 3.2 the pose generator,
 //! eq. 6; 3.3 the intention labels). Tensors as in `training/models.py` (`IntentionModel`,
 //! `IntentionLabels`; labelling in `training/intention_labels.py`):
 //! `labels.centroids [K, O]`, `labels.merge [K]`, `label_encoder.*`, `label_decoder.*`,

@@ -6,7 +6,7 @@
 //! - [`MotionModel`]: a loaded predictor (shared, immutable); [`vgru`], [`grud`], [`dae_lstm`]
 //!   and [`intention`] its networks.
 //! - [`Generator`] (one character) and [`BatchGenerator`] (many in lockstep): closed-loop frames.
-//! - [`ActionClassifier`]: the action classifier of paper 002 (section 4.5), the long-horizon
+//! - [`ActionClassifier`]: the action classifier of Ghosh et al. 2017 (section 4.5), the long-horizon
 //!   evaluation instrument.
 //! - [`random`]: schema-conformant files with random weights (benchmarks, tests).
 //!

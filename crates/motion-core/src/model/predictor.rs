@@ -2,10 +2,10 @@
 //! decoder, read from one self-describing safetensors file (schema: weights/README.md).
 //!
 //! Citation: Gopalakrishnan, Mali, Kifer, Giles, Ororbia, "A Neural Temporal Model for Human
-//! Motion Prediction", CVPR 2019 — paper 000, sections 3.2-3.3 (VGRU-d, GRU-d); Ghosh, Song,
+//! Motion Prediction", CVPR 2019 — Gopalakrishnan et al. 2019, sections 3.2-3.3 (VGRU-d, GRU-d); Ghosh, Song,
 //! Aksan, Hilliges, "Learning Human Motion Models for Long-term Predictions", 3DV 2017 — paper
 //! 002, section 3 (DAE-LSTM); Tanke, Zaveri, Gall, "Intention-based Long-Term Human Motion
-//! Anticipation", 3DV 2021 — paper 003, section 3 (intention).
+//! Anticipation", 3DV 2021 — Tanke et al. 2021, section 3 (intention).
 use super::config::{check_format, parse_provenance, Architecture, ModelConfig, Provenance};
 use super::dae_lstm::DaeLstm;
 use super::grud::GruD;

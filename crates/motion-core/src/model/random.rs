@@ -11,11 +11,11 @@ use rand::{RngExt, SeedableRng};
 use std::collections::BTreeMap;
 
 impl ModelConfig {
-    /// The paper's configuration (paper 000, section 4): H3.6M frames (99 dims, 54 used),
+    /// The paper's configuration (Gopalakrishnan et al. 2019, section 4): H3.6M frames (99 dims, 54 used),
     /// derivative order 3, 512 units (GRU-d: 2 layers, PyTorch convention, unconditioned;
     /// VGRU-d: plan 512, paper convention, the 15 H3.6M actions), 50 seed + 100 predicted frames.
-    /// DAE-LSTM (paper 002, 4.1): 3 LSTM layers of 1000 units over plain min-max scaled poses and
-    /// the action one-hot, a 3 x 3000 autoencoder. Intention (paper 003; `make_config` of
+    /// DAE-LSTM (Ghosh et al. 2017, 4.1): 3 LSTM layers of 1000 units over plain min-max scaled poses and
+    /// the action one-hot, a 3 x 3000 autoencoder. Intention (Tanke et al. 2021; `make_config` of
     /// `training/models.py`): 3 GRU layers of 256 units over plain poses, residual,
     /// unconditioned, noise 32, forecaster 128 units, 8 intentions from 32 clusters, look-ahead
     /// 10, 32 convolution channels.

@@ -3,7 +3,7 @@
 //! linear decoder turns into the next frame.
 //!
 //! Citation: Gopalakrishnan, Mali, Kifer, Giles, Ororbia, "A Neural Temporal Model for Human
-//! Motion Prediction", CVPR 2019 — paper 000, sections 3.2 (architecture) and 3.3 (derivative
+//! Motion Prediction", CVPR 2019 — Gopalakrishnan et al. 2019, sections 3.2 (architecture) and 3.3 (derivative
 //! features). Tensors `plan.*` and `body.*` as in `training/models.py`.
 //!
 //! ## Plan

@@ -1,4 +1,4 @@
-//! The body GRU of paper 000 (eqs. 1-4): a GRU cell whose three gates (r, z and the candidate)
+//! The body GRU of Gopalakrishnan et al. 2019 (eqs. 1-4): a GRU cell whose three gates (r, z and the candidate)
 //! each also read the guide vector through `V p_t` (`weight_ph [3H, P]`, no extra bias).
 //!
 //! The guide term is added to the input projection, so the cell works in either convention

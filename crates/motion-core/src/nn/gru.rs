@@ -1,7 +1,7 @@
 //! GRU cell in two conventions, gate order r, z, n as in `torch.nn.GRU` state dicts.
 //!
 //! - [`GruConvention::PyTorch`]: `n = tanh(W_n x + b_in + r ⊙ (U_n h + b_hn))`
-//! - [`GruConvention::Paper`] (paper 000, eq. 3): `n = tanh(W_n x + b_in + U_n (r ⊙ h) + b_hn)`
+//! - [`GruConvention::Paper`] (Gopalakrishnan et al. 2019, eq. 3): `n = tanh(W_n x + b_in + U_n (r ⊙ h) + b_hn)`
 //!
 //! In both, `r = σ(W_r x + b_ir + U_r h + b_hr)`, `z = σ(W_z x + b_iz + U_z h + b_hz)` and
 //! `h' = (1 - z) ⊙ n + z ⊙ h`. The input projection `W x + b_i` of all three gates is one matrix
@@ -18,7 +18,7 @@ pub enum GruConvention {
     /// `torch.nn.GRU`: `r ⊙ (U_n h + b_hn)`.
     #[serde(rename = "pytorch")]
     PyTorch,
-    /// Paper 000 eq. 3: `U_n (r ⊙ h) + b_hn`.
+    /// Gopalakrishnan et al. 2019 eq. 3: `U_n (r ⊙ h) + b_hn`.
     #[serde(rename = "paper")]
     Paper,
 }

@@ -1,6 +1,6 @@
 //! LSTM cell in PyTorch's convention (`torch.nn.LSTMCell`), gate order i, f, g, o:
 //! `c' = f ⊙ c + i ⊙ g`, `h' = o ⊙ tanh(c')` with `i, f, o = σ(·)`, `g = tanh(·)` of
-//! `W x + b_i + U h + b_h`. Built for the DAE-LSTM of paper 002.
+//! `W x + b_i + U h + b_h`. Built for the DAE-LSTM of Ghosh et al. 2017.
 use super::gates::{sigmoid_fast, tanh_fast};
 use super::gemm::MatMul;
 use super::packed::PackedMatrix;

@@ -1,5 +1,5 @@
 //! A multilayer perceptron: [`Linear`] layers with ReLU between them (none after the last),
-//! named `{prefix}.layers.{k}.weight/bias`. Built for the denoising autoencoder of paper 002.
+//! named `{prefix}.layers.{k}.weight/bias`. Built for the denoising autoencoder of Ghosh et al. 2017.
 use super::activation::relu;
 use super::linear::{Linear, LinearConfig};
 use crate::weights::{WeightStore, WeightsError};

@@ -1,4 +1,4 @@
-//! NDMS, the motion-quality score of paper 003 (section 4), exactly as `metrics.md` defines it:
+//! NDMS, the motion-quality score of Tanke et al. 2021 (section 4), exactly as `metrics.md` defines it:
 //! every query word of a forecast is scored against its **exact** nearest neighbour in a database
 //! of motion words with the normalized directional motion similarity.
 //!
@@ -44,7 +44,7 @@ pub use index::{NearestIndex, Neighbour, NnMethod};
 /// What NDMS compares and how: motion-word length, joints, hips and the vertical axis.
 #[derive(Debug, Clone, PartialEq)]
 pub struct NdmsConfig {
-    /// Frames per motion word (κ = 8 at 25 Hz in paper 003).
+    /// Frames per motion word (κ = 8 at 25 Hz in Tanke et al. 2021).
     pub kappa: usize,
     /// Skeleton joints kept in a word, in this order.
     pub joints: Vec<usize>,
@@ -54,14 +54,14 @@ pub struct NdmsConfig {
     pub right_hip: usize,
     /// The vertical axis of the input positions (1 = y-up, as H3.6M).
     pub vertical_axis: usize,
-    /// Words per reporting bin (10 = 0.4 s at 25 Hz, as paper 003 Tables 2-3).
+    /// Words per reporting bin (10 = 0.4 s at 25 Hz, as Tanke et al. 2021 Tables 2-3).
     pub words_per_bin: usize,
     /// The frame words are expressed in.
     pub frame: WordFrame,
 }
 
 impl NdmsConfig {
-    /// Paper 003's setting on the 32-joint H3.6M skeleton: κ = 8, the 12 joints (wrists, elbows,
+    /// Tanke et al. 2021's setting on the 32-joint H3.6M skeleton: κ = 8, the 12 joints (wrists, elbows,
     /// shoulders, hips, knees, ankles), hips LeftUpLeg / RightUpLeg, y up, 0.4 s bins, the
     /// heading-only recipe of `metrics.md` (for gravity-aligned positions).
     pub fn h36m() -> Self {
@@ -169,7 +169,7 @@ pub struct NdmsReport {
     /// The forecast frame (0-based) at which the first word ends: 0 with the seed's last κ-1
     /// frames prepended, κ-1 without.
     pub first_word_end: usize,
-    /// f_sim (paper 003 eq. 9): the mean over all words of all forecasts.
+    /// f_sim (Tanke et al. 2021 eq. 9): the mean over all words of all forecasts.
     pub mean: f64,
     /// Means over bins of `words_per_bin` forecast frames by word end frame (0.4 s at 25 Hz);
     /// bin `b` holds the words ending at frames `b·words_per_bin ..`. Bins without words are left out.

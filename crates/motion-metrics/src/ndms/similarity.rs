@@ -1,4 +1,4 @@
-//! NDMS, the normalized directional motion similarity of two motion words (paper 003 eq. 11-12,
+//! NDMS, the normalized directional motion similarity of two motion words (Tanke et al. 2021 eq. 11-12,
 //! with the public implementation's ε handling, `metrics.md`):
 //! `mean over t = 1..κ-1 and joints j of ½(1 + cos(v_a, v_b)) · min(|v_a|, |v_b|) / max(|v_a|, |v_b|)`
 //! where `v` are the joint's frame-to-frame velocities, the magnitudes are clamped to at least

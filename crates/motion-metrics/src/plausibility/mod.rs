@@ -98,7 +98,7 @@ pub const WINDOW_BOUNDS_S: [(u32, u32); 9] = [
 ];
 /// The frames the windows cover at 25 Hz (60 s).
 pub const MAX_HORIZON_FRAMES: usize = 1500;
-/// Motion frames of a real window of the drift reference (12 s: paper 002's horizon).
+/// Motion frames of a real window of the drift reference (12 s: Ghosh et al. 2017's horizon).
 pub const REAL_WINDOW_FRAMES: usize = 300;
 /// Both feet higher than this above the seed's floor: airborne (mm).
 pub const FOOT_CLEARANCE_MM: f64 = 100.0;

@@ -3,7 +3,7 @@
 Score a prediction (exp-map frames, ``N x T x 99`` at 25 Hz)::
 
     import motion
-    print(motion.npss(gt, pred, input_space="expmap"))      # paper 000's NPSS
+    print(motion.npss(gt, pred, input_space="expmap"))      # Gopalakrishnan et al. 2019's NPSS
     print(motion.euler_error(gt, pred)[[1, 3, 7, 9, 13, 24]])  # the protocol's ms horizons
     db = motion.NdmsDatabase([motion.expmap_to_positions(f) for f in reference_clips])
     print(db.score(motion.expmap_to_positions(pred[0]))["mean"])

@@ -1,5 +1,5 @@
 //! `motion-cli eval`: runs a model on the standard H3.6M protocol's test windows (8 per action,
-//! 50 seed frames at 25 Hz) and scores it the way paper 000 and paper 003 do, beside the
+//! 50 seed frames at 25 Hz) and scores it the way Gopalakrishnan et al. 2019 and Tanke et al. 2021 do, beside the
 //! zero-velocity baseline and the papers' published numbers.
 //!
 //! - [`selection`]: the dataset directory and the actions to run;
@@ -64,7 +64,7 @@ neighbour; queries include the last 7 seed frames; every word is put in the rigi
 its first frame (hips and shoulders), because positions integrated from H3.6M's root deltas carry an \
 arbitrary tilt of the starting frame; mean and 0.4 s bins); APD with 2+ samples; \
 and the mean joint speed of the last second vs the ground truth (to catch freezing). Beside them: \
-paper 000 Tables 4-7 and paper 003 Tables 1-2.
+Gopalakrishnan et al. 2019 Tables 4-7 and Tanke et al. 2021 Tables 1-2.
 
 Plausibility without ground truth (motion_metrics::plausibility), per window 0-2, 2-4, 4-8, 8-12 s \
 of the horizon, for the model, the zero-velocity baseline and the real S5 continuation (the \
@@ -73,7 +73,7 @@ drift (largest hip height and torso lean change since the last seed frame, besid
 real 12 s windows of the action, every subject) and foot_contact (fraction of frames with both \
 feet over 100 mm above the seed's lowest foot joint).
 
-Horizons past 100 frames (up to 300 = 12 s, paper 002's): some S5 files end before the window's \
+Horizons past 100 frames (up to 300 = 12 s, Ghosh et al. 2017's): some S5 files end before the window's \
 horizon does. The metrics that need ground truth (Euler error, NPSS) then use the part each file \
 covers: the Euler error of a frame is the mean over the windows covering it, NPSS whole is over \
 the frames all 8 windows cover, each NPSS window (adding 4-8 s and 8-12 s) over the windows \
@@ -109,7 +109,7 @@ pub struct Args {
     #[arg(long, value_delimiter = ',', default_value = "all")]
     pub actions: Vec<String>,
     /// Predicted frames per window at 25 Hz (1..=1500; 100 = 4 s, the long-term protocol; 300 =
-    /// 12 s, paper 002's horizon; 1500 = 60 s for the plausibility measures, raw and grounded
+    /// 12 s, Ghosh et al. 2017's horizon; 1500 = 60 s for the plausibility measures, raw and grounded
     /// side by side; ground-truth metrics use what the S5 files cover).
     #[arg(long, default_value_t = LONG_TERM_HORIZON)]
     pub horizon: usize,
@@ -123,7 +123,7 @@ pub struct Args {
     /// Write the predictions (actions x 8 x K x horizon x 99, float64, un-normalized exp-map frames).
     #[arg(long, value_name = "FILE.npy")]
     pub save_predictions: Option<PathBuf>,
-    /// Action classifier weights for the paper 002 protocol (default: the built-in
+    /// Action classifier weights for the Ghosh et al. 2017 protocol (default: the built-in
     /// action_classifier.safetensors).
     #[arg(long, value_name = "FILE")]
     pub classifier: Option<PathBuf>,
@@ -690,11 +690,11 @@ fn full_report(
 /// How each number of the report is computed.
 const METHOD: Method = Method {
     samples: "Euler error: mean over all 8 x K sequences; NPSS: each sample index scored as a set of the 8 windows, then the mean over the K sets; NDMS: f_sim over all words of all 8 x K forecasts; APD: per window over its K samples (world positions of all 32 joints, mm), mean over windows",
-    npss: "npss = |DFT|² (paper 000's definition); npss_reference = Re(DFT)² (the published code, which every published NPSS used)",
+    npss: "npss = |DFT|² (Gopalakrishnan et al. 2019's definition); npss_reference = Re(DFT)² (the published code, which every published NPSS used)",
     ndms: "database = every motion word (kappa 8, stride 1) of the action's S5 files at 25 Hz; queries = forecasts with the last 7 seed frames prepended; exact nearest neighbour (brute force); bins of 0.4 s by word end; ground_truth.real_motion_ndms = the same score of real motion that is not the truth: one clip (seed + horizon) per test window from the action's takes of the other subjects (S1, S6, S7, S8, S9, S11), clip i from the (i mod n)-th take long enough, evenly spread within it (motion_metrics::protocol::real_motion_clips)",
     positions: "FK of seed + forecast with the root integrated (each 25 Hz root delta applied twice)",
     mean_joint_speed_last_1s: "mean displacement per 25 Hz frame (mm) of the 12 NDMS joints over the last 25 frame steps; world = with the root trajectory, pose = root deltas zeroed (body motion only)",
-    zero_velocity: "the last seed pose repeated with the root held (root deltas 0: no translation, no turning); its joint angles are the protocol's repeated last frame, so its Euler error and NPSS are paper 000 Table 6's zero-velocity baseline",
+    zero_velocity: "the last seed pose repeated with the root held (root deltas 0: no translation, no turning); its joint angles are the protocol's repeated last frame, so its Euler error and NPSS are Gopalakrishnan et al. 2019 Table 6's zero-velocity baseline",
     ground_truth_coverage: "horizons past 100 frames: a window's ground truth ends with its S5 file; Euler error per frame = mean over the windows covering the frame (dims chosen over each window's covered frames); NPSS whole over the frames all windows cover (npss_whole_frames), each NPSS window over the windows covering it completely (npss_windows); windows_per_second = windows covering each second of the horizon",
     plausibility: "speed_ratio, drift, foot_contact (motion_metrics::plausibility) per window 0-2, 2-4, 4-8, 8-12 s for model (all 8 x K), zero_velocity and ground_truth (the real continuation; each window counts the test windows whose file covers it); speed reference = mean root-frame joint speed over the action's S5 files; drift p95 over real 12 s windows of the action, every subject, seeded by the 50 frames before each",
 };

@@ -1,10 +1,10 @@
 //! The published H3.6M numbers that `eval` prints beside its own, as code.
 //!
 //! Citations: Gopalakrishnan, Mali, Kifer, Giles, Ororbia, "A Neural Temporal Model for Human
-//! Motion Prediction", CVPR 2019 (paper 000), Tables 4-7; Ghosh, Song, Aksan, Hilliges,
-//! "Learning Human Motion Models for Long-term Predictions", 3DV 2017 (paper 002), Table 2; Tanke, Zaveri, Gall, "Intention-based
-//! Long-Term Human Motion Anticipation", 3DV 2021 (paper 003), Tables 1-2. Model names are
-//! normalized ("GRU-d (ours)" -> "GRU-d"); paper 003 methods keep their reference numbers.
+//! Motion Prediction", CVPR 2019 (Gopalakrishnan et al. 2019), Tables 4-7; Ghosh, Song, Aksan, Hilliges,
+//! "Learning Human Motion Models for Long-term Predictions", 3DV 2017 (Ghosh et al. 2017), Table 2; Tanke, Zaveri, Gall, "Intention-based
+//! Long-Term Human Motion Anticipation", 3DV 2021 (Tanke et al. 2021), Tables 1-2. Model names are
+//! normalized ("GRU-d (ours)" -> "GRU-d"); Tanke et al. 2021 methods keep their reference numbers.
 //! Every published NPSS was computed with the authors' code, i.e. the reference variant
 //! (`Re(DFT)²`, see metrics.md).
 // Table cells such as 0.318 are published numbers, not approximations of 1/π.
@@ -14,16 +14,16 @@ use std::collections::BTreeMap;
 
 use serde::Serialize;
 
-/// The actions of paper 000's tables, in column order.
+/// The actions of Gopalakrishnan et al. 2019's tables, in column order.
 pub const PAPER000_ACTIONS: [&str; 4] = ["walking", "eating", "smoking", "discussion"];
-/// The columns of paper 003 Table 1 (the last is the mean over the four actions).
+/// The columns of Tanke et al. 2021 Table 1 (the last is the mean over the four actions).
 pub const PAPER003_TABLE1_COLUMNS: [&str; 5] =
     ["walking", "eating", "smoking", "discussion", "average"];
-/// The horizons of paper 000 Table 6, in milliseconds.
+/// The horizons of Gopalakrishnan et al. 2019 Table 6, in milliseconds.
 pub const TABLE6_HORIZONS_MS: [u32; 4] = [80, 160, 320, 400];
-/// The horizons of paper 002 Table 2, in milliseconds.
+/// The horizons of Ghosh et al. 2017 Table 2, in milliseconds.
 pub const P002_TABLE2_HORIZONS_MS: [u32; 5] = [80, 160, 320, 560, 1000];
-/// The horizons of paper 000 Table 7, in milliseconds.
+/// The horizons of Gopalakrishnan et al. 2019 Table 7, in milliseconds.
 pub const TABLE7_HORIZONS_MS: [u32; 6] = [80, 160, 320, 400, 560, 1000];
 
 /// One model's numbers, one per table column.
@@ -35,8 +35,8 @@ pub struct ModelRow<const N: usize> {
     pub values: [f64; N],
 }
 
-/// One model's errors at `H` horizons, per action of [`PAPER000_ACTIONS`]: paper 000 Table 7 at
-/// [`TABLE7_HORIZONS_MS`] (`H` = 6), paper 002 Table 2 at [`P002_TABLE2_HORIZONS_MS`] (`H` = 5).
+/// One model's errors at `H` horizons, per action of [`PAPER000_ACTIONS`]: Gopalakrishnan et al. 2019 Table 7 at
+/// [`TABLE7_HORIZONS_MS`] (`H` = 6), Ghosh et al. 2017 Table 2 at [`P002_TABLE2_HORIZONS_MS`] (`H` = 5).
 #[derive(Debug, Clone, Copy)]
 pub struct EulerRow<const H: usize = 6> {
     /// The model as the paper names it.
@@ -45,10 +45,10 @@ pub struct EulerRow<const H: usize = 6> {
     pub values: [[f64; H]; 4],
 }
 
-/// One method's NDMS over the 0.4 s bins of one action (paper 003 Table 2).
+/// One method's NDMS over the 0.4 s bins of one action (Tanke et al. 2021 Table 2).
 #[derive(Debug, Clone, Copy)]
 pub struct NdmsRow {
-    /// The method as paper 003 names it.
+    /// The method as Tanke et al. 2021 names it.
     pub method: &'static str,
     /// The action, or `average` (over all 15 actions).
     pub action: &'static str,
@@ -56,7 +56,7 @@ pub struct NdmsRow {
     pub bins: [Option<f64>; 10],
 }
 
-/// Paper 000 Table 4: NPSS over 4 s (published code, i.e. the reference variant), per model, columns [`PAPER000_ACTIONS`].
+/// Gopalakrishnan et al. 2019 Table 4: NPSS over 4 s (published code, i.e. the reference variant), per model, columns [`PAPER000_ACTIONS`].
 #[rustfmt::skip]
 pub const P000_TABLE4_NPSS: [ModelRow<4>; 6] = [
     ModelRow { model: "VGRU-r1 (SA)", values: [1.217, 1.312, 1.736, 4.884] },
@@ -66,7 +66,7 @@ pub const P000_TABLE4_NPSS: [ModelRow<4>; 6] = [
     ModelRow { model: "GRU-d", values: [0.931, 0.836, 1.274, 1.688] },
     ModelRow { model: "VGRU-d", values: [0.887, 0.846, 1.235, 1.777] },
 ];
-/// Paper 000 Table 5: NPSS (reference variant) on the 0-1 s window, columns [`PAPER000_ACTIONS`].
+/// Gopalakrishnan et al. 2019 Table 5: NPSS (reference variant) on the 0-1 s window, columns [`PAPER000_ACTIONS`].
 #[rustfmt::skip]
 pub const P000_TABLE5_NPSS_SHORT: [ModelRow<4>; 6] = [
     ModelRow { model: "VGRU-r1 (SA)", values: [0.12, 0.091, 0.052, 0.258] },
@@ -76,7 +76,7 @@ pub const P000_TABLE5_NPSS_SHORT: [ModelRow<4>; 6] = [
     ModelRow { model: "GRU-d", values: [0.127, 0.095, 0.126, 0.185] },
     ModelRow { model: "VGRU-d", values: [0.117, 0.121, 0.084, 0.194] },
 ];
-/// Paper 000 Table 5: NPSS (reference variant) on the 1-2 s window, columns [`PAPER000_ACTIONS`].
+/// Gopalakrishnan et al. 2019 Table 5: NPSS (reference variant) on the 1-2 s window, columns [`PAPER000_ACTIONS`].
 #[rustfmt::skip]
 pub const P000_TABLE5_NPSS_MEDIUM: [ModelRow<4>; 6] = [
     ModelRow { model: "VGRU-r1 (SA)", values: [0.194, 0.093, 0.079, 0.375] },
@@ -86,7 +86,7 @@ pub const P000_TABLE5_NPSS_MEDIUM: [ModelRow<4>; 6] = [
     ModelRow { model: "GRU-d", values: [0.17, 0.096, 0.083, 0.258] },
     ModelRow { model: "VGRU-d", values: [0.179, 0.08, 0.067, 0.331] },
 ];
-/// Paper 000 Table 5: NPSS (reference variant) on the 2-4 s window, columns [`PAPER000_ACTIONS`].
+/// Gopalakrishnan et al. 2019 Table 5: NPSS (reference variant) on the 2-4 s window, columns [`PAPER000_ACTIONS`].
 #[rustfmt::skip]
 pub const P000_TABLE5_NPSS_LONG: [ModelRow<4>; 6] = [
     ModelRow { model: "VGRU-r1 (SA)", values: [0.544, 0.764, 0.948, 2.72] },
@@ -96,7 +96,7 @@ pub const P000_TABLE5_NPSS_LONG: [ModelRow<4>; 6] = [
     ModelRow { model: "GRU-d", values: [0.406, 0.332, 0.723, 0.785] },
     ModelRow { model: "VGRU-d", values: [0.359, 0.288, 0.577, 1.001] },
 ];
-/// Paper 000 Table 6: the zero-velocity baseline's Euler error at 80, 160, 320, 400 ms, rows [`PAPER000_ACTIONS`].
+/// Gopalakrishnan et al. 2019 Table 6: the zero-velocity baseline's Euler error at 80, 160, 320, 400 ms, rows [`PAPER000_ACTIONS`].
 #[rustfmt::skip]
 pub const P000_TABLE6_ZERO_VELOCITY: [[f64; 4]; 4] = [
     [0.39, 0.68, 0.99, 1.15],
@@ -104,7 +104,7 @@ pub const P000_TABLE6_ZERO_VELOCITY: [[f64; 4]; 4] = [
     [0.26, 0.48, 0.97, 0.95],
     [0.31, 0.67, 0.94, 1.04],
 ];
-/// Paper 000 Table 7: Euler error of the long-term models at 80, 160, 320, 400, 560, 1000 ms, per action of [`PAPER000_ACTIONS`].
+/// Gopalakrishnan et al. 2019 Table 7: Euler error of the long-term models at 80, 160, 320, 400, 560, 1000 ms, per action of [`PAPER000_ACTIONS`].
 #[rustfmt::skip]
 pub const P000_TABLE7_EULER: [EulerRow; 2] = [
     EulerRow { model: "GRU-d", values: [
@@ -120,7 +120,7 @@ pub const P000_TABLE7_EULER: [EulerRow; 2] = [
         [1.749, 2.037, 2.011, 1.868, 2.088, 2.318],
     ] },
 ];
-/// Paper 002 Table 2: "the Euclidean norm (L2) of un-normalized ground truth and predicted MOCAP
+/// Ghosh et al. 2017 Table 2: "the Euclidean norm (L2) of un-normalized ground truth and predicted MOCAP
 /// vectors" (exp-map, H3.6M) at [`P002_TABLE2_HORIZONS_MS`], per action of [`PAPER000_ACTIONS`]; the
 /// baselines' rows are the paper's copies of SRNN [19]'s. Printed beside the Euler error of the
 /// standard protocol, its closest measured counterpart (the paper does not say how it averaged).
@@ -151,7 +151,7 @@ pub const P002_TABLE2_L2: [EulerRow<5>; 4] = [
         [1.11, 1.20, 1.38, 1.53, 1.73],
     ] },
 ];
-/// Paper 003 Table 1: NPSS (public implementation = reference variant) on the 2-4 s window, columns [`PAPER003_TABLE1_COLUMNS`].
+/// Tanke et al. 2021 Table 1: NPSS (public implementation = reference variant) on the 2-4 s window, columns [`PAPER003_TABLE1_COLUMNS`].
 #[rustfmt::skip]
 pub const P003_TABLE1_NPSS_LONG: [ModelRow<5>; 6] = [
     ModelRow { model: "Seq2Seq [23] (MBR-long)", values: [0.549, 0.754, 1.403, 1.245, 0.987] },
@@ -161,7 +161,7 @@ pub const P003_TABLE1_NPSS_LONG: [ModelRow<5>; 6] = [
     ModelRow { model: "Grammar [28]", values: [0.467, 0.301, 0.751, 0.945, 0.616] },
     ModelRow { model: "Ours (paper 003)", values: [0.367, 0.621, 0.363, 0.795, 0.536] },
 ];
-/// Paper 003 Table 2: NDMS per 0.4 s bin (0.4 .. 4.0 s); `None` where the paper has no value.
+/// Tanke et al. 2021 Table 2: NDMS per 0.4 s bin (0.4 .. 4.0 s); `None` where the paper has no value.
 #[rustfmt::skip]
 pub const P003_TABLE2_NDMS: [NdmsRow; 36] = [
     NdmsRow { method: "Seq2Seq [23]", action: "walking", bins: [Some(0.891), Some(0.66), Some(0.673), Some(0.67), Some(0.647), Some(0.617), Some(0.562), Some(0.537), Some(0.515), Some(0.418)] },
@@ -216,25 +216,25 @@ pub type ByHorizon = BTreeMap<String, f64>;
 /// out).
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct ForAction {
-    /// Paper 000 Table 4: NPSS (reference variant) over 0-4 s, per model.
+    /// Gopalakrishnan et al. 2019 Table 4: NPSS (reference variant) over 0-4 s, per model.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub paper000_table4_npss_reference_0_4s: Option<ByModel>,
-    /// Paper 000 Table 5: NPSS (reference variant) per window label, per model.
+    /// Gopalakrishnan et al. 2019 Table 5: NPSS (reference variant) per window label, per model.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub paper000_table5_npss_reference_windows: Option<BTreeMap<String, ByModel>>,
-    /// Paper 000 Table 6: the zero-velocity Euler error per horizon.
+    /// Gopalakrishnan et al. 2019 Table 6: the zero-velocity Euler error per horizon.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub paper000_table6_zero_velocity_euler: Option<ByHorizon>,
-    /// Paper 000 Table 7: the Euler error per model and horizon.
+    /// Gopalakrishnan et al. 2019 Table 7: the Euler error per model and horizon.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub paper000_table7_euler: Option<BTreeMap<String, ByHorizon>>,
-    /// Paper 002 Table 2: the error per model and horizon.
+    /// Ghosh et al. 2017 Table 2: the error per model and horizon.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub paper002_table2_l2: Option<BTreeMap<String, ByHorizon>>,
-    /// Paper 003 Table 1: NPSS (reference variant) over 2-4 s, per method.
+    /// Tanke et al. 2021 Table 1: NPSS (reference variant) over 2-4 s, per method.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub paper003_table1_npss_reference_2_4s: Option<ByModel>,
-    /// Paper 003 Table 2: NDMS per 0.4 s bin, per method (`null` where the paper has none).
+    /// Tanke et al. 2021 Table 2: NDMS per 0.4 s bin, per method (`null` where the paper has none).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub paper003_table2_ndms_bins: Option<BTreeMap<String, Vec<Option<f64>>>>,
 }
@@ -242,11 +242,11 @@ pub struct ForAction {
 /// The published averages over actions.
 #[derive(Debug, Clone, Serialize)]
 pub struct Averages {
-    /// Paper 003 Table 1's NPSS average over its four actions, per method.
+    /// Tanke et al. 2021 Table 1's NPSS average over its four actions, per method.
     pub paper003_table1_npss_reference_2_4s_average_of_4_actions: ByModel,
-    /// Paper 003 Table 2's NDMS bins averaged over all 15 actions, per method.
+    /// Tanke et al. 2021 Table 2's NDMS bins averaged over all 15 actions, per method.
     pub paper003_table2_ndms_bins_average_of_15_actions: BTreeMap<String, Vec<Option<f64>>>,
-    /// Paper 003 Table 5: APD on Human3.6M, per method.
+    /// Tanke et al. 2021 Table 5: APD on Human3.6M, per method.
     pub paper003_table5_apd_h36m: ByModel,
 }
 
@@ -282,14 +282,14 @@ fn models_by_horizon<const H: usize>(
         .collect()
 }
 
-/// `{method: bins}` of paper 003 Table 2's rows for `action` (`average`: over 15 actions).
+/// `{method: bins}` of Tanke et al. 2021 Table 2's rows for `action` (`average`: over 15 actions).
 fn ndms_bins_by_method(action: &str) -> BTreeMap<String, Vec<Option<f64>>> {
     ndms_rows(action)
         .map(|r| (r.method.to_string(), r.bins.to_vec()))
         .collect()
 }
 
-/// Paper 003 Table 5: diversity (APD) on Human3.6M, per method as the paper names it. The paper
+/// Tanke et al. 2021 Table 5: diversity (APD) on Human3.6M, per method as the paper names it. The paper
 /// does not state the unit or joint set of these numbers (DLow's are "taken from [3]"); `eval`'s
 /// APD is over world positions of all 32 joints in mm, so only the ranking is comparable.
 pub const P003_TABLE5_APD_H36M: [(&str, f64); 6] = [
@@ -301,12 +301,12 @@ pub const P003_TABLE5_APD_H36M: [(&str, f64); 6] = [
     ("Ours (paper 003)", 3.07),
 ];
 
-/// The published NDMS rows of `action` (paper 003 Table 2).
+/// The published NDMS rows of `action` (Tanke et al. 2021 Table 2).
 pub fn ndms_rows(action: &str) -> impl Iterator<Item = &'static NdmsRow> + '_ {
     P003_TABLE2_NDMS.iter().filter(move |r| r.action == action)
 }
 
-/// Paper 000's published NPSS (reference variant, 0-4 s) of `model` for `action`.
+/// Gopalakrishnan et al. 2019's published NPSS (reference variant, 0-4 s) of `model` for `action`.
 pub fn table4_npss(model: &str, action: &str) -> Option<f64> {
     let col = column(&PAPER000_ACTIONS, action)?;
     P000_TABLE4_NPSS
@@ -315,7 +315,7 @@ pub fn table4_npss(model: &str, action: &str) -> Option<f64> {
         .map(|r| r.values[col])
 }
 
-/// Paper 000's published NPSS (reference variant) of `model` for `action` on window `w`
+/// Gopalakrishnan et al. 2019's published NPSS (reference variant) of `model` for `action` on window `w`
 /// (0 = 0-1 s, 1 = 1-2 s, 2 = 2-4 s).
 pub fn table5_npss(model: &str, action: &str, w: usize) -> Option<f64> {
     let col = column(&PAPER000_ACTIONS, action)?;
@@ -331,12 +331,12 @@ pub fn table5_npss(model: &str, action: &str, w: usize) -> Option<f64> {
         .map(|r| r.values[col])
 }
 
-/// Paper 000 Table 6's zero-velocity Euler error of `action` at [`TABLE6_HORIZONS_MS`].
+/// Gopalakrishnan et al. 2019 Table 6's zero-velocity Euler error of `action` at [`TABLE6_HORIZONS_MS`].
 pub fn table6_zero_velocity(action: &str) -> Option<[f64; 4]> {
     column(&PAPER000_ACTIONS, action).map(|col| P000_TABLE6_ZERO_VELOCITY[col])
 }
 
-/// Paper 000 Table 7's Euler error of `model` for `action` at [`TABLE7_HORIZONS_MS`].
+/// Gopalakrishnan et al. 2019 Table 7's Euler error of `model` for `action` at [`TABLE7_HORIZONS_MS`].
 pub fn table7_euler(model: &str, action: &str) -> Option<[f64; 6]> {
     let col = column(&PAPER000_ACTIONS, action)?;
     P000_TABLE7_EULER
@@ -345,7 +345,7 @@ pub fn table7_euler(model: &str, action: &str) -> Option<[f64; 6]> {
         .map(|r| r.values[col])
 }
 
-/// Paper 002 Table 2's error of `model` for `action` at `ms` (one of [`P002_TABLE2_HORIZONS_MS`]).
+/// Ghosh et al. 2017 Table 2's error of `model` for `action` at `ms` (one of [`P002_TABLE2_HORIZONS_MS`]).
 pub fn table2_p002(model: &str, action: &str, ms: u32) -> Option<f64> {
     let col = column(&PAPER000_ACTIONS, action)?;
     let h = P002_TABLE2_HORIZONS_MS.iter().position(|h| *h == ms)?;
@@ -395,7 +395,7 @@ pub fn for_action(action: &str) -> ForAction {
     out
 }
 
-/// The published averages over actions: paper 003 Table 1's NPSS average over the four actions
+/// The published averages over actions: Tanke et al. 2021 Table 1's NPSS average over the four actions
 /// and Table 2's NDMS average over all 15 actions.
 pub fn averages() -> Averages {
     Averages {
@@ -435,7 +435,7 @@ mod tests {
             for_action("eating")["paper002_table2_l2"]["DAE-LSTM"]["560"],
             json!(1.76)
         );
-        // paper 003 Table 1's VGRU-d row is paper 000's Table 5 long-term row.
+        // Tanke et al. 2021 Table 1's VGRU-d row is Gopalakrishnan et al. 2019's Table 5 long-term row.
         for (col, action) in PAPER000_ACTIONS.iter().enumerate() {
             assert_eq!(
                 P003_TABLE1_NPSS_LONG[1].values[col],

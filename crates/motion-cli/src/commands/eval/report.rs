@@ -358,7 +358,7 @@ fn cells(values: impl IntoIterator<Item = Option<f64>>) -> String {
     values.into_iter().map(cell).collect::<Vec<_>>().join(" ")
 }
 
-/// The NDMS 0.4 s bins of model and baseline, then paper 003's "Ours" row for `action` (Table 2;
+/// The NDMS 0.4 s bins of model and baseline, then Tanke et al. 2021's "Ours" row for `action` (Table 2;
 /// `average` for the mean over 15 actions) followed by `note`.
 fn ndms_bins(out: &mut String, model: &str, baseline: &str, real: &str, action: &str, note: &str) {
     out.push_str(&format!(
@@ -377,7 +377,7 @@ fn ndms_bins(out: &mut String, model: &str, baseline: &str, real: &str, action: 
                 .map(|b| b.map_or("-".into(), |v| format!("{v:.3}")))
                 .collect();
             out.push_str(&format!(
-                "                    paper 003 {}{note}\n",
+                "                    Tanke et al. 2021 {}{note}\n",
                 bins.join(" ")
             ));
         }
@@ -470,7 +470,7 @@ fn action_block(out: &mut String, a: &ActionResult) {
                 published_pairs(&[
                     ("VGRU-d", published::table5_npss("VGRU-d", action, i)),
                     ("GRU-d", published::table5_npss("GRU-d", action, i)),
-                    ("paper 003", p003),
+                    ("Tanke et al. 2021", p003),
                 ])
             } else {
                 String::new()
@@ -644,7 +644,10 @@ pub fn table(report: &EvalReport) -> String {
             "APD (mm)",
             m.apd,
             None,
-            &format!("paper 003 Table 5 (unit unstated): {}", paper.join(", ")),
+            &format!(
+                "Tanke et al. 2021 Table 5 (unit unstated): {}",
+                paper.join(", ")
+            ),
         );
     }
     for ms in EULER_HORIZONS_MS {

@@ -55,7 +55,7 @@ pub enum NnChoice {
 
 /// The long help after the options.
 const LONG_HELP: &str = "\
-The action-classifier protocol of paper 002 (--metric classifier --action NAME; definition in \
+The action-classifier protocol of Ghosh et al. 2017 (--metric classifier --action NAME; definition in \
 motion_metrics::classifier): a recurrent classifier of 2 s windows (the built-in \
 action_classifier.safetensors, or --classifier FILE) slides over each prediction, windows ending \
 every second after the seed (the first windows take the seed's last frames when --seed is given, \
@@ -121,7 +121,7 @@ pub struct Args {
     #[arg(long, value_name = "NAME")]
     pub action: Option<String>,
     /// Action classifier weights for --metric classifier (default: the built-in
-    /// action_classifier.safetensors, paper 002's protocol).
+    /// action_classifier.safetensors, Ghosh et al. 2017's protocol).
     #[arg(long, value_name = "FILE")]
     pub classifier: Option<PathBuf>,
     /// H3.6M data root (holding h3.6m/dataset) for the reference statistics of --action.
@@ -163,7 +163,7 @@ pub enum Metric {
     Ndms,
     /// Average pairwise distance of samples.
     Apd,
-    /// Paper 002's action-classifier probability.
+    /// Ghosh et al. 2017's action-classifier probability.
     Classifier,
     /// Joint speed against the action's real data.
     #[value(name = "speed_ratio", alias = "speed-ratio")]

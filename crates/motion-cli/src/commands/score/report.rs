@@ -25,7 +25,7 @@ pub struct ScoreReport {
     /// APD of each sequence.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub apd_per_sequence: Option<Vec<f64>>,
-    /// The action-classifier curve (paper 002's protocol).
+    /// The action-classifier curve (Ghosh et al. 2017's protocol).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub classifier: Option<ClassifierCurve>,
     /// `drift` (when asked for).
