@@ -14,9 +14,10 @@ use criterion::{BenchmarkId, Criterion, Throughput};
 use motion::core::kinematics::expmap_positions;
 use motion::core::protocol::{
     actions_with_windows, dataset_dir, expmap_batch_to_euler_protocol, load_action_windows,
-    sequence_file, zero_velocity, LONG_TERM_HORIZON, TEST_SUBJECT,
+    sequence_file, LONG_TERM_HORIZON, TEST_SUBJECT,
 };
 use motion::core::{formats::h36m_text, RootEncoding, Skeleton};
+use motion::metrics::baselines::zero_velocity;
 use motion::metrics::ndms::index::NearestIndex;
 use motion::metrics::ndms::word::append_all_words;
 use motion::metrics::{

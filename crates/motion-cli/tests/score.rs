@@ -4,7 +4,8 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 use motion_core::formats::npy::write_npy;
-use motion_core::protocol::{dataset_dir, load_action_windows, zero_velocity, LONG_TERM_HORIZON};
+use motion_core::protocol::{dataset_dir, load_action_windows, LONG_TERM_HORIZON};
+use motion_metrics::baselines::zero_velocity;
 use ndarray::{Array2, Array3, Array4, Axis};
 use serde_json::Value;
 

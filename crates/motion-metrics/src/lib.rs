@@ -22,9 +22,11 @@
 #![warn(missing_docs)]
 
 pub mod apd;
+pub mod baselines;
 pub mod classifier;
 pub mod error;
 pub mod euler_error;
+pub mod evaluation;
 pub mod ndms;
 pub mod npss;
 pub mod plausibility;

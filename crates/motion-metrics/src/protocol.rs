@@ -24,12 +24,11 @@ use std::sync::Arc;
 use ndarray::{concatenate, s, Array2, Array3, Array4, ArrayView2, ArrayView3, ArrayView4, Axis};
 
 use motion_core::error::MotionError;
-use motion_core::protocol::{
-    expmap_batch_to_euler_protocol, protocol_positions, zero_velocity_held_root, WindowData,
-};
+use motion_core::protocol::{expmap_batch_to_euler_protocol, WindowData};
 use motion_core::skeleton::H36M_NDMS_JOINTS;
 use motion_core::Skeleton;
 
+use crate::baselines::{protocol_positions, zero_velocity_held_root};
 use crate::ndms::{NdmsConfig, NdmsDatabase, NdmsReport};
 use crate::npss::{Npss, NpssWindow, SpectrumPower, NPSS_LONG_WINDOWS_25HZ, NPSS_WINDOWS_25HZ};
 use crate::{apd, euler_error, MetricError};
@@ -292,7 +291,7 @@ impl ActionTruth {
     }
 
     /// The zero-velocity baseline of every window, root held
-    /// ([`motion_core::protocol::zero_velocity_held_root`]): `windows x 1 x horizon x 99`. Its
+    /// ([`crate::baselines::zero_velocity_held_root`]): `windows x 1 x horizon x 99`. Its
     /// angles are the protocol's repeated last frame, so its Euler error and NPSS are Gopalakrishnan et al. 2019
     /// Table 6's baseline.
     pub fn zero_velocity(&self) -> Array4<f64> {

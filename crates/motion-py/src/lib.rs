@@ -6,6 +6,7 @@ use pyo3::prelude::*;
 
 mod arrays;
 mod errors;
+mod evaluation;
 mod io;
 mod metrics;
 mod model;
@@ -17,6 +18,7 @@ fn _motion(m: &Bound<'_, PyModule>) -> PyResult<()> {
     metrics::register(m)?;
     io::register(m)?;
     model::register(m)?;
+    evaluation::register(m)?;
     m.add_function(wrap_pyfunction!(set_threads, m)?)?;
     m.add_function(wrap_pyfunction!(arrays::data_address, m)?)?;
     Ok(())

@@ -26,10 +26,21 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
 /// A motion model (self-describing safetensors weights, or the built-in default).
 #[pyclass(module = "motion._motion", frozen)]
 pub struct Model {
-    model: Arc<MotionModel>,
+    pub(crate) model: Arc<MotionModel>,
 }
 
 impl Model {
+    /// The built-in default model.
+    pub(crate) fn builtin() -> PyResult<Model> {
+        match default_model() {
+            Some(Ok(model)) => Ok(Model {
+                model: Arc::new(model),
+            }),
+            Some(Err(e)) => Err(weights(e)),
+            None => Err(value("this build has no built-in weights")),
+        }
+    }
+
     fn target(&self) -> PyResult<ExpMapTarget> {
         let dims = self.model.config().frame_dims;
         ExpMapTarget::for_frame_dims(dims).ok_or_else(|| {
@@ -81,13 +92,7 @@ impl Model {
     /// The built-in default model (the shipped weights).
     #[staticmethod]
     fn default() -> PyResult<Model> {
-        match default_model() {
-            Some(Ok(model)) => Ok(Model {
-                model: Arc::new(model),
-            }),
-            Some(Err(e)) => Err(weights(e)),
-            None => Err(value("this build has no built-in weights")),
-        }
+        Model::builtin()
     }
 
     /// The configuration and provenance: `{"config": {...}, "provenance": {...}, "parameters": n}`.

@@ -130,6 +130,7 @@ pub fn exit_code(err: &anyhow::Error) -> u8 {
             || c.is::<motion_metrics::MetricError>()
             || c.is::<motion_metrics::plausibility::ReferenceError>()
             || c.is::<motion_metrics::protocol::ProtocolError>()
+            || c.is::<motion_metrics::evaluation::EvalError>()
             || c.is::<std::io::Error>()
     });
     if is_input {

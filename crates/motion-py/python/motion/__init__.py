@@ -8,6 +8,11 @@ Score a prediction (exp-map frames, ``N x T x 99`` at 25 Hz)::
     db = motion.NdmsDatabase([motion.expmap_to_positions(f) for f in reference_clips])
     print(db.score(motion.expmap_to_positions(pred[0]))["mean"])
 
+Evaluate a model on the H3.6M protocol (the report of ``motion-cli eval --json``)::
+
+    report = motion.evaluate(actions=["walking"], horizon=100)   # the built-in model
+    print(report["actions"][0]["model"]["npss"]["whole"])
+
 Generate one::
 
     model = motion.Model.default()
@@ -26,6 +31,7 @@ from ._motion import (  # noqa: F401
     __version__,
     apd,
     euler_error,
+    evaluate,
     expmap_to_positions,
     npss,
     npss_windows,
@@ -41,6 +47,7 @@ __all__ = [
     "NdmsDatabase",
     "apd",
     "euler_error",
+    "evaluate",
     "expmap_to_positions",
     "npss",
     "npss_windows",

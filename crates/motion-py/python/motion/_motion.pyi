@@ -60,6 +60,17 @@ class NdmsDatabase:
     ) -> dict[str, Any]:
         """``{"mean", "per_word", "bins", "first_word_end"}`` of the forecasts' NDMS."""
 
+def evaluate(
+    model: Optional["Model"] = None,
+    data: Optional[Path] = None,
+    actions: Union[str, list[str], None] = None,
+    horizon: int = 100,
+    samples: int = 1,
+    rng_seed: int = 0,
+    classifier: Union[bool, Path, None] = None,
+) -> dict[str, Any]:
+    """The H3.6M protocol: the report of ``motion-cli eval --json`` as a dict."""
+
 def read_bvh(path: Path) -> dict[str, Any]:
     """``{"channels", "fps", "joints", "parents", "offsets", "expmap"}`` of a BVH file."""
 

@@ -1,7 +1,7 @@
 //! `eval --plot`: metric vs horizon per action (Euler error per frame, NPSS windows, NDMS bins),
 //! the model as solid lines and the zero-velocity baseline dashed beside it.
-use super::report::{ActionResult, ActionScores};
 use crate::plot::{bin_points, per_frame_points, window_points, Chart, Series};
+use motion_metrics::evaluation::report::{ActionResult, ActionScores};
 
 /// Three charts per evaluated action, built from the per-action results of the `eval` report.
 pub fn charts(results: &[ActionResult]) -> Vec<Chart> {
@@ -56,9 +56,10 @@ fn ndms_bin_points(scores: &ActionScores) -> Vec<(f64, f64)> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::published;
-    use super::super::report::{fixtures, CoverageReport, GroundTruth};
+    use super::super::table::fixtures;
     use super::*;
+    use motion_metrics::evaluation::published;
+    use motion_metrics::evaluation::report::{CoverageReport, GroundTruth};
 
     #[test]
     fn charts_per_action_with_baseline_dashed() {

@@ -97,7 +97,8 @@ pub fn compute(
             action.expect("checked by the caller"),
             seed.as_ref().expect("checked by the caller"),
         );
-        let dataset = super::super::eval::selection::resolve_dataset(args.data.as_deref())?;
+        let dataset = motion_metrics::evaluation::resolve_dataset(args.data.as_deref())
+            .map_err(|e| super::super::UsageError(e.to_string()))?;
         let plausibility = score_plausibility(&dataset, action, pred, seed)?;
         report.action = Some(action.to_string());
         if metrics.contains(&Metric::SpeedRatio) {

@@ -5,25 +5,25 @@ use std::path::{Path, PathBuf};
 use motion_core::model::MotionModel;
 use motion_core::protocol::{self, ACTIONS, ACTIONS_WITHOUT_WINDOWS, TEST_SUBJECT};
 
-use super::super::UsageError;
+use super::EvalError;
 
 /// The exp-map dataset directory (the one holding `S5/`) of `--data`, `$MOTION_DATA_DIR` or
 /// `../shared/data`. `root` may be the data root (holding `h3.6m/dataset`) or the dataset itself.
-pub fn resolve_dataset(root: Option<&Path>) -> Result<PathBuf, UsageError> {
+pub fn resolve_dataset(root: Option<&Path>) -> Result<PathBuf, EvalError> {
     let root = match root {
         Some(root) => root.to_path_buf(),
         None => match std::env::var_os("MOTION_DATA_DIR") {
             Some(dir) => PathBuf::from(dir),
             None if Path::new("../shared/data").is_dir() => PathBuf::from("../shared/data"),
             None => {
-                return Err(UsageError(
+                return Err(EvalError::Invalid(
                     "no data directory: pass --data DIR or set MOTION_DATA_DIR".into(),
                 ))
             }
         },
     };
     if !root.is_dir() {
-        return Err(UsageError(format!(
+        return Err(EvalError::Invalid(format!(
             "{}: data directory does not exist",
             root.display()
         )));
@@ -34,7 +34,7 @@ pub fn resolve_dataset(root: Option<&Path>) -> Result<PathBuf, UsageError> {
     } else if root.join(TEST_SUBJECT).is_dir() {
         Ok(root)
     } else {
-        Err(UsageError(format!(
+        Err(EvalError::Invalid(format!(
             "{}: no H3.6M exp-map data (expected {} or {})",
             root.display(),
             nested.join(TEST_SUBJECT).display(),
@@ -87,7 +87,7 @@ pub fn select_actions(
     model: &MotionModel,
     dataset: &Path,
     any_action: bool,
-) -> Result<Selection, UsageError> {
+) -> Result<Selection, EvalError> {
     let all = requested.iter().any(|a| a.trim() == "all");
     let names: Vec<&'static str> = if all {
         ACTIONS.to_vec()
@@ -96,7 +96,7 @@ pub fn select_actions(
         for raw in requested {
             let name = raw.trim().to_lowercase();
             let Some(&known) = ACTIONS.iter().find(|a| **a == name) else {
-                return Err(UsageError(format!(
+                return Err(EvalError::Invalid(format!(
                     "unknown action `{raw}`; valid actions: all, {}",
                     ACTIONS.join(", ")
                 )));
@@ -134,7 +134,7 @@ pub fn select_actions(
                 selection.skipped.push((action, reason));
                 continue;
             }
-            return Err(UsageError(reason));
+            return Err(EvalError::Invalid(reason));
         }
         if ACTIONS_WITHOUT_WINDOWS.contains(&action) {
             selection.skipped.push((
@@ -173,7 +173,7 @@ pub fn select_actions(
             .iter()
             .map(|(a, r)| format!("{a}: {r}"))
             .collect();
-        return Err(UsageError(format!(
+        return Err(EvalError::Invalid(format!(
             "no action to evaluate ({})",
             reasons.join("; ")
         )));
@@ -217,7 +217,8 @@ mod tests {
         let dir = dataset("single");
         let model = small_model(Architecture::VgruD, &["walking"]);
         let err = select_actions(&strings(&["eating"]), &model, &dir, false).unwrap_err();
-        assert!(err.0.contains("trained on `walking` only") && err.0.contains("--any-action"));
+        let err = err.to_string();
+        assert!(err.contains("trained on `walking` only") && err.contains("--any-action"));
         let all = select_actions(&strings(&["all"]), &model, &dir, false).unwrap();
         assert_eq!(all.planned.len(), 1);
         assert_eq!(all.planned[0].action, "walking");
@@ -263,7 +264,7 @@ mod tests {
         assert_eq!(s.planned[0].label, None);
         let err = select_actions(&strings(&["Jogging"]), &grud, &dir, false).unwrap_err();
         assert!(err
-            .0
+            .to_string()
             .starts_with("unknown action `Jogging`; valid actions: all, directions"));
         std::fs::remove_dir_all(&dir).unwrap();
     }
