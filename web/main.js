@@ -110,6 +110,34 @@ function start() {
   }
 }
 
+// --- steering: arrow keys or WASD (or a gamepad's left stick) set a goal velocity on the floor ---
+const SPEED = 0.5; // m/s: about the shipped model's own walking pace (the warp scales its stride ±30 %)
+const held = new Set();
+window.addEventListener("keydown", (e) => held.add(e.key.toLowerCase()));
+window.addEventListener("keyup", (e) => held.delete(e.key.toLowerCase()));
+let steering = false;
+function steer() {
+  let x = 0, z = 0;
+  if (held.has("arrowup") || held.has("w")) z += 1;
+  if (held.has("arrowdown") || held.has("s")) z -= 1;
+  if (held.has("arrowleft") || held.has("a")) x += 1;
+  if (held.has("arrowright") || held.has("d")) x -= 1;
+  const pad = navigator.getGamepads ? [...navigator.getGamepads()].find((g) => g) : null;
+  if (pad && Math.hypot(pad.axes[0], pad.axes[1]) > 0.2) {
+    x = -pad.axes[0];
+    z = -pad.axes[1];
+  }
+  const length = Math.hypot(x, z);
+  if (length > 0) {
+    // yaw about +y: 0 faces +z, pi/2 faces +x
+    character.set_goal((SPEED * x) / length, (SPEED * z) / length, Math.atan2(x, z));
+    steering = true;
+  } else if (steering) {
+    character.clear_goal();
+    steering = false;
+  }
+}
+
 // --- the loop: one pose per displayed frame, at the display's rate ------------------------------
 let last = null;
 let fps = 0;
@@ -121,6 +149,7 @@ function frame(now) {
   last = now;
   if (dt > 0) fps = 0.95 * fps + 0.05 / dt;
   try {
+    steer();
     const t0 = performance.now();
     character.advance(dt);
     stepMs = 0.95 * stepMs + 0.05 * (performance.now() - t0);

@@ -99,6 +99,7 @@ pub mod root;
 pub mod rotation;
 pub mod seed;
 pub mod skeleton;
+pub mod steering;
 pub mod weights;
 
 pub use error::{FormatError, MotionError, SkeletonError};

@@ -70,8 +70,9 @@ impl RootMotion {
     };
 }
 
-/// One frame as an engine poses a rig (see the module conventions).
-#[derive(Debug, Clone, PartialEq)]
+/// One frame as an engine poses a rig (see the module conventions). `clone_from` reuses the
+/// rotations' buffer (no allocation per frame).
+#[derive(Debug, PartialEq)]
 pub struct Pose {
     /// World position of the root joint, metres.
     pub root_translation: Vec3,
@@ -80,6 +81,22 @@ pub struct Pose {
     pub local_rotations: Vec<Quat>,
     /// The root motion split into ground transform and pelvis remainder.
     pub root_motion: RootMotion,
+}
+
+impl Clone for Pose {
+    fn clone(&self) -> Pose {
+        Pose {
+            root_translation: self.root_translation,
+            local_rotations: self.local_rotations.clone(),
+            root_motion: self.root_motion,
+        }
+    }
+
+    fn clone_from(&mut self, source: &Pose) {
+        self.root_translation = source.root_translation;
+        self.local_rotations.clone_from(&source.local_rotations);
+        self.root_motion = source.root_motion;
+    }
 }
 
 impl Pose {

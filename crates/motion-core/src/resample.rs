@@ -227,7 +227,7 @@ impl PoseResampler {
             return Err(ResampleError::Full);
         }
         let slot = (self.head + self.len) % RESAMPLER_CAPACITY;
-        self.held[slot].clone_from(pose); // reuses the allocation
+        self.held[slot].clone_from(pose); // reuses the allocation (Pose's own clone_from)
         self.len += 1;
         Ok(())
     }

@@ -117,6 +117,22 @@ int motion_generator_start_frames(struct motion_generator *generator,
 // `generator` is NULL or live.
 int motion_generator_set_grounding(struct motion_generator *generator, int enabled);
 
+// Steers the character from the next model frame on toward a velocity on the floor (`vx`,
+// `vz` in metres per second, world axes) and a facing (`facing`: yaw in radians about +y, 0
+// facing +z, pi/2 facing +x), by root-motion warping (motion_core::steering: the stride scaled
+// within 30 % toward the speed, the heading turned at a bounded rate, planted feet kept by the
+// grounding). A speed under 0.05 m/s stops the root. Non-finite values are refused.
+//
+// # Safety
+// `generator` is NULL or live.
+int motion_generator_set_goal(struct motion_generator *generator, float vx, float vz, float facing);
+
+// Drops the goal: the model's own root motion from where the character is.
+//
+// # Safety
+// `generator` is NULL or live.
+int motion_generator_clear_goal(struct motion_generator *generator);
+
 // Changes the action from the next pose on, without re-seeding.
 //
 // # Safety

@@ -29,6 +29,7 @@ use std::sync::Arc;
 use motion_core::grounding::GroundingConfig;
 use motion_core::model::{builtin, Character, MotionModel, Noise};
 use motion_core::seed::load_model_seed;
+use motion_core::steering::Goal;
 use ndarray::ArrayView2;
 
 /// Status codes (negative on failure).
@@ -363,6 +364,49 @@ pub unsafe extern "C" fn motion_generator_set_grounding(
         } else {
             GroundingConfig::off()
         });
+        Ok(0)
+    })
+}
+
+/// Steers the character from the next model frame on toward a velocity on the floor (`vx`,
+/// `vz` in metres per second, world axes) and a facing (`facing`: yaw in radians about +y, 0
+/// facing +z, pi/2 facing +x), by root-motion warping (motion_core::steering: the stride scaled
+/// within 30 % toward the speed, the heading turned at a bounded rate, planted feet kept by the
+/// grounding). A speed under 0.05 m/s stops the root. Non-finite values are refused.
+///
+/// # Safety
+/// `generator` is NULL or live.
+#[no_mangle]
+pub unsafe extern "C" fn motion_generator_set_goal(
+    generator: *mut motion_generator,
+    vx: f32,
+    vz: f32,
+    facing: f32,
+) -> c_int {
+    guard(|| {
+        let g = unsafe { generator.as_mut() }.ok_or_else(|| invalid("generator is NULL"))?;
+        if !(vx.is_finite() && vz.is_finite() && facing.is_finite()) {
+            return Err(invalid(&format!(
+                "goal ({vx}, {vz}) facing {facing}: values must be finite"
+            )));
+        }
+        g.character.set_goal(Some(Goal {
+            velocity: motion_core::steering::Vec2::new(vx, vz),
+            facing,
+        }));
+        Ok(0)
+    })
+}
+
+/// Drops the goal: the model's own root motion from where the character is.
+///
+/// # Safety
+/// `generator` is NULL or live.
+#[no_mangle]
+pub unsafe extern "C" fn motion_generator_clear_goal(generator: *mut motion_generator) -> c_int {
+    guard(|| {
+        let g = unsafe { generator.as_mut() }.ok_or_else(|| invalid("generator is NULL"))?;
+        g.character.set_goal(None);
         Ok(0)
     })
 }

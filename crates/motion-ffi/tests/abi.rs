@@ -162,3 +162,74 @@ fn expmap_seed_files_are_read_at_the_front_ends_rate() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A goal steers the character (its root goes the goal's way); a non-finite goal is refused;
+/// clearing it is accepted.
+#[test]
+fn goals_steer_and_bad_goals_are_refused() {
+    unsafe {
+        let fixture = c(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../tests/fixtures/parity/vgru_d.safetensors"
+        ));
+        let model = motion_model_load(fixture.as_ptr());
+        let generator = motion_generator_new(model, 1);
+        let frames = vec![0.05f32; 10 * 99];
+        assert_eq!(
+            motion_generator_start_frames(
+                generator,
+                frames.as_ptr(),
+                10,
+                99,
+                c("walking").as_ptr()
+            ),
+            0,
+            "{}",
+            last_error()
+        );
+        assert_eq!(
+            motion_generator_set_goal(generator, f32::NAN, 0.0, 0.0),
+            MotionStatus::InvalidArgument as i32
+        );
+        assert!(last_error().contains("finite"), "{}", last_error());
+        assert_eq!(motion_generator_set_goal(generator, 1.0, 0.0, 1.5), 0);
+        let (mut p, mut r, mut q) = ([0f32; 3], [0f32; 4], vec![0f32; 4 * 32]);
+        motion_generator_advance_pose(
+            generator,
+            0.0,
+            p.as_mut_ptr(),
+            r.as_mut_ptr(),
+            q.as_mut_ptr(),
+            32,
+        );
+        let start = p;
+        for _ in 0..120 {
+            assert_eq!(
+                motion_generator_advance_pose(
+                    generator,
+                    1.0 / 60.0,
+                    p.as_mut_ptr(),
+                    r.as_mut_ptr(),
+                    q.as_mut_ptr(),
+                    32
+                ),
+                0,
+                "{}",
+                last_error()
+            );
+        }
+        // The random-weight fixture's stride is whatever it is; its direction is the goal's (+x).
+        let moved = (p[0] - start[0], p[2] - start[2]);
+        assert!(
+            moved.0 >= 0.0 && moved.1.abs() <= moved.0.abs() + 0.05,
+            "{moved:?}"
+        );
+        assert_eq!(motion_generator_clear_goal(generator), 0);
+        assert_eq!(
+            motion_generator_set_goal(null_mut(), 0.0, 0.0, 0.0),
+            MotionStatus::InvalidArgument as i32
+        );
+        motion_generator_free(generator);
+        motion_model_free(model);
+    }
+}

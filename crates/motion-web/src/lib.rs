@@ -148,6 +148,27 @@ impl Animator {
         Ok(())
     }
 
+    /// Steers toward a velocity on the floor (`vx`, `vz` m/s) and a facing (yaw about +y, 0 =
+    /// +z) from the next model frame on ([`motion_core::steering`]); non-finite values are
+    /// refused.
+    pub fn set_goal(&mut self, vx: f32, vz: f32, facing: f32) -> Result<(), String> {
+        if !(vx.is_finite() && vz.is_finite() && facing.is_finite()) {
+            return Err(format!(
+                "goal ({vx}, {vz}) facing {facing}: values must be finite"
+            ));
+        }
+        self.character.set_goal(Some(motion_core::steering::Goal {
+            velocity: motion_core::steering::Vec2::new(vx, vz),
+            facing,
+        }));
+        Ok(())
+    }
+
+    /// Drops the goal: the model's own root motion.
+    pub fn clear_goal(&mut self) {
+        self.character.set_goal(None);
+    }
+
     /// Runs `n` model steps directly (no pose, no resampling): what a benchmark times.
     pub fn step_model(&mut self, n: u32) -> Result<(), String> {
         for _ in 0..n {
@@ -229,6 +250,18 @@ impl WebCharacter {
     /// Switches the action.
     pub fn set_action(&mut self, action: &str) -> Result<(), JsError> {
         self.inner.set_action(action).map_err(js)
+    }
+
+    /// Steers toward a velocity on the floor (`vx`, `vz` m/s, world axes) and a facing (yaw in
+    /// radians about +y, 0 = +z, pi/2 = +x): a keyboard or gamepad controller calls it every
+    /// frame.
+    pub fn set_goal(&mut self, vx: f32, vz: f32, facing: f32) -> Result<(), JsError> {
+        self.inner.set_goal(vx, vz, facing).map_err(js)
+    }
+
+    /// Drops the goal: the model's own root motion.
+    pub fn clear_goal(&mut self) {
+        self.inner.clear_goal();
     }
 
     /// Runs `n` model steps (for timing one step in the page).

@@ -20,6 +20,7 @@ use crate::motion::{FrameScalar, RootEncoding};
 use crate::pose::{Pose, PoseDecoder};
 use crate::resample::{PoseResampler, ResampleError};
 use crate::skeleton::{Skeleton, H36M_SOURCE_FPS};
+use crate::steering::{Goal, Steering};
 
 /// Why a [`Character`] could not start or advance.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -46,6 +47,8 @@ pub struct Character {
     decoder: PoseDecoder,
     resampler: PoseResampler,
     grounder: PoseGrounder,
+    /// Root-motion warping toward a goal ([`Character::set_goal`]).
+    steering: Steering,
     /// The grounding the next start uses ([`Character::set_grounding`]).
     grounding: GroundingConfig,
 }
@@ -78,8 +81,11 @@ impl Character {
         let step = ((H36M_SOURCE_FPS / config.fps).round() as usize).max(1);
         let resampler = PoseResampler::new(skeleton.len(), config.fps);
         let grounder = PoseGrounder::new(&skeleton, (1.0 / config.fps) as f32, grounding)?;
+        let steering =
+            Steering::new(&skeleton, (1.0 / config.fps) as f32).map_err(GroundingError::from)?;
         Ok(Character {
             grounder,
+            steering,
             grounding,
             generator: Generator::new(model),
             decoder: PoseDecoder::new(skeleton, RootEncoding::Deltas, step),
@@ -135,6 +141,7 @@ impl Character {
             };
             self.grounder.observe_seed(pose);
         }
+        self.steering.reset(self.decoder.pose());
         self.resampler
             .push(self.grounder.ground(self.decoder.pose()))?;
         Ok(self.resampler.advance(0.0)?)
@@ -166,13 +173,35 @@ impl Character {
     /// A long `dt` (a hitch) is walked through frame by frame; the pose's root-motion deltas
     /// span all of it.
     pub fn advance(&mut self, dt: f64) -> Result<&Pose, CharacterError> {
-        let (generator, decoder, grounder) =
-            (&mut self.generator, &mut self.decoder, &mut self.grounder);
+        let (generator, decoder, steering, grounder) = (
+            &mut self.generator,
+            &mut self.decoder,
+            &mut self.steering,
+            &mut self.grounder,
+        );
         self.resampler.advance_pulling(dt, |resampler| {
             let frame = generator.step()?;
-            resampler.push(grounder.ground(decoder.push(frame)))?;
+            resampler.push(grounder.ground(steering.steer(decoder.push(frame))))?;
             Ok(())
         })
+    }
+
+    /// Steers the character toward `goal` (a velocity on the floor and a facing; `None`: the
+    /// model's own root motion) from the next model frame on, by root-motion warping
+    /// ([`crate::steering`]); kept across [`start`](Self::start)s.
+    pub fn set_goal(&mut self, goal: Option<Goal>) {
+        self.steering.set_goal(goal);
+    }
+
+    /// The goal in force ([`Character::set_goal`]).
+    pub fn goal(&self) -> Option<Goal> {
+        self.steering.goal()
+    }
+
+    /// The heading (yaw about +y, `0` facing +z) of `pose`'s pelvis, the angle a goal's facing
+    /// is compared with.
+    pub fn heading_of(&self, pose: &Pose) -> f32 {
+        self.steering.heading_of(pose)
     }
 
     /// Changes the action without re-seeding ([`Generator::set_action`]); the lean limit

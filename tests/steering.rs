@@ -1,0 +1,229 @@
+//! Steering a character with `Character::set_goal` (root-motion warping, `motion_core::steering`)
+//! on the shipped model walking after the example seed: the heading convention is the direction
+//! it walks, 90 and 180 degree turns are done within 1.2 s, a stop goal holds the root, and ticks
+//! allocate nothing with or without a goal. The square course on a steady walker is a unit test
+//! of `motion_core::steering`.
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use glam::{Vec2, Vec3};
+use motion::core::formats::expmap_bvh::ExpMapTarget;
+use motion::core::grounding::find_body_parts;
+use motion::core::model::{Character, MotionModel, Noise};
+use motion::core::pose::Pose;
+use motion::core::seed::load_seed;
+use motion::core::steering::{direction_of, facing_of, Goal};
+
+struct CountingAllocator;
+
+thread_local! {
+    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
+}
+
+// SAFETY: forwards to the system allocator; only counts calls.
+unsafe impl GlobalAlloc for CountingAllocator {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: CountingAllocator = CountingAllocator;
+
+const TICK: f64 = 1.0 / 60.0;
+
+fn repo() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// The shipped model walking after the example seed.
+fn walker() -> (Character, Pose) {
+    let model = Arc::new(
+        MotionModel::load(repo().join("weights/vgru_d_multi.safetensors"))
+            .expect("shipped weights"),
+    );
+    let config = model.config().clone();
+    let seed = load_seed(
+        &repo().join("examples/walk_seed.bvh"),
+        ExpMapTarget::H36m,
+        config.fps,
+        50.0,
+        None,
+    )
+    .unwrap();
+    let mut character = Character::new(model).unwrap();
+    let first = character
+        .start_from_clip(seed.frames.view(), Some("walking"), Noise::Seed(3))
+        .unwrap()
+        .clone();
+    (character, first)
+}
+
+fn floor_xz(p: Vec3) -> Vec2 {
+    Vec2::new(p.x, p.z)
+}
+
+/// Foot skating: the fraction of ticks with a foot point under 5 cm moving faster than 0.5 m/s
+/// on the floor (the definition of the plausibility metric).
+struct Skating {
+    feet: Vec<usize>,
+    previous: Option<Vec<Vec3>>,
+    positions: Vec<Vec3>,
+    world: Vec<glam::Quat>,
+    skating: usize,
+    ticks: usize,
+}
+
+impl Skating {
+    fn new(character: &Character) -> Skating {
+        let skeleton = character.skeleton();
+        let parts = find_body_parts(skeleton).unwrap();
+        let feet = parts
+            .legs
+            .iter()
+            .flat_map(|l| l.foot_points.iter().copied())
+            .collect();
+        Skating {
+            feet,
+            previous: None,
+            positions: vec![Vec3::ZERO; skeleton.len()],
+            world: vec![glam::Quat::IDENTITY; skeleton.len()],
+            skating: 0,
+            ticks: 0,
+        }
+    }
+
+    fn observe(&mut self, character: &Character, pose: &Pose) {
+        pose.world_positions_into(character.skeleton(), &mut self.positions, &mut self.world);
+        let now: Vec<Vec3> = self.feet.iter().map(|&j| self.positions[j]).collect();
+        if let Some(before) = &self.previous {
+            let slides = now.iter().zip(before).any(|(a, b)| {
+                a.y < 0.05 && (floor_xz(*a) - floor_xz(*b)).length() / TICK as f32 > 0.5
+            });
+            self.skating += usize::from(slides);
+            self.ticks += 1;
+        }
+        self.previous = Some(now);
+    }
+
+    fn fraction(&self) -> f64 {
+        self.skating as f64 / self.ticks.max(1) as f64
+    }
+}
+
+#[test]
+fn the_pelvis_faces_the_walk() {
+    // Unsteered: the heading convention of the goals is the direction the model walks.
+    let (mut character, first) = walker();
+    let mut last = floor_xz(first.root_translation);
+    let mut facing_errors = Vec::new();
+    for k in 0..(8.0 / TICK) as usize {
+        let pose = character.advance(TICK).unwrap().clone();
+        let here = floor_xz(pose.root_translation);
+        // Every 0.5 s in which it walked (its walk slows to a shuffle at times).
+        if k % 30 == 29 {
+            if (here - last).length() > 0.15 {
+                let d = (facing_of(here - last) - character.heading_of(&pose))
+                    .rem_euclid(std::f32::consts::TAU);
+                facing_errors.push(d.min(std::f32::consts::TAU - d));
+            }
+            last = here;
+        }
+    }
+    facing_errors.sort_by(f32::total_cmp);
+    assert!(facing_errors.len() >= 5, "{facing_errors:?}");
+    let median = facing_errors[facing_errors.len() / 2];
+    assert!(median < 0.5, "the pelvis faces the walk: {facing_errors:?}");
+}
+
+/// Seconds until `character`'s heading is within 10 degrees of `goal`'s facing, ticking at 60 Hz
+/// (at most `limit`), with the skating fraction of those ticks.
+fn time_to_face(character: &mut Character, goal: Goal, limit: f64) -> (Option<f64>, f64) {
+    character.set_goal(Some(goal));
+    let mut skating = Skating::new(character);
+    let mut time = 0.0;
+    let mut faced = None;
+    while time < limit {
+        let pose = character.advance(TICK).unwrap().clone();
+        time += TICK;
+        skating.observe(character, &pose);
+        let d = (character.heading_of(&pose) - goal.facing).rem_euclid(std::f32::consts::TAU);
+        if faced.is_none() && d.min(std::f32::consts::TAU - d) < 10f32.to_radians() {
+            faced = Some(time);
+        }
+    }
+    (faced, skating.fraction())
+}
+
+#[test]
+fn a_steered_character_turns_to_its_goal_and_stops_on_request() {
+    let (mut character, first) = walker();
+    let heading = character.heading_of(&first);
+    for _ in 0..60 {
+        character.advance(TICK).unwrap();
+    }
+    for turn in [std::f32::consts::FRAC_PI_2, std::f32::consts::PI] {
+        let facing = heading + turn;
+        let goal = Goal::towards(direction_of(facing) * 0.4, 0.0);
+        let (faced, _) = time_to_face(&mut character, goal, 2.0);
+        let faced = faced.unwrap_or_else(|| panic!("a {turn} rad turn not done in 2 s"));
+        assert!(faced < 1.2, "a {turn} rad turn took {faced} s");
+    }
+    // Stop: the root stays put (the legs keep the model's motion).
+    character.set_goal(Some(Goal {
+        velocity: Vec2::ZERO,
+        facing: heading,
+    }));
+    for _ in 0..30 {
+        character.advance(TICK).unwrap();
+    }
+    let at = floor_xz(character.advance(0.0).unwrap().root_translation);
+    let mut furthest = 0.0f32;
+    for _ in 0..120 {
+        let here = floor_xz(character.advance(TICK).unwrap().root_translation);
+        furthest = furthest.max((here - at).length());
+    }
+    assert!(furthest < 0.25, "a stopped character moved {furthest} m");
+}
+
+#[test]
+fn steering_allocates_nothing_per_tick() {
+    let (mut character, _) = walker();
+    character.set_goal(Some(Goal::towards(Vec2::new(1.0, 0.0), 0.0)));
+    for _ in 0..30 {
+        character.advance(TICK).unwrap();
+    }
+    let before = ALLOCATIONS.with(|c| c.get());
+    for k in 0..240 {
+        if k % 60 == 0 {
+            let turn = direction_of(k as f32 * 0.5);
+            character.set_goal(Some(Goal::towards(turn * 1.2, 0.0)));
+        }
+        character.advance(TICK).unwrap();
+    }
+    assert_eq!(ALLOCATIONS.with(|c| c.get()) - before, 0);
+}
+
+#[test]
+fn ticks_allocate_nothing_without_a_goal() {
+    let (mut character, first) = walker();
+    let mut pose = first;
+    for _ in 0..30 {
+        character.advance(TICK).unwrap();
+    }
+    let before = ALLOCATIONS.with(|c| c.get());
+    for _ in 0..240 {
+        pose.clone_from(character.advance(TICK).unwrap());
+    }
+    assert_eq!(ALLOCATIONS.with(|c| c.get()) - before, 0);
+}
