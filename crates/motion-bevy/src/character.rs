@@ -79,6 +79,29 @@ pub struct MotionCharacter {
     /// (`motion_core::grounding`; default `true`); `false` poses the model's raw motion. Read
     /// when the character starts.
     pub grounding: bool,
+    /// Where to go: a velocity on the floor and a facing in world axes (`motion_core::steering`:
+    /// the model's stride warped within 30 % toward the speed, its heading turned toward the
+    /// facing); `None` (the default) lets the model walk where it walks. Read every tick.
+    pub goal: Option<MotionGoal>,
+}
+
+/// A steering goal in world axes (see [`MotionCharacter::goal`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MotionGoal {
+    /// Velocity on the floor, metres per second: `x` and `z` world axes.
+    pub velocity: Vec2,
+    /// Yaw to face, radians about +y: 0 faces +z, pi/2 faces +x.
+    pub facing: f32,
+}
+
+impl MotionGoal {
+    /// Walk at `velocity` (`x`, `z`) facing where it goes.
+    pub fn towards(velocity: Vec2) -> MotionGoal {
+        MotionGoal {
+            velocity,
+            facing: velocity.x.atan2(velocity.y),
+        }
+    }
 }
 
 impl MotionCharacter {
@@ -91,6 +114,7 @@ impl MotionCharacter {
             rng_seed,
             playback_rate: 1.0,
             grounding: true,
+            goal: None,
         }
     }
 }

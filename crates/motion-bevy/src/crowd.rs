@@ -20,6 +20,7 @@ use motion_core::pose::{root_motion_between, PoseDecoder, METRES_PER_MM};
 use motion_core::resample::PoseResampler;
 use motion_core::seed::seed_from_bvh;
 use motion_core::skeleton::{Skeleton, H36M_SOURCE_FPS};
+use motion_core::steering::{Goal, Steering};
 use motion_core::RootEncoding;
 use ndarray::{s, Array2, Array3, ArrayView2};
 
@@ -53,6 +54,8 @@ struct Member {
     action: String,
     rng_seed: u64,
     decoder: PoseDecoder,
+    /// Root-motion warping toward the character's goal (`motion_core::steering`).
+    steering: Steering,
     /// Grounding of each decoded pose (`motion_core::grounding`, on by default).
     grounder: PoseGrounder,
     resampler: PoseResampler,
@@ -82,13 +85,14 @@ impl Member {
         }
         let Member {
             decoder,
+            steering,
             grounder,
             resampler,
             scratch,
             ..
         } = self;
         resampler
-            .push(grounder.ground(decoder.push(scratch)))
+            .push(grounder.ground(steering.steer(decoder.push(scratch))))
             .map_err(|e| e.to_string())
     }
 
@@ -259,6 +263,9 @@ fn new_member(
     for row in window.rows() {
         grounder.observe_seed(decoder.push(row.as_slice().expect("contiguous")));
     }
+    let mut steering =
+        Steering::new(&skeleton, (1.0 / cfg.fps) as f32).map_err(|e| e.to_string())?;
+    steering.reset(decoder.pose());
     let mut resampler = PoseResampler::new(skeleton.len(), cfg.fps);
     resampler
         .push(grounder.ground(decoder.pose()))
@@ -270,6 +277,7 @@ fn new_member(
         action: character.action.clone(),
         rng_seed: character.rng_seed,
         decoder,
+        steering,
         grounder,
         resampler,
         pending: VecDeque::with_capacity(8 * dims),
@@ -390,9 +398,11 @@ pub(crate) fn step_characters(
         // Action changes from game code.
         let batch = group.batch.as_mut().expect("started above");
         for (row, m) in group.members.iter_mut().enumerate() {
-            let Ok((character, ..)) = characters.get(m.entity) else {
+            let Ok((character, rig, ..)) = characters.get(m.entity) else {
                 continue;
             };
+            m.steering
+                .set_goal(character.goal.map(|g| motion_goal(g, rig.origin)));
             if character.action != m.action {
                 if let Err(e) = batch.set_action(row, &character.action, 0) {
                     failed.push((m.entity, format!("{e}; carrying on with {:?}", m.action)));
@@ -453,5 +463,17 @@ pub(crate) fn step_characters(
     });
     for (entity, e) in failed {
         commands.entity(entity).insert(MotionFailed(e));
+    }
+}
+
+/// A world-axes goal in the character's motion frame (its spawn transform's axes, where the
+/// plugin integrates its root motion).
+fn motion_goal(goal: crate::MotionGoal, origin: Transform) -> Goal {
+    let inverse = origin.rotation.inverse();
+    let v = inverse * Vec3::new(goal.velocity.x, 0.0, goal.velocity.y);
+    let f = inverse * Vec3::new(goal.facing.sin(), 0.0, goal.facing.cos());
+    Goal {
+        velocity: motion_core::steering::Vec2::new(v.x, v.z),
+        facing: f.x.atan2(f.z),
     }
 }

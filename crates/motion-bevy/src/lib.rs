@@ -46,7 +46,7 @@ use bevy::transform::TransformSystems;
 
 pub use asset::{MotionAssetError, MotionWeights, MotionWeightsLoader};
 pub use character::{
-    MotionCharacter, MotionFailed, MotionModelSource, MotionPose, MotionRig, MotionSeed,
+    MotionCharacter, MotionFailed, MotionGoal, MotionModelSource, MotionPose, MotionRig, MotionSeed,
 };
 pub use crowd::MotionJoint;
 

@@ -8,8 +8,8 @@ use std::time::Duration;
 use bevy::prelude::*;
 use bevy::time::TimeUpdateStrategy;
 use motion_bevy::{
-    MotionCharacter, MotionFailed, MotionModelSource, MotionPlugin, MotionPose, MotionRig,
-    MotionSeed, MotionWeights,
+    MotionCharacter, MotionFailed, MotionGoal, MotionModelSource, MotionPlugin, MotionPose,
+    MotionRig, MotionSeed, MotionWeights,
 };
 use motion_core::formats::bvh::parse_bvh;
 use motion_core::formats::expmap_bvh::ExpMapTarget;
@@ -227,4 +227,24 @@ fn bad_characters_are_reported_not_panicked_and_others_go_on() {
     let after = &app.world().get::<MotionPose>(walker).unwrap().0;
     assert!(after.local_rotations.iter().all(|q| q.is_finite()));
     assert!(after.root_translation != before);
+}
+
+#[test]
+fn a_goal_in_world_axes_steers_the_character_that_way() {
+    let mut app = app("assets");
+    // Spawned turned by 0.5 rad: the goal is in world axes all the same (the seed walks the
+    // spawn heading first; the heading then turns at a bounded rate, so the path curves in).
+    let origin = Transform::from_xyz(0.0, 0.0, 0.0).with_rotation(Quat::from_rotation_y(0.5));
+    let mut character = MotionCharacter::new("walking", 3);
+    character.goal = Some(MotionGoal::towards(Vec2::new(0.5, 0.0)));
+    let a = app.world_mut().spawn((character, origin)).id();
+    for _ in 0..240 {
+        app.update();
+        assert!(app.world().get::<MotionFailed>(a).is_none());
+    }
+    let moved = app.world().get::<Transform>(a).unwrap().translation;
+    assert!(
+        moved.x > 0.5 && moved.z.abs() < 0.5 * moved.x,
+        "steered toward +x, moved {moved}"
+    );
 }
