@@ -3,8 +3,6 @@
 //! it walks, 90 and 180 degree turns are done within 1.2 s, a stop goal holds the root, and ticks
 //! allocate nothing with or without a goal. The square course on a steady walker is a unit test
 //! of `motion_core::steering`.
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -16,29 +14,8 @@ use motion::core::pose::Pose;
 use motion::core::seed::load_seed;
 use motion::core::steering::{direction_of, facing_of, Goal};
 
-struct CountingAllocator;
-
-thread_local! {
-    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
-}
-
-// SAFETY: forwards to the system allocator; only counts calls.
-unsafe impl GlobalAlloc for CountingAllocator {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: CountingAllocator = CountingAllocator;
+mod common;
+use common::allocations;
 
 const TICK: f64 = 1.0 / 60.0;
 
@@ -206,7 +183,7 @@ fn steering_allocates_nothing_per_tick() {
     for _ in 0..30 {
         character.advance(TICK).unwrap();
     }
-    let before = ALLOCATIONS.with(|c| c.get());
+    let before = allocations();
     for k in 0..240 {
         if k % 60 == 0 {
             let turn = direction_of(k as f32 * 0.5);
@@ -214,7 +191,7 @@ fn steering_allocates_nothing_per_tick() {
         }
         character.advance(TICK).unwrap();
     }
-    assert_eq!(ALLOCATIONS.with(|c| c.get()) - before, 0);
+    assert_eq!(allocations() - before, 0);
 }
 
 #[test]
@@ -224,9 +201,9 @@ fn ticks_allocate_nothing_without_a_goal() {
     for _ in 0..30 {
         character.advance(TICK).unwrap();
     }
-    let before = ALLOCATIONS.with(|c| c.get());
+    let before = allocations();
     for _ in 0..240 {
         pose.clone_from(character.advance(TICK).unwrap());
     }
-    assert_eq!(ALLOCATIONS.with(|c| c.get()) - before, 0);
+    assert_eq!(allocations() - before, 0);
 }

@@ -667,29 +667,8 @@ fn a_seed_on_another_rig_is_predicted_and_written_back_onto_it() {
         "{err}"
     );
     // A joint map fixes it; one naming a joint the rig lacks is refused, naming both.
-    let names = [
-        "Hips",
-        "RightUpLeg",
-        "RightLeg",
-        "RightFoot",
-        "RightToeBase",
-        "LeftUpLeg",
-        "LeftLeg",
-        "LeftFoot",
-        "LeftToeBase",
-        "LowerBack",
-        "Spine",
-        "Neck",
-        "Head",
-        "LeftShoulder",
-        "LeftArm",
-        "LeftElbow",
-        "LeftHand",
-        "RightShoulder",
-        "RightArm",
-        "RightForeArm",
-        "RightHand",
-    ];
+    let names =
+        motion_core::retarget::CMU_NAMES.map(|n| if n == "LeftForeArm" { "LeftElbow" } else { n });
     let pairs: Vec<String> = motion_core::retarget::MAPPED_JOINTS
         .iter()
         .zip(names)

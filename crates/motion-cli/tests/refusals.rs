@@ -118,38 +118,15 @@ fn gifs_over_the_pixel_limit_are_refused_before_drawing() {
 /// The CMU-style demo rig's walk and a joint map for it with `edit` applied to its pairs.
 fn rig_and_map(dir: &std::path::Path, edit: impl Fn(&mut Vec<(String, String)>)) {
     use motion_core::formats::bvh::{read_bvh, write_bvh};
-    use motion_core::retarget::{demo_rig, JointMap, Retargeter, MAPPED_JOINTS};
+    use motion_core::retarget::{demo_rig, JointMap, Retargeter, CMU_NAMES, MAPPED_JOINTS};
     let rig = demo_rig("", false, 1.0 / 70.0);
     let retargeter = Retargeter::new(&rig, JointMap::detect(&rig).unwrap()).unwrap();
     let rest = ndarray::Array2::zeros((1, rig.channel_count()));
     let bvh = retargeter.to_rig(&read_bvh(walk_seed()).unwrap(), rest.view());
     write_bvh(dir.join("rig.bvh"), &bvh).unwrap();
-    let cmu = [
-        "Hips",
-        "RightUpLeg",
-        "RightLeg",
-        "RightFoot",
-        "RightToeBase",
-        "LeftUpLeg",
-        "LeftLeg",
-        "LeftFoot",
-        "LeftToeBase",
-        "LowerBack",
-        "Spine",
-        "Neck",
-        "Head",
-        "LeftShoulder",
-        "LeftArm",
-        "LeftForeArm",
-        "LeftHand",
-        "RightShoulder",
-        "RightArm",
-        "RightForeArm",
-        "RightHand",
-    ];
     let mut pairs: Vec<(String, String)> = MAPPED_JOINTS
         .iter()
-        .zip(cmu)
+        .zip(CMU_NAMES)
         .map(|(m, u)| (m.to_string(), u.to_string()))
         .collect();
     edit(&mut pairs);

@@ -84,35 +84,36 @@ const DIRECTION_CHILD: [Option<&str>; 21] = [
     None,
 ];
 
+/// The CMU mocap BVH conversions' joint for each of [`MAPPED_JOINTS`] (the built-in map of
+/// those rigs, and what a joint map for them names).
+pub const CMU_NAMES: [&str; 21] = [
+    "Hips",
+    "RightUpLeg",
+    "RightLeg",
+    "RightFoot",
+    "RightToeBase",
+    "LeftUpLeg",
+    "LeftLeg",
+    "LeftFoot",
+    "LeftToeBase",
+    "LowerBack",
+    "Spine",
+    "Neck",
+    "Head",
+    "LeftShoulder",
+    "LeftArm",
+    "LeftForeArm",
+    "LeftHand",
+    "RightShoulder",
+    "RightArm",
+    "RightForeArm",
+    "RightHand",
+];
+
 /// Built-in rig name maps, in [`MAPPED_JOINTS`] order; the first whose names a rig has wins, so
 /// the rigs with a distinctive bone (CMU's `LowerBack`, Mixamo's `Spine2`) come first.
 const PRESETS: [(&str, [&str; 21]); 4] = [
-    (
-        "CMU mocap BVH",
-        [
-            "Hips",
-            "RightUpLeg",
-            "RightLeg",
-            "RightFoot",
-            "RightToeBase",
-            "LeftUpLeg",
-            "LeftLeg",
-            "LeftFoot",
-            "LeftToeBase",
-            "LowerBack",
-            "Spine",
-            "Neck",
-            "Head",
-            "LeftShoulder",
-            "LeftArm",
-            "LeftForeArm",
-            "LeftHand",
-            "RightShoulder",
-            "RightArm",
-            "RightForeArm",
-            "RightHand",
-        ],
-    ),
+    ("CMU mocap BVH", CMU_NAMES),
     (
         "Mixamo",
         [
