@@ -14,14 +14,12 @@ use std::sync::Arc;
 
 use bevy::prelude::*;
 use motion_core::formats::expmap_bvh::ExpMapTarget;
-use motion_core::grounding::{GroundingConfig, PoseGrounder};
-use motion_core::model::{BatchGenerator, MotionModel, Noise};
-use motion_core::pose::{root_motion_between, PoseDecoder, METRES_PER_MM};
-use motion_core::resample::PoseResampler;
+use motion_core::grounding::GroundingConfig;
+use motion_core::model::{BatchGenerator, MotionModel, Noise, PoseStream};
+use motion_core::pose::{root_motion_between, METRES_PER_MM};
 use motion_core::seed::seed_from_bvh;
 use motion_core::skeleton::{Skeleton, H36M_SOURCE_FPS};
-use motion_core::steering::{Goal, Steering};
-use motion_core::RootEncoding;
+use motion_core::steering::Goal;
 use ndarray::{s, Array2, Array3, ArrayView2};
 
 use crate::asset::MotionWeights;
@@ -53,12 +51,9 @@ struct Member {
     entity: Entity,
     action: String,
     rng_seed: u64,
-    decoder: PoseDecoder,
-    /// Root-motion warping toward the character's goal (`motion_core::steering`).
-    steering: Steering,
-    /// Grounding of each decoded pose (`motion_core::grounding`, on by default).
-    grounder: PoseGrounder,
-    resampler: PoseResampler,
+    /// Decoding, steering, grounding and resampling of the generated frames (motion-core's one
+    /// chain, as `Character` uses it).
+    stream: PoseStream,
     /// Generated frames not yet decoded (`frame_dims` floats each).
     pending: VecDeque<f32>,
     /// The last `seed_frames` frames, a ring (`next` is the oldest): what a restart re-seeds from.
@@ -83,23 +78,13 @@ impl Member {
         for (dst, v) in self.scratch.iter_mut().zip(self.pending.drain(..dims)) {
             *dst = v;
         }
-        let Member {
-            decoder,
-            steering,
-            grounder,
-            resampler,
-            scratch,
-            ..
-        } = self;
-        resampler
-            .push(grounder.ground(steering.steer(decoder.push(scratch))))
-            .map_err(|e| e.to_string())
+        self.stream.push(&self.scratch).map_err(|e| e.to_string())
     }
 
     /// Feeds the resampler from `pending` until it can advance by `dt` or `pending` runs out;
     /// whether it still needs a frame.
     fn feed(&mut self, dt: f64) -> Result<bool, String> {
-        while self.resampler.needs(dt) {
+        while self.stream.needs(dt) {
             if self.pending.is_empty() {
                 return Ok(true);
             }
@@ -170,7 +155,7 @@ impl Group {
             }
         }
         for m in &mut self.members {
-            m.resampler.advance(dt).map_err(|e| e.to_string())?;
+            m.stream.advance(dt).map_err(|e| e.to_string())?;
         }
         Ok(())
     }
@@ -251,35 +236,22 @@ fn new_member(
     let window: ArrayView2<'_, f64> = seed.frames.slice(s![have - needed.., ..]);
     let skeleton = Arc::new(Skeleton::h36m());
     let step = ((H36M_SOURCE_FPS / cfg.fps).round() as usize).max(1);
-    let mut decoder = PoseDecoder::new(Arc::clone(&skeleton), RootEncoding::Deltas, step);
     let grounding = if character.grounding {
         GroundingConfig::default()
     } else {
         GroundingConfig::off()
     };
-    let mut grounder = PoseGrounder::new(&skeleton, (1.0 / cfg.fps) as f32, grounding)
+    let mut stream =
+        PoseStream::new(skeleton, cfg.fps, step, grounding).map_err(|e| e.to_string())?;
+    stream
+        .start(window, Some(&character.action))
         .map_err(|e| e.to_string())?;
-    grounder.reset(Some(&character.action));
-    for row in window.rows() {
-        grounder.observe_seed(decoder.push(row.as_slice().expect("contiguous")));
-    }
-    let mut steering =
-        Steering::new(&skeleton, (1.0 / cfg.fps) as f32).map_err(|e| e.to_string())?;
-    steering.reset(decoder.pose());
-    let mut resampler = PoseResampler::new(skeleton.len(), cfg.fps);
-    resampler
-        .push(grounder.ground(decoder.pose()))
-        .map_err(|e| e.to_string())?;
-    resampler.advance(0.0).map_err(|e| e.to_string())?;
     let dims = cfg.frame_dims;
     Ok(Member {
         entity,
         action: character.action.clone(),
         rng_seed: character.rng_seed,
-        decoder,
-        steering,
-        grounder,
-        resampler,
+        stream,
         pending: VecDeque::with_capacity(8 * dims),
         history: window.mapv(|v| v as f32),
         next: 0,
@@ -326,8 +298,8 @@ pub(crate) fn start_characters(
                 continue;
             }
         };
-        let skeleton = member.decoder.skeleton().clone();
-        let pose = member.resampler.current().clone();
+        let skeleton = member.stream.skeleton().clone();
+        let pose = member.stream.current().clone();
         let mut joints = Vec::with_capacity(skeleton.len());
         for (j, joint) in skeleton.joints().iter().enumerate() {
             let parent = joint.parent.map_or(entity, |p| joints[p]);
@@ -401,14 +373,14 @@ pub(crate) fn step_characters(
             let Ok((character, rig, ..)) = characters.get(m.entity) else {
                 continue;
             };
-            m.steering
+            m.stream
                 .set_goal(character.goal.map(|g| motion_goal(g, rig.origin)));
             if character.action != m.action {
                 if let Err(e) = batch.set_action(row, &character.action, 0) {
                     failed.push((m.entity, format!("{e}; carrying on with {:?}", m.action)));
                 }
                 m.action.clone_from(&character.action);
-                m.grounder.set_action(Some(&character.action));
+                m.stream.set_action(Some(&character.action));
             }
         }
         // The clock, walked through a model frame at a time (a long frame of the game's).
@@ -431,7 +403,7 @@ pub(crate) fn step_characters(
             let Ok((_, rig, mut root, mut pose)) = characters.get_mut(m.entity) else {
                 continue;
             };
-            let now = m.resampler.current();
+            let now = m.stream.current();
             let mut motion = now.root_motion;
             if substeps > 1 {
                 // The deltas over the whole tick, not its last model frame.

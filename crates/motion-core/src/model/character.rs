@@ -1,8 +1,8 @@
 //! One animated character for a game engine: a [`Generator`] whose frames come out as engine
 //! [`Pose`]s (f32 glam, metres, root motion split) at whatever rate the engine ticks, with the
-//! action switchable mid-stream. It chains the three streaming pieces — closed-loop generation,
-//! [`PoseDecoder`] (root integration from the seed on) and [`PoseResampler`] (one model frame of
-//! look-ahead) — and allocates nothing per tick. Each model frame after the seed is grounded
+//! action switchable mid-stream and the root steerable ([`Character::set_goal`]). It chains
+//! closed-loop generation and a [`PoseStream`] (decoding, steering, grounding, resampling) and
+//! allocates nothing per tick. Each model frame after the seed is grounded
 //! ([`crate::grounding`]: on the seed's floor, upright, feet planted) unless the character was
 //! made with [`GroundingConfig::off`].
 //!
@@ -14,13 +14,14 @@ use ndarray::ArrayView2;
 use super::batch::Noise;
 use super::generate_error::GenerateError;
 use super::generator::Generator;
+use super::pose_stream::PoseStream;
 use super::predictor::MotionModel;
-use crate::grounding::{Grounder, GroundingConfig, GroundingError, PoseGrounder};
-use crate::motion::{FrameScalar, RootEncoding};
-use crate::pose::{Pose, PoseDecoder};
-use crate::resample::{PoseResampler, ResampleError};
+use crate::grounding::{Grounder, GroundingConfig, GroundingError};
+use crate::motion::FrameScalar;
+use crate::pose::Pose;
+use crate::resample::ResampleError;
 use crate::skeleton::{Skeleton, H36M_SOURCE_FPS};
-use crate::steering::{Goal, Steering};
+use crate::steering::Goal;
 
 /// Why a [`Character`] could not start or advance.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -40,17 +41,11 @@ pub enum CharacterError {
     Grounding(#[from] GroundingError),
 }
 
-/// A generator, a pose decoder and a resampler for one character (see the module docs).
+/// A generator and a [`PoseStream`] for one character (see the module docs).
 #[derive(Debug)]
 pub struct Character {
     generator: Generator,
-    decoder: PoseDecoder,
-    resampler: PoseResampler,
-    grounder: PoseGrounder,
-    /// Root-motion warping toward a goal ([`Character::set_goal`]).
-    steering: Steering,
-    /// The grounding the next start uses ([`Character::set_grounding`]).
-    grounding: GroundingConfig,
+    stream: PoseStream,
 }
 
 impl Character {
@@ -76,37 +71,29 @@ impl Character {
         if config.skeleton != "h36m-32" {
             return Err(CharacterError::Skeleton(config.skeleton.clone()));
         }
-        let skeleton = Arc::new(Skeleton::h36m());
         // H3.6M root deltas are per 50 Hz source frame: a 25 Hz model frame spans 2.
         let step = ((H36M_SOURCE_FPS / config.fps).round() as usize).max(1);
-        let resampler = PoseResampler::new(skeleton.len(), config.fps);
-        let grounder = PoseGrounder::new(&skeleton, (1.0 / config.fps) as f32, grounding)?;
-        let steering =
-            Steering::new(&skeleton, (1.0 / config.fps) as f32).map_err(GroundingError::from)?;
+        let stream = PoseStream::new(Arc::new(Skeleton::h36m()), config.fps, step, grounding)?;
         Ok(Character {
-            grounder,
-            steering,
-            grounding,
+            stream,
             generator: Generator::new(model),
-            decoder: PoseDecoder::new(skeleton, RootEncoding::Deltas, step),
-            resampler,
         })
     }
 
     /// Grounds the frames after the next [`start`](Self::start) as `grounding` says
     /// ([`GroundingConfig::off`]: the model's raw motion); the motion under way keeps its own.
     pub fn set_grounding(&mut self, grounding: GroundingConfig) {
-        self.grounding = grounding;
+        self.stream.set_grounding(grounding);
     }
 
     /// The grounding in force (floor, contacts, lean limit).
     pub fn grounder(&self) -> &Grounder {
-        self.grounder.grounder()
+        self.stream.grounder()
     }
 
     /// The skeleton the poses are on (joint order of [`Pose::local_rotations`]).
     pub fn skeleton(&self) -> &Arc<Skeleton> {
-        self.decoder.skeleton()
+        self.stream.skeleton()
     }
 
     /// The generator (plan horizon, model).
@@ -124,27 +111,7 @@ impl Character {
         noise: Noise<'_>,
     ) -> Result<&Pose, CharacterError> {
         self.generator.start(seed, action, noise)?;
-        if *self.grounder.grounder().config() != self.grounding {
-            let frame_time = (1.0 / self.generator.model().config().fps) as f32;
-            self.grounder = PoseGrounder::new(self.decoder.skeleton(), frame_time, self.grounding)?;
-        }
-        self.decoder.reset();
-        self.resampler.reset();
-        self.grounder.reset(action);
-        for row in seed.rows() {
-            let pose = match row.as_slice() {
-                Some(frame) => self.decoder.push(frame),
-                None => {
-                    let owned: Vec<T> = row.iter().copied().collect();
-                    self.decoder.push(&owned)
-                }
-            };
-            self.grounder.observe_seed(pose);
-        }
-        self.steering.reset(self.decoder.pose());
-        self.resampler
-            .push(self.grounder.ground(self.decoder.pose()))?;
-        Ok(self.resampler.advance(0.0)?)
+        Ok(self.stream.start(seed, action)?)
     }
 
     /// [`start`](Self::start) from the last `seed_frames` frames of a longer clip (a loaded seed
@@ -173,43 +140,33 @@ impl Character {
     /// A long `dt` (a hitch) is walked through frame by frame; the pose's root-motion deltas
     /// span all of it.
     pub fn advance(&mut self, dt: f64) -> Result<&Pose, CharacterError> {
-        let (generator, decoder, steering, grounder) = (
-            &mut self.generator,
-            &mut self.decoder,
-            &mut self.steering,
-            &mut self.grounder,
-        );
-        self.resampler.advance_pulling(dt, |resampler| {
-            let frame = generator.step()?;
-            resampler.push(grounder.ground(steering.steer(decoder.push(frame))))?;
-            Ok(())
-        })
-    }
-
-    /// Steers the character toward `goal` (a velocity on the floor and a facing; `None`: the
-    /// model's own root motion) from the next model frame on, by root-motion warping
-    /// ([`crate::steering`]); kept across [`start`](Self::start)s.
-    pub fn set_goal(&mut self, goal: Option<Goal>) {
-        self.steering.set_goal(goal);
-    }
-
-    /// The goal in force ([`Character::set_goal`]).
-    pub fn goal(&self) -> Option<Goal> {
-        self.steering.goal()
-    }
-
-    /// The heading (yaw about +y, `0` facing +z) of `pose`'s pelvis, the angle a goal's facing
-    /// is compared with.
-    pub fn heading_of(&self, pose: &Pose) -> f32 {
-        self.steering.heading_of(pose)
+        self.stream.advance_generating(dt, &mut self.generator)
     }
 
     /// Changes the action without re-seeding ([`Generator::set_action`]); the lean limit
     /// follows it.
     pub fn set_action(&mut self, action: &str, crossfade: usize) -> Result<(), CharacterError> {
         self.generator.set_action(action, crossfade)?;
-        self.grounder.set_action(Some(action));
+        self.stream.set_action(Some(action));
         Ok(())
+    }
+
+    /// Steers the character toward `goal` (a velocity on the floor and a facing; `None`: the
+    /// model's own root motion) from the next model frame on, by root-motion warping
+    /// ([`crate::steering`]); kept across [`start`](Self::start)s.
+    pub fn set_goal(&mut self, goal: Option<Goal>) {
+        self.stream.set_goal(goal);
+    }
+
+    /// The goal in force ([`Character::set_goal`]).
+    pub fn goal(&self) -> Option<Goal> {
+        self.stream.goal()
+    }
+
+    /// The heading (yaw about +y, `0` facing +z) of `pose`'s pelvis, the angle a goal's facing
+    /// is compared with.
+    pub fn heading_of(&self, pose: &Pose) -> f32 {
+        self.stream.heading_of(pose)
     }
 }
 

@@ -37,6 +37,7 @@ pub mod generator;
 pub mod grud;
 pub mod intention;
 pub mod norm;
+pub mod pose_stream;
 pub mod predictor;
 pub mod random;
 pub mod samples;
@@ -50,6 +51,7 @@ pub use classifier::{ActionClassifier, ClassifierConfig, ClassifyError, CLASSIFI
 pub use config::{Architecture, ModelConfig, Provenance};
 pub use generate_error::GenerateError;
 pub use generator::Generator;
+pub use pose_stream::PoseStream;
 pub use predictor::{MotionModel, Network};
 pub use samples::generate_samples;
 pub use weights::{WeightStore, WeightsError};
