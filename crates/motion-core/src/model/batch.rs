@@ -25,12 +25,10 @@
 //! The fed-back frame is the model's normalized output itself (as in `training/models.py`), not
 //! a re-normalized copy of the full frame it returns.
 use super::config::ModelConfig;
-use super::dae_lstm::DaeLstmState;
 use super::generate_error::GenerateError;
-use super::grud::GruDState;
-use super::intention::IntentionState;
-use super::predictor::{MotionModel, Network};
-use super::vgru::{NoiseSource, VgruState};
+use super::net::{Begin, NetState};
+use super::predictor::MotionModel;
+use super::vgru::NoiseSource;
 use crate::derivatives::DerivativeBuffer;
 use ndarray::{ArrayView2, ArrayView3};
 use std::sync::Arc;
@@ -68,14 +66,6 @@ pub enum Noise<'a> {
     /// This vector: VGRU-d's `eps` (length `plan_hidden`) for every plan block, or the intention
     /// model's `z` (length `noise_dims`).
     Explicit(&'a [f32]),
-}
-
-#[derive(Debug)]
-enum NetState {
-    Vgru(Box<VgruState>),
-    Grud(GruDState),
-    DaeLstm(Box<DaeLstmState>),
-    Intention(Box<IntentionState>),
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -120,21 +110,14 @@ struct Shard {
     x_norm: Vec<f32>,
     features: Vec<f32>,
     out_norm: Vec<f32>,
-    state: NetState,
+    state: Box<dyn NetState>,
 }
 
 impl Shard {
     fn new(model: &MotionModel, rows: usize) -> Self {
         let cfg = model.config();
         let (o, i) = (cfg.output_dims(), cfg.input_dims());
-        let state = match model.network() {
-            Network::Vgru(v) => {
-                NetState::Vgru(Box::new(v.new_state(rows, cfg.seed_frames + cfg.horizon)))
-            }
-            Network::Grud(g) => NetState::Grud(g.new_state(rows)),
-            Network::DaeLstm(d) => NetState::DaeLstm(Box::new(d.new_state(rows))),
-            Network::Intention(n) => NetState::Intention(Box::new(n.new_state(rows))),
-        };
+        let state = model.network().net().new_state(rows, cfg);
         Self {
             rows,
             derivatives: (0..rows)
@@ -160,21 +143,9 @@ impl Shard {
                 &mut self.features[b * i..(b + 1) * i],
             );
         }
-        let hidden = match (&mut self.state, model.network()) {
-            (NetState::Vgru(state), Network::Vgru(net)) => {
-                net.step(state, &self.features, rows, body_step)
-            }
-            (NetState::Grud(state), Network::Grud(net)) => net.step(state, &self.features, rows),
-            (NetState::DaeLstm(state), Network::DaeLstm(net)) => {
-                net.step(state, &self.features, rows)
-            }
-            (NetState::Intention(state), Network::Intention(net)) => {
-                match net.step(state, &self.features, rows, body_step) {
-                    Some(hidden) => hidden,
-                    None => return,
-                }
-            }
-            _ => unreachable!("state built for this model"),
+        let net = model.network().net();
+        let Some(hidden) = net.step(self.state.as_mut(), &self.features, rows, body_step) else {
+            return;
         };
         model.decoder().forward(hidden, rows, &mut self.out_norm);
         if cfg.residual {
@@ -182,11 +153,7 @@ impl Shard {
                 *y += x;
             }
         }
-        if let (NetState::DaeLstm(state), Network::DaeLstm(net)) =
-            (&mut self.state, model.network())
-        {
-            net.filter(state, &mut self.out_norm, rows);
-        }
+        net.filter(self.state.as_mut(), &mut self.out_norm, rows);
         let norm = model.normalization();
         for b in 0..rows {
             norm.unnormalize(
@@ -322,36 +289,25 @@ impl BatchGenerator {
         }
         debug_assert_eq!(width, cfg.frame_dims);
         let action_indices = self.action_indices(cfg, actions)?;
-        let mut sources = match model.network() {
-            Network::Vgru(net) => self.noise_sources(net.plan_hidden(), noise)?,
-            Network::Intention(net) => self.noise_sources(net.noise_dims(), noise)?,
-            Network::Grud(_) | Network::DaeLstm(_) => Vec::new(),
+        let net = model.network().net();
+        let mut sources = match net.noise_dims() {
+            0 => Vec::new(),
+            dims => self.noise_sources(dims, noise)?,
         }
         .into_iter();
-        let teacher_forcing = !matches!(model.network(), Network::Intention(_));
+        let teacher_forcing = net.teacher_forced();
         for (k, shard) in self.shards.iter_mut().enumerate() {
             let rows = k * self.shard_rows..k * self.shard_rows + shard.rows;
-            match (&mut shard.state, model.network()) {
-                (NetState::Vgru(state), Network::Vgru(net)) => {
-                    let shard_sources = sources.by_ref().take(shard.rows).collect();
-                    net.begin(
-                        state,
-                        &action_indices[rows],
-                        shard_sources,
-                        seed_len,
-                        self.plan_horizon,
-                    );
-                }
-                (NetState::Grud(state), Network::Grud(net)) => net.reset(state, shard.rows),
-                (NetState::DaeLstm(state), Network::DaeLstm(net)) => {
-                    net.begin(state, &action_indices[rows])
-                }
-                (NetState::Intention(state), Network::Intention(net)) => {
-                    let shard_sources = sources.by_ref().take(shard.rows).collect();
-                    net.begin(state, shard_sources, seed_len);
-                }
-                _ => unreachable!("state built for this model"),
-            }
+            net.begin(
+                shard.state.as_mut(),
+                Begin {
+                    rows: shard.rows,
+                    actions: &action_indices[rows],
+                    noise: sources.by_ref().take(shard.rows).collect(),
+                    seed_len,
+                    plan_horizon: self.plan_horizon,
+                },
+            );
             for d in &mut shard.derivatives {
                 d.reset();
             }
@@ -427,16 +383,14 @@ impl BatchGenerator {
         let t = self.body_steps;
         let (k, local) = (row / self.shard_rows, row % self.shard_rows);
         let shard = &mut self.shards[k];
-        match (&mut shard.state, model.network()) {
-            (NetState::Vgru(state), Network::Vgru(net)) => {
-                net.set_action(state, shard.rows, local, index, t)
-            }
-            (NetState::DaeLstm(state), Network::DaeLstm(net)) => {
-                net.set_action(state, local, index, crossfade)
-            }
-            _ => return Err(GenerateError::NotConditioned),
-        }
-        Ok(())
+        model.network().net().set_action(
+            shard.state.as_mut(),
+            shard.rows,
+            local,
+            index,
+            crossfade,
+            t,
+        )
     }
 
     /// The next full frame of every character, `[batch, frame_dims]`: the first call after
@@ -547,7 +501,7 @@ impl BatchGenerator {
                     valid: cfg.actions.clone(),
                 })
         };
-        let needed = matches!(self.model.network(), Network::Vgru(_) | Network::DaeLstm(_));
+        let needed = self.model.network().net().needs_action();
         match actions.len() {
             0 if needed => Err(GenerateError::MissingAction {
                 valid: cfg.actions.clone(),

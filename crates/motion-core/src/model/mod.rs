@@ -36,6 +36,7 @@ pub mod generate_error;
 pub mod generator;
 pub mod grud;
 pub mod intention;
+pub mod net;
 pub mod norm;
 pub mod pose_stream;
 pub mod predictor;
