@@ -3,7 +3,8 @@
 //! must be reproduced within 1e-5, and loading errors must name the tensor and the file.
 use motion::core::model::weights::serialize_f32;
 use motion::core::model::{
-    BatchGenerator, Generator, MotionModel, Network, Noise, WeightStore, WeightsError,
+    BatchGenerator, GenerateError, Generator, MotionModel, Network, Noise, WeightStore,
+    WeightsError,
 };
 use motion::core::nn::{
     BodyGruCell, BodyGruConfig, GruCell, GruConfig, GruConvention, GruScratch, Linear,
@@ -379,6 +380,64 @@ fn intention_lookahead_1_and_2() {
     // gamma 2: the ring holds two frames, nothing forecast before the first step either.
     check_intention("intention_lookahead1");
     check_intention("intention_lookahead2");
+}
+
+/// The action-conditioned intention fixture: the closed loop under the fixture's action, and a
+/// switch to another action mid-stream (`Generator::set_action` before the pose step producing
+/// frame `S + switch_at`).
+#[test]
+fn intention_with_actions_and_a_switch() {
+    let name = "intention_actions";
+    let model = Arc::new(MotionModel::load(fixture(&format!("{name}.safetensors"))).unwrap());
+    let expected = WeightStore::open(fixture(&format!("{name}.expected.safetensors"))).unwrap();
+    let (ss, seed) = get(&expected, "seed");
+    let (_, z) = get(&expected, "eps");
+    let (cs, closed) = get(&expected, "closed_loop");
+    let (_, switched) = get(&expected, "switched");
+    let action = expected.metadata("action").unwrap().to_string();
+    let switch_to = expected.metadata("switch_to").unwrap().to_string();
+    let switch_at: usize = expected.metadata("switch_at").unwrap().parse().unwrap();
+    let width = ss[1];
+    let seed = ArrayView2::from_shape((ss[0], width), &seed).unwrap();
+
+    let mut generator = Generator::new(Arc::clone(&model));
+    generator
+        .start(seed, Some(&action), Noise::Explicit(&z))
+        .unwrap();
+    let frames = generator.generate(cs[0]).unwrap();
+    assert_close(
+        &format!("{name} closed_loop"),
+        frames.as_slice().unwrap(),
+        &closed,
+    );
+    assert!(
+        matches!(
+            Generator::new(Arc::clone(&model)).start(seed, None, Noise::Explicit(&z)),
+            Err(GenerateError::MissingAction { .. })
+        ),
+        "a conditioned model needs an action"
+    );
+
+    let mut generator = Generator::new(Arc::clone(&model));
+    generator
+        .start(seed, Some(&action), Noise::Explicit(&z))
+        .unwrap();
+    for k in 0..cs[0] {
+        if k == switch_at {
+            generator.set_action(&switch_to, 0).unwrap();
+        }
+        let frame = generator.step().unwrap();
+        assert_close(
+            &format!("{name} switched[{k}]"),
+            frame,
+            &switched[k * width..(k + 1) * width],
+        );
+    }
+    assert_ne!(
+        &switched[(cs[0] - 1) * width..],
+        &closed[(cs[0] - 1) * width..],
+        "the switch changes the motion"
+    );
 }
 
 #[test]

@@ -154,7 +154,11 @@ LATE_MODEL_SPECS = {
 # Intention fixtures (Tanke et al. 2021), drawn after every file above so those stay byte-identical:
 # file stem -> look-ahead gamma (3: the general case; 1 and 2: the edges of the engine's ring of
 # intention probabilities, no forecast ahead of the first pose step).
-INTENTION_SPECS = {"intention": 3, "intention_lookahead1": 1, "intention_lookahead2": 2}
+INTENTION_SPECS = {"intention": 3, "intention_lookahead1": 1, "intention_lookahead2": 2, "intention_actions": 3}
+# The action-conditioned intention fixture (drawn after every other file): its actions, the action of the
+# expected closed loop, and the one ``switched`` changes to before the pose step producing frame S + SWITCH_AT.
+INTENTION_ACTIONS = ["walking", "eating", "sitting"]
+INTENTION_ACTION, INTENTION_SWITCH_TO, SWITCH_AT = "eating", "sitting", 5
 INTENTION_SIZES = {
     "hidden": 24, "noise_dims": 6, "label_hidden": 10, "intentions": 4, "clusters": 7, "intention_features": 5,
     "layers": 2,
@@ -268,9 +272,10 @@ def intention_fixture(stem: str, gen: torch.Generator) -> tuple[Fixture, Fixture
     [horizon + γ - 2, C]`` (the forecast probabilities of frames ``S ..``) and ``closed_loop [horizon, 99]``; no
     ``teacher_forced`` (the model makes no predictions during the seed)."""
     lookahead = INTENTION_SPECS[stem]
+    conditioned = stem == "intention_actions"
     config = make_config(
         "intention", H36M_DIMS_USED, seed_frames=SEED_FRAMES, horizon=HORIZON, lookahead=lookahead, **INTENTION_SIZES
-    )
+    ) | ({"actions": INTENTION_ACTIONS} if conditioned else {})
     model = build_model(config)
     hidden, label_hidden = config["hidden"], config["label_hidden"]
     bounds = {
@@ -306,9 +311,23 @@ def intention_fixture(stem: str, gen: torch.Generator) -> tuple[Fixture, Fixture
         d = ((norm_seed[0].unsqueeze(-2) - ref.labels.centroids) ** 2).sum(-1).sort(-1).values
         margin = (d[:, 1] - d[:, 0]).min().item()
         assert margin > LABEL_MARGIN, f"{stem}: a seed frame is {margin:.3g} from a tie between centroids"
-        labels, _, probs = ref.forecast_intentions(norm_seed, HORIZON + lookahead - 2)
+        action = INTENTION_ACTION if conditioned else None
+        onehot = ref.action_onehot(action, 1, norm_seed)
+        steps = HORIZON + lookahead - 2
+        labels, _, probs = ref.forecast_intentions(norm_seed, steps, action=onehot)
         assert len(set(labels[0].tolist())) >= 2, f"{stem}: the seed has a single intention"
-        closed_loop = ref.predict(seed.double(), horizon=HORIZON, eps=z.double())
+        closed_loop = ref.predict(seed.double(), action=action, horizon=HORIZON, eps=z.double())
+        if conditioned:
+            # A switch before the pose step producing frame S + k: that step and every later one read the new
+            # action, and so do the intention frames the engine has not forecast yet (S + k + γ - 2 on).
+            new = ref.action_onehot(INTENTION_SWITCH_TO, 1, norm_seed)
+            k = SWITCH_AT
+            forecast_acts = onehot[:, None, :].repeat(1, steps, 1)
+            forecast_acts[:, k + lookahead - 2 :] = new[:, None, :]
+            pose_acts = onehot[:, None, :].repeat(1, HORIZON, 1)
+            pose_acts[:, k:] = new[:, None, :]
+            sl, _, sprobs = ref.forecast_intentions(norm_seed, steps, action=forecast_acts)
+            switched = ref.norm.unnormalize(ref.generate(norm_seed, HORIZON, z.double()[None], sl, sprobs, pose_acts))
     expected = {
         "seed": seed,
         "eps": z,
@@ -317,12 +336,15 @@ def intention_fixture(stem: str, gen: torch.Generator) -> tuple[Fixture, Fixture
         "closed_loop": _f32(closed_loop),
     }
     meta = {
-        "action": "",
+        "action": action or "",
         "horizon": str(HORIZON),
         "lookahead": str(lookahead),
         "seed_frames": str(SEED_FRAMES),
         "weights": f"{stem}.safetensors",
     }
+    if conditioned:
+        expected["switched"] = _f32(switched[0])
+        meta |= {"switch_to": INTENTION_SWITCH_TO, "switch_at": str(SWITCH_AT)}
     return weights, (expected, meta)
 
 

@@ -493,7 +493,13 @@ class IntentionModel(MotionModel):
       last seed frame are their labels' one-hots, later ones the forecast) and ``x̂_{S-1}`` is the last seed
       frame; ``decoder`` maps the top layer to the change of the pose (residual).
     All GRUs use the PyTorch convention. The discriminators are training-only (``training/train_intention.py``).
-    Frame indices: seed frames ``0 .. S-1``, predictions ``S ..``."""
+    Frame indices: seed frames ``0 .. S-1``, predictions ``S ..``.
+
+    Action conditioning (this project's addition; the paper's model is unconditioned): a config with ``actions``
+    appends the action's one-hot ``a`` (``A`` = ``len(actions)`` dims) to three inputs, last: the label encoder's
+    (pose ⊕ label one-hot ⊕ a), the label decoder's (probabilities ⊕ a) and the first decoder layer's
+    (``x̂ ⊕ z ⊕ f ⊕ a``). ``with_actions`` turns an unconditioned model into one whose new columns are zero, so it
+    starts computing exactly what the unconditioned one does."""
 
     def __init__(self, config: dict, dropout: float = 0.0):
         super().__init__(config, 0.0)
@@ -512,20 +518,44 @@ class IntentionModel(MotionModel):
             raise ValueError("intention model needs 0 < noise_dims < hidden, lookahead >= 1, layers >= 1")
         if not 0.0 <= self.noise_scale <= MAX_NOISE_SCALE:
             raise ValueError(f"noise_scale {self.noise_scale} is not in [0, {MAX_NOISE_SCALE}]")
-        o, c = self.output_size, self.intentions
+        o, c, a = self.output_size, self.intentions, len(self.actions)
         self.labels = IntentionLabels(int(config["clusters"]), o)
-        self.label_encoder = GRUCell(o + c, self.label_hidden)
-        self.label_decoder = GRUCell(c, self.label_hidden)
+        self.label_encoder = GRUCell(o + c + a, self.label_hidden)
+        self.label_decoder = GRUCell(c + a, self.label_hidden)
         self.label_out = nn.Linear(self.label_hidden, c)
         self.pose_encoder = GRUCell(o, self.hidden_size - self.noise_dims)
         self.intent_conv = nn.Conv1d(c, self.intention_features, self.lookahead)
-        sizes = [o + self.noise_dims + self.intention_features] + [self.hidden_size] * self.num_layers
+        sizes = [o + self.noise_dims + self.intention_features + a] + [self.hidden_size] * self.num_layers
         self.rnn = nn.ModuleList(GRUCell(a, self.hidden_size) for a in sizes[:-1])
         nn.init.zeros_(self.decoder.weight)  # residual: start by holding the pose
         nn.init.zeros_(self.decoder.bias)
 
     def action_indices(self, action, batch, device):
-        return None  # unconditioned: the intentions take the action's place
+        if not self.actions:
+            return None  # unconditioned: the intentions take the action's place
+        return super().action_indices(action, batch, device)
+
+    def action_onehot(self, action, batch: int, like: torch.Tensor) -> torch.Tensor | None:
+        """The action's one-hot ``[B, A]`` (None for an unconditioned model)."""
+        idx = self.action_indices(action, batch, like.device)
+        return None if idx is None else F.one_hot(idx, len(self.actions)).to(like.dtype)
+
+    def with_actions(self, actions: list[str]) -> "IntentionModel":
+        """An action-conditioned copy of this unconditioned model: the one-hot columns appended to the three
+        inputs are zero, every other weight and buffer is copied, so it computes what this model does."""
+        if self.actions:
+            raise ValueError(f"the model is already conditioned on {self.actions}")
+        if not actions or len(set(actions)) != len(actions):
+            raise ValueError(f"need distinct action labels, got {actions}")
+        config = dict(self.config) | {"actions": list(actions)}
+        out = IntentionModel(config).to(self.decoder.weight.dtype)
+        state = self.state_dict()
+        with torch.no_grad():
+            for name in ("label_encoder.weight_ih", "label_decoder.weight_ih", "rnn.0.weight_ih"):
+                w = state[name]
+                state[name] = torch.cat([w, w.new_zeros(w.shape[0], len(actions))], dim=1)
+        out.load_state_dict(state)
+        return out
 
     @staticmethod
     def _encode(cell: GRUCell, inputs: torch.Tensor) -> torch.Tensor:
@@ -535,15 +565,24 @@ class IntentionModel(MotionModel):
             h = cell.step(g, h)
         return h
 
-    def forecast_intentions(self, seed: torch.Tensor, steps: int, labels: torch.Tensor | None = None):
+    def forecast_intentions(self, seed: torch.Tensor, steps: int, labels: torch.Tensor | None = None,
+                            action: torch.Tensor | None = None):
         """Seed ``[B, S, O]`` -> (seed labels ``[B, S]``, forecast logits ``[B, steps, C]`` of frames
-        ``S .. S+steps-1``, their probabilities). ``labels`` overrides the seed's own labelling."""
+        ``S .. S+steps-1``, their probabilities). ``labels`` overrides the seed's own labelling; ``action`` is
+        the action one-hot ``[B, A]`` of a conditioned model (``action_onehot``), or one per forecast step
+        ``[B, steps, A]`` (an action switched mid-stream; the encoder reads the first)."""
         labels = self.labels(seed) if labels is None else labels
         onehot = F.one_hot(labels, self.intentions).to(seed.dtype)
-        h = self._encode(self.label_encoder, torch.cat([seed, onehot], dim=-1))
+        enc_in = torch.cat([seed, onehot], dim=-1)
+        if action is not None:
+            first = action if action.dim() == 2 else action[:, 0]
+            enc_in = torch.cat([enc_in, first[:, None, :].expand(-1, seed.shape[1], -1)], dim=-1)
+        h = self._encode(self.label_encoder, enc_in)
         x = onehot[:, -1]
         logits, probs = [], []
-        for _ in range(steps):
+        for j in range(steps):
+            if action is not None:
+                x = torch.cat([x, action if action.dim() == 2 else action[:, j]], dim=-1)
             h = self.label_decoder(x, h)
             lg = self.label_out(h)
             x = torch.softmax(lg, dim=-1)
@@ -558,11 +597,12 @@ class IntentionModel(MotionModel):
         return torch.randn(batch, self.noise_dims, generator=generator, dtype=like.dtype).to(like.device)
 
     def generate(self, seed: torch.Tensor, horizon: int, z: torch.Tensor, seed_labels: torch.Tensor,
-                 future_probs: torch.Tensor) -> torch.Tensor:
+                 future_probs: torch.Tensor, action: torch.Tensor | None = None) -> torch.Tensor:
         """Poses of frames ``S .. S+horizon-1`` ``[B, horizon, O]`` from the seed, the noise ``z [B, N]``, the
-        seed's labels and intention probabilities of frames ``S .. S+horizon+γ-3`` (``[B, >= horizon+γ-2, C]``)."""
+        seed's labels and intention probabilities of frames ``S .. S+horizon+γ-3`` (``[B, >= horizon+γ-2, C]``)
+        (and the action one-hot ``[B, A]`` of a conditioned model)."""
         feats = self.intention_features_of(seed_labels, future_probs, horizon, seed)
-        outputs, _ = self.rollout(seed[:, -1], self.initial_state(seed, z), z, feats)
+        outputs, _ = self.rollout(seed[:, -1], self.initial_state(seed, z), z, feats, action)
         return outputs
 
     def intention_features_of(self, seed_labels: torch.Tensor, future_probs: torch.Tensor, horizon: int,
@@ -577,13 +617,18 @@ class IntentionModel(MotionModel):
         h0 = torch.cat([self._encode(self.pose_encoder, seed), z], dim=-1)
         return [h0 for _ in self.rnn]
 
-    def rollout(self, x: torch.Tensor, hs: list[torch.Tensor], z: torch.Tensor, feats: torch.Tensor):
+    def rollout(self, x: torch.Tensor, hs: list[torch.Tensor], z: torch.Tensor, feats: torch.Tensor,
+                action: torch.Tensor | None = None):
         """Pose steps from the last frame ``x [B, O]`` and decoder states ``hs``, one per row of ``feats
-        [B, T, Fe]``: (frames ``[B, T, O]``, final states)."""
+        [B, T, Fe]`` (``action``: the one-hot ``[B, A]`` of a conditioned model, or one per step ``[B, T, A]``):
+        (frames ``[B, T, O]``, final states)."""
         hs = list(hs)
         outputs = []
         for j in range(feats.shape[1]):
-            inp = torch.cat([x, z, feats[:, j]], dim=-1)
+            parts = [x, z, feats[:, j]]
+            if action is not None:
+                parts.append(action if action.dim() == 2 else action[:, j])
+            inp = torch.cat(parts, dim=-1)
             for k, cell in enumerate(self.rnn):
                 hs[k] = cell(inp, hs[k])
                 inp = hs[k]
@@ -603,8 +648,9 @@ class IntentionModel(MotionModel):
             z = self.noise_scale * self.sample_noise(batch, seed)
         else:
             z = torch.as_tensor(eps, dtype=seed.dtype).expand(batch, -1)
-        labels, _, probs = self.forecast_intentions(seed, max(0, horizon + self.lookahead - 2))
-        out = self.generate(seed, horizon, z, labels, probs)
+        onehot = self.action_onehot(action, batch, seed)
+        labels, _, probs = self.forecast_intentions(seed, max(0, horizon + self.lookahead - 2), action=onehot)
+        out = self.generate(seed, horizon, z, labels, probs, onehot)
         return (None, out) if return_seed_outputs else out
 
     @torch.no_grad()
@@ -616,7 +662,7 @@ class IntentionModel(MotionModel):
         if unbatched:
             seed_full = seed_full.unsqueeze(0)
         seed = self.norm.normalize(seed_full.to(self.decoder.weight.dtype))
-        out = self.norm.unnormalize(self.closed_loop(seed, horizon, eps=eps))
+        out = self.norm.unnormalize(self.closed_loop(seed, horizon, action=action, eps=eps))
         return out[0] if unbatched else out
 
 

@@ -159,6 +159,13 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--init-weights", type=Path, metavar="FILE.safetensors",
                    help="a new run whose model (and clustering) starts from an exported intention file; fresh "
                         "discriminators and optimizers; the model size flags do not apply")
+    g.add_argument("--condition-on-actions", action="store_true",
+                   help="the model reads the action's one-hot (every H3.6M action; models.IntentionModel); with "
+                        "--init-weights of an unconditioned file its new input columns start at zero")
+    g.add_argument("--switch-prob", type=float, default=0.0, metavar="P",
+                   help="with --condition-on-actions and --long-weight: each window's action is switched to another "
+                        "(uniform) with probability P where the frames after the 4 s start; the word-realism term "
+                        "(--word-weight) then judges the long-horizon frames against the new action's words")
     g.add_argument("--d-warmup", type=int, default=0, metavar="N",
                    help="the first N iterations train only the discriminators (the model is not updated): fresh "
                         "discriminators catch up with a model loaded by --init-weights before their gradients reach it")
@@ -290,7 +297,8 @@ def validate(model: IntentionModel, validator: Validator) -> dict:
     try:
         n = validator.seed_norm.shape[0]
         z = torch.randn(n, model.noise_dims, generator=torch.Generator().manual_seed(VAL_NOISE_SEED))
-        pred = model.closed_loop(validator.seed_norm, LONG_HORIZON, eps=z).double().numpy()
+        action = validator.window_actions if model.actions else None
+        pred = model.closed_loop(validator.seed_norm, LONG_HORIZON, action=action, eps=z).double().numpy()
     finally:
         model.train(was)
     full = validator.stats.unnormalize(pred)
@@ -323,7 +331,7 @@ def build_config(args, dims_used) -> dict:
         label_hidden=args.label_hidden, intentions=args.intentions, clusters=args.clusters,
         lookahead=args.lookahead, intention_features=args.intention_features,
         seed_frames=h36m.SEED_FRAMES, horizon=h36m.HORIZON,
-    )
+    ) | ({"actions": list(h36m.ACTIONS)} if args.condition_on_actions else {})
 
 
 def train(args, argv: list[str]) -> None:
@@ -361,6 +369,9 @@ def train(args, argv: list[str]) -> None:
         if not isinstance(model, IntentionModel):
             raise SystemExit(f"error: {args.init_weights}: not an intention model ({model.config['architecture']})")
         model = model.float()
+        if args.condition_on_actions and not model.actions:
+            model = model.with_actions(list(h36m.ACTIONS))
+            log("action-conditioned: the new one-hot input columns start at zero")
         config = model.config
         log(f"initial weights (and clustering) from {args.init_weights}")
     else:
@@ -449,7 +460,23 @@ def train(args, argv: list[str]) -> None:
         seed, truth = frames[:, :seed_len], frames[:, seed_len:]
         burn = int(rng.integers(0, args.long_burn_in + 1)) if long_total else 0
         steps = future + (burn + args.long_frames if long_total else 0)
-        seed_labels, logits, probs = model.forecast_intentions(seed, steps + g - 2, labels=labels[:, :seed_len])
+        acts = torch.from_numpy(actions_np).to(device)
+        long_acts = acts
+        act_steps = None  # one-hot per forecast step [B, steps + γ - 2, A]; the pose step producing S+j reads row j
+        if model.actions:
+            n_act = len(model.actions)
+            if long_total and args.switch_prob > 0:
+                switch = torch.from_numpy(rng.random(args.batch) < args.switch_prob).to(device)
+                other = (acts + torch.from_numpy(rng.integers(1, n_act, args.batch)).to(device)) % n_act
+                long_acts = torch.where(switch, other, acts)
+            act_steps = F.one_hot(acts, n_act).to(frames.dtype)[:, None, :].repeat(1, steps + g - 2, 1)
+            act_steps[:, future:] = F.one_hot(long_acts, n_act).to(frames.dtype)[:, None, :]
+
+        def step_acts(a: int, b: int):
+            return None if act_steps is None else act_steps[:, a:b]
+
+        seed_labels, logits, probs = model.forecast_intentions(seed, steps + g - 2, labels=labels[:, :seed_len],
+                                                               action=act_steps)
         # --- forecaster: eq. 4 and eq. 5
         ce = F.cross_entropy(logits[:, :future].reshape(-1, model.intentions), labels[:, seed_len:].reshape(-1))
         real_l = windows_of(F.one_hot(labels[:, seed_len:], model.intentions).float(), args.label_window, 5)
@@ -463,7 +490,7 @@ def train(args, argv: list[str]) -> None:
         z = model.sample_noise(args.batch, seed)
         feats = model.intention_features_of(seed_labels, probs.detach(), steps, seed)
         state = model.initial_state(seed, z)
-        pred, state = model.rollout(seed[:, -1], state, z, feats[:, :future])
+        pred, state = model.rollout(seed[:, -1], state, z, feats[:, :future], step_acts(0, future))
         rec = rec_loss(pred, truth, groups, lam)
         k = args.pose_context
         fake_p = with_context(windows_of(torch.cat([seed[:, -1:], pred], 1), args.pose_window, 3), seed, k)
@@ -475,10 +502,11 @@ def train(args, argv: list[str]) -> None:
                 x = pred[:, -1]
                 hs = [h.detach() for h in state]
                 if burn:
-                    burned, hs = model.rollout(x, hs, z, feats[:, future : future + burn])
+                    burned, hs = model.rollout(x, hs, z, feats[:, future : future + burn],
+                                               step_acts(future, future + burn))
                     x = burned[:, -1]
                     drift_parts.append((burned, False))
-            more, _ = model.rollout(x, hs, z, feats[:, future + burn :])
+            more, _ = model.rollout(x, hs, z, feats[:, future + burn :], step_acts(future + burn, steps))
             long_fake = with_context(windows_of(torch.cat([x[:, None], more], 1), args.pose_window, 3), seed, k)
             drift_parts.append((more, True))
         fakes = fake_p if long_fake is None else tuple(
@@ -517,8 +545,7 @@ def train(args, argv: list[str]) -> None:
             lg = lg + args.smooth_weight * rough
             terms["rough"] = rough.item()
         if bank is not None:
-            acts = torch.from_numpy(actions_np).to(device)
-            word = sum(word_realism_loss(model, m, acts, bank) for m in moved)
+            word = sum(word_realism_loss(model, m, a, bank) for m, a in zip(moved, (acts, long_acts)))
             lg = lg + args.word_weight * word
             terms["word"] = word.item()
         if args.drift_weight > 0:

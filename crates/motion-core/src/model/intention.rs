@@ -30,6 +30,14 @@
 //! vectors per row holds the window. The forecaster does not read the poses, so this gives the
 //! same numbers as forecasting the whole horizon first (what `training/models.py` does).
 //! Every buffer is sized in [`Intention::new_state`]: a step allocates nothing.
+//!
+//! ## Action conditioning
+//! This project's addition (the paper's model is unconditioned): a config with `actions` appends
+//! the row's action one-hot `a` (`A` values) to the label encoder's input (pose ⊕ label one-hot ⊕
+//! `a`), the label decoder's (probabilities ⊕ `a`) and the first decoder layer's (`x̂ ⊕ z ⊕ f ⊕
+//! a`), as `training/models.py` does. [`Intention::set_action`] switches a row's one-hot: the
+//! next pose step reads the new action, and so does every intention frame not yet forecast (the
+//! forecaster runs `γ - 2` frames ahead of the poses).
 use super::config::ModelConfig;
 use super::vgru::NoiseSource;
 use super::weights::{WeightStore, WeightsError};
@@ -58,6 +66,8 @@ pub struct IntentionConfig {
     pub lookahead: usize,
     /// Convolution channels `Fe`.
     pub features: usize,
+    /// Action labels `A` (0: unconditioned, the paper's model).
+    pub actions: usize,
 }
 
 impl IntentionConfig {
@@ -74,12 +84,23 @@ impl IntentionConfig {
             clusters: config.clusters.unwrap_or(0),
             lookahead: config.lookahead.unwrap_or(0),
             features: config.intention_features.unwrap_or(0),
+            actions: config.actions.len(),
         }
     }
 
-    /// Width of the first decoder layer's input, `O + N + Fe`.
+    /// Width of the first decoder layer's input, `O + N + Fe + A`.
     pub fn rnn_input_dims(&self) -> usize {
-        self.outputs + self.noise_dims + self.features
+        self.outputs + self.noise_dims + self.features + self.actions
+    }
+
+    /// Width of the label encoder's input, `O + C + A`.
+    pub fn label_input_dims(&self) -> usize {
+        self.outputs + self.intentions + self.actions
+    }
+
+    /// Width of the label decoder's input, `C + A`.
+    pub fn label_decoder_dims(&self) -> usize {
+        self.intentions + self.actions
     }
 
     /// Units of the pose encoder, `H - N`.
@@ -119,12 +140,14 @@ pub struct IntentionState {
     z: Vec<f32>,
     /// Label of each row's latest seed frame.
     labels: Vec<usize>,
-    /// Label-encoder input per row, pose ⊕ one-hot `[capacity, O + C]`.
+    /// Each row's action (conditioned models).
+    actions: Vec<usize>,
+    /// Label-encoder input per row, pose ⊕ one-hot ⊕ action one-hot `[capacity, O + C + A]`.
     label_input: Vec<f32>,
     /// Label encoder, then decoder state `[capacity, L]`.
     label_h: Vec<f32>,
     label_scratch: GruScratch,
-    /// The label decoder's next input `[capacity, C]`.
+    /// The label decoder's next input, probabilities ⊕ action one-hot `[capacity, C + A]`.
     label_x: Vec<f32>,
     logits: Vec<f32>,
     /// Per row the probabilities of the last `γ` frames, frame `j` in slot `j % γ`:
@@ -132,10 +155,19 @@ pub struct IntentionState {
     ring: Vec<f32>,
     pose_h: Vec<f32>,
     pose_scratch: GruScratch,
-    /// First decoder layer's input per row, `x ⊕ z ⊕ features` `[capacity, O + N + Fe]`.
+    /// First decoder layer's input per row, `x ⊕ z ⊕ features ⊕ action one-hot`
+    /// `[capacity, O + N + Fe + A]`.
     input: Vec<f32>,
     hidden: Vec<Vec<f32>>,
     scratch: Vec<GruScratch>,
+}
+
+/// `out` (empty for unconditioned models) set to the one-hot of `index`.
+fn write_onehot(out: &mut [f32], index: usize) {
+    if !out.is_empty() {
+        out.fill(0.0);
+        out[index] = 1.0;
+    }
 }
 
 fn gru(
@@ -180,8 +212,13 @@ impl Intention {
                 }
             })
             .collect::<Result<Vec<_>, _>>()?;
-        let label_encoder = gru(store, "label_encoder", o + n, c.label_hidden)?;
-        let label_decoder = gru(store, "label_decoder", n, c.label_hidden)?;
+        let label_encoder = gru(store, "label_encoder", c.label_input_dims(), c.label_hidden)?;
+        let label_decoder = gru(
+            store,
+            "label_decoder",
+            c.label_decoder_dims(),
+            c.label_hidden,
+        )?;
         let label_out = Linear::load(
             store,
             "label_out",
@@ -278,17 +315,18 @@ impl Intention {
     /// State for up to `capacity` rows.
     pub fn new_state(&self, capacity: usize) -> IntentionState {
         let c = &self.config;
-        let (o, n, l) = (c.outputs, c.intentions, c.label_hidden);
+        let (n, l) = (c.intentions, c.label_hidden);
         IntentionState {
             capacity,
             seed_len: 0,
             forecast_last: 0,
             z: vec![0.0; capacity * c.noise_dims],
             labels: vec![0; capacity],
-            label_input: vec![0.0; capacity * (o + n)],
+            actions: vec![0; capacity],
+            label_input: vec![0.0; capacity * c.label_input_dims()],
             label_h: vec![0.0; capacity * l],
             label_scratch: GruScratch::new(l, capacity),
-            label_x: vec![0.0; capacity * n],
+            label_x: vec![0.0; capacity * c.label_decoder_dims()],
             logits: vec![0.0; capacity * n],
             ring: vec![0.0; capacity * c.lookahead * n],
             pose_h: vec![0.0; capacity * c.pose_hidden()],
@@ -309,10 +347,27 @@ impl Intention {
 
     /// Starts `noise.len()` rows on a seed of `seed_len` frames: encoder states zeroed, each
     /// row's `z` drawn once from its source (a seeded `N(0, s² I)` generator, `s` the file's
-    /// `noise_scale`, or a fixed vector used as given).
-    pub fn begin(&self, state: &mut IntentionState, mut noise: Vec<NoiseSource>, seed_len: usize) {
+    /// `noise_scale`, or a fixed vector used as given), each row's action from `actions` (read
+    /// by conditioned models only; indices below `A`).
+    pub fn begin(
+        &self,
+        state: &mut IntentionState,
+        mut noise: Vec<NoiseSource>,
+        actions: &[usize],
+        seed_len: usize,
+    ) {
         let batch = noise.len();
         assert!(batch <= state.capacity, "more rows than the state holds");
+        if self.config.actions > 0 {
+            assert!(actions.len() >= batch, "an action per row");
+            state.actions[..batch].copy_from_slice(&actions[..batch]);
+            assert!(
+                state.actions[..batch]
+                    .iter()
+                    .all(|&a| a < self.config.actions),
+                "action index out of range"
+            );
+        }
         let (nd, scale) = (self.config.noise_dims, self.config.noise_scale);
         for (source, z) in noise.iter_mut().zip(state.z.chunks_exact_mut(nd)) {
             source.fill(z);
@@ -347,10 +402,21 @@ impl Intention {
         Some(self.pose_step(state, x, batch, t + 1))
     }
 
+    /// Whether the model reads an action (its config has `actions`).
+    pub fn is_conditioned(&self) -> bool {
+        self.config.actions > 0
+    }
+
+    /// Switches `row`'s action to `action` (`< A`) from the next step on (module docs).
+    pub fn set_action(&self, state: &mut IntentionState, row: usize, action: usize) {
+        assert!(action < self.config.actions, "action index out of range");
+        state.actions[row] = action;
+    }
+
     /// One seed frame through the labelling and both encoders.
     fn encode(&self, state: &mut IntentionState, x: &[f32], batch: usize) {
         let (o, n) = (self.config.outputs, self.config.intentions);
-        let width = o + n;
+        let width = self.config.label_input_dims();
         for (b, row) in state.label_input[..batch * width]
             .chunks_exact_mut(width)
             .enumerate()
@@ -358,10 +424,12 @@ impl Intention {
             let pose = &x[b * o..(b + 1) * o];
             let label = self.label(pose);
             state.labels[b] = label;
-            let (p, onehot) = row.split_at_mut(o);
+            let (p, rest) = row.split_at_mut(o);
+            let (onehot, action) = rest.split_at_mut(n);
             p.copy_from_slice(pose);
             onehot.fill(0.0);
             onehot[label] = 1.0;
+            write_onehot(action, state.actions[b]);
         }
         self.label_encoder.step(
             &state.label_input[..batch * width],
@@ -393,9 +461,10 @@ impl Intention {
         }
         let last = state.seed_len - 1;
         state.ring[..batch * g * n].fill(0.0);
+        let width = c.label_decoder_dims();
         for b in 0..batch {
             let label = state.labels[b];
-            let x = &mut state.label_x[b * n..(b + 1) * n];
+            let x = &mut state.label_x[b * width..b * width + n];
             x.fill(0.0);
             x[label] = 1.0;
             state.ring[(b * g + last % g) * n + label] = 1.0;
@@ -410,8 +479,15 @@ impl Intention {
     /// next input.
     fn forecast(&self, state: &mut IntentionState, batch: usize) {
         let (n, g) = (self.config.intentions, self.config.lookahead);
+        let width = self.config.label_decoder_dims();
+        for b in 0..batch {
+            write_onehot(
+                &mut state.label_x[b * width + n..(b + 1) * width],
+                state.actions[b],
+            );
+        }
         self.label_decoder.step(
-            &state.label_x[..batch * n],
+            &state.label_x[..batch * width],
             &mut state.label_h,
             batch,
             &mut state.label_scratch,
@@ -426,7 +502,7 @@ impl Intention {
         for b in 0..batch {
             let logits = &state.logits[b * n..(b + 1) * n];
             let max = logits.iter().copied().fold(f32::NEG_INFINITY, f32::max);
-            let x = &mut state.label_x[b * n..(b + 1) * n];
+            let x = &mut state.label_x[b * width..b * width + n];
             let mut sum = 0.0f32;
             for (p, &l) in x.iter_mut().zip(logits) {
                 *p = (l - max).exp();
@@ -466,7 +542,9 @@ impl Intention {
             .enumerate()
         {
             let (pose, rest) = row.split_at_mut(o);
-            let (z, features) = rest.split_at_mut(nd);
+            let (z, rest) = rest.split_at_mut(nd);
+            let (features, action) = rest.split_at_mut(fe);
+            write_onehot(action, state.actions[b]);
             pose.copy_from_slice(&x[b * o..(b + 1) * o]);
             z.copy_from_slice(&state.z[b * nd..(b + 1) * nd]);
             let ring = &state.ring[b * g * n..(b + 1) * g * n];
@@ -480,7 +558,6 @@ impl Intention {
                 }
                 *out = acc;
             }
-            debug_assert_eq!(features.len(), fe);
         }
         let h = c.hidden;
         for (k, cell) in self.layers.iter().enumerate() {

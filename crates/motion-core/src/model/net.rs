@@ -228,6 +228,9 @@ impl Net for Intention {
     fn teacher_forced(&self) -> bool {
         false
     }
+    fn needs_action(&self) -> bool {
+        self.is_conditioned()
+    }
     fn new_state(&self, rows: usize, _config: &ModelConfig) -> Box<dyn NetState> {
         Box::new(self.new_state(rows))
     }
@@ -236,8 +239,25 @@ impl Net for Intention {
             self,
             own::<IntentionState>(state),
             begin.noise,
+            begin.actions,
             begin.seed_len,
         );
+    }
+    /// Switches at once (`crossfade` is not used: the model was trained on hard switches).
+    fn set_action(
+        &self,
+        state: &mut dyn NetState,
+        _rows: usize,
+        row: usize,
+        action: usize,
+        _crossfade: usize,
+        _body_step: usize,
+    ) -> Result<(), GenerateError> {
+        if !self.is_conditioned() {
+            return Err(GenerateError::NotConditioned);
+        }
+        Intention::set_action(self, own::<IntentionState>(state), row, action);
+        Ok(())
     }
     fn step<'s>(
         &self,
