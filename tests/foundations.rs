@@ -384,3 +384,76 @@ fn actions_are_the_fifteen_of_the_protocol() {
     sorted.sort_unstable();
     assert_eq!(sorted, H36M_ACTIONS, "h36m.md lists them alphabetically");
 }
+
+#[test]
+fn validation_windows_are_training_datas() {
+    // `training/data.py`: validation_windows(None, ACTIONS, 8, stride=50), (subaction, start) of
+    // three actions, in pick order.
+    let expected: [(&str, [(u8, usize); 8]); 3] = [
+        (
+            "greeting",
+            [
+                (1, 552),
+                (2, 532),
+                (2, 116),
+                (2, 682),
+                (2, 66),
+                (2, 482),
+                (2, 582),
+                (2, 732),
+            ],
+        ),
+        (
+            "posing",
+            [
+                (1, 602),
+                (2, 674),
+                (1, 552),
+                (2, 574),
+                (1, 652),
+                (2, 724),
+                (1, 213),
+                (2, 524),
+            ],
+        ),
+        (
+            "walking",
+            [
+                (1, 810),
+                (2, 682),
+                (1, 401),
+                (2, 582),
+                (1, 910),
+                (2, 782),
+                (1, 351),
+                (2, 532),
+            ],
+        ),
+    ];
+    let dataset = data_dir().join("h3.6m/dataset");
+    if !dataset.join("S5").exists() {
+        eprintln!(
+            "SKIPPED: validation_windows_are_training_datas: no S5 data (set MOTION_DATA_DIR)"
+        );
+        return;
+    }
+    for (action, starts) in expected {
+        let windows = motion::core::protocol::load_action_windows_in(
+            &dataset,
+            action,
+            100,
+            motion::core::protocol::WindowSet::Validation,
+            8,
+        )
+        .unwrap();
+        let got: Vec<(u8, usize)> = windows
+            .iter()
+            .map(|w| (w.window.subaction, w.window.seed_start))
+            .collect();
+        assert_eq!(got, starts, "{action}");
+        for w in &windows {
+            assert_eq!(w.seed.nrows(), 50);
+            assert_eq!(w.ground_truth.nrows(), 100);
+        }
+    }
+}

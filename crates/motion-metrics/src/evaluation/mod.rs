@@ -39,8 +39,8 @@ use motion_core::model::{
     ActionClassifier, BatchGenerator, GenerateError, MotionModel, Network, Noise,
 };
 use motion_core::protocol::{
-    load_action_windows_covered, load_subject_sequences, ACTIONS, LONG_TERM_HORIZON, SEED_FRAMES,
-    SUBJECTS, TEST_SUBJECT,
+    load_action_windows_in, load_subject_sequences, WindowSet, ACTIONS, LONG_TERM_HORIZON,
+    SEED_FRAMES, SUBJECTS, TEST_SUBJECT,
 };
 use motion_core::skeleton::{H36M_FRAME_DIMS, H36M_PROTOCOL_FPS};
 use motion_core::FormatError;
@@ -89,6 +89,9 @@ pub struct EvalOptions {
     pub any_action: bool,
     /// Write the predictions here (`actions x 8 x K x horizon x 99`, float64 `.npy`).
     pub save_predictions: Option<PathBuf>,
+    /// The protocol's test windows (report these) or validation windows disjoint from them
+    /// (choose checkpoints and settings on these; `motion_core::protocol::validation`).
+    pub windows: WindowSet,
 }
 
 impl EvalOptions {
@@ -104,6 +107,7 @@ impl EvalOptions {
             classifier: None,
             any_action: false,
             save_predictions: None,
+            windows: WindowSet::Test,
         }
     }
 }
@@ -262,11 +266,18 @@ pub fn evaluate(
         let action = planned.action;
         let stage = |stage| Progress::Stage { action, stage };
         progress(stage("loading"));
-        let windows = load_action_windows_covered(dataset, action, horizon)?;
+        let windows = load_action_windows_in(
+            dataset,
+            action,
+            horizon,
+            options.windows,
+            WINDOWS_PER_ACTION,
+        )?;
         if windows.len() != WINDOWS_PER_ACTION {
             return Err(EvalError::Invalid(format!(
-                "{action}: {} test windows, the protocol has {WINDOWS_PER_ACTION}",
-                windows.len()
+                "{action}: {} {} windows, the evaluation needs {WINDOWS_PER_ACTION}",
+                windows.len(),
+                options.windows.name()
             )));
         }
         let references = load_subject_sequences(dataset, TEST_SUBJECT, action)?;
@@ -645,6 +656,11 @@ fn action_result(
         action: planned.action,
         label: planned.label.clone(),
         windows: truth.windows().len(),
+        window_starts: truth
+            .windows()
+            .iter()
+            .map(|w| (w.window.subaction, w.window.seed_start))
+            .collect(),
         samples,
         horizon,
         ground_truth_coverage: coverage_report(truth.coverage()),
@@ -702,6 +718,7 @@ fn full_report(
             fps: H36M_PROTOCOL_FPS,
             seed_frames: SEED_FRAMES,
             horizon: options.horizon,
+            windows: options.windows.name(),
             windows_per_action: WINDOWS_PER_ACTION,
             samples: options.samples,
             rng_seed: options.rng_seed,

@@ -68,7 +68,9 @@ pub struct Protocol {
     pub seed_frames: usize,
     /// Predicted frames per window.
     pub horizon: usize,
-    /// Test windows per action.
+    /// Which windows: `test` (the protocol's) or `validation` (disjoint from them, for choosing).
+    pub windows: &'static str,
+    /// Windows per action.
     pub windows_per_action: usize,
     /// Samples per window.
     pub samples: usize,
@@ -104,8 +106,10 @@ pub struct ActionResult {
     pub action: &'static str,
     /// The conditioning label (`null` for unconditioned models).
     pub label: Option<String>,
-    /// Test windows.
+    /// Windows evaluated.
     pub windows: usize,
+    /// Where each window's seed starts: `[subaction, first seed frame at 25 Hz]` of the S5 take.
+    pub window_starts: Vec<(u8, usize)>,
     /// Samples per window.
     pub samples: usize,
     /// Predicted frames per window.

@@ -9,7 +9,7 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 
-use motion_core::protocol::LONG_TERM_HORIZON;
+use motion_core::protocol::{WindowSet, LONG_TERM_HORIZON};
 use motion_metrics::evaluation::{
     check_request, evaluate, resolve_dataset, EvalError, EvalOptions, Progress,
 };
@@ -101,12 +101,26 @@ pub struct Args {
     /// Evaluate a single-action model on other actions too.
     #[arg(long)]
     pub any_action: bool,
+    /// Which S5 windows: the protocol's 8 test windows per action (report these), or 8
+    /// validation windows per action that overlap no test window (choose checkpoints and settings
+    /// on these, the same windows as training/data.py's validation set).
+    #[arg(long, value_enum, default_value = "test")]
+    pub windows: Windows,
     #[command(flatten)]
     pub reporting: crate::commands::output::Output,
     /// Also draw metric vs horizon per action (Euler error, NPSS windows, NDMS bins; the
     /// zero-velocity baseline dashed) to FILE.svg or FILE.png.
     #[arg(long, value_name = "FILE.svg|FILE.png")]
     pub plot: Option<PathBuf>,
+}
+
+/// `--windows`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Windows {
+    /// The protocol's test windows.
+    Test,
+    /// Windows disjoint from the test windows.
+    Validation,
 }
 
 /// Runs the command.
@@ -141,6 +155,10 @@ pub fn run(args: Args) -> Result<()> {
         classifier,
         any_action: args.any_action,
         save_predictions: args.save_predictions.clone(),
+        windows: match args.windows {
+            Windows::Test => WindowSet::Test,
+            Windows::Validation => WindowSet::Validation,
+        },
     };
     let mut bar = None;
     let report = evaluate(&model, &options, &mut |p| match p {

@@ -16,6 +16,9 @@ use crate::rotation::expmap_frame_to_euler_protocol;
 
 pub use crate::skeleton::H36M_ACTIONS as ACTIONS;
 
+pub mod validation;
+pub use validation::WindowSet;
+
 /// Frames the model observes before it predicts (2 s at 25 Hz).
 pub const SEED_FRAMES: usize = 50;
 /// Frames predicted in the long-term protocol (4 s at 25 Hz).
@@ -264,15 +267,65 @@ pub fn load_action_windows_covered(
     load_windows(dataset, action, horizon, true)
 }
 
+/// [`load_action_windows_covered`] on another [`WindowSet`]: the test windows, or `per_action`
+/// validation windows ([`validation::validation_windows`]; fewer where the takes do not hold
+/// that many, none for an action that is not in [`ACTIONS`]).
+pub fn load_action_windows_in(
+    dataset: &Path,
+    action: &str,
+    horizon: usize,
+    set: WindowSet,
+    per_action: usize,
+) -> Result<Vec<WindowData>, FormatError> {
+    match set {
+        WindowSet::Test => load_windows(dataset, action, horizon, true),
+        WindowSet::Validation => {
+            let Some(&action) = ACTIONS.iter().find(|&&a| a == action) else {
+                return Ok(Vec::new());
+            };
+            let mut loaded = Vec::new();
+            for sub in [1u8, 2] {
+                let path = sequence_file(dataset, TEST_SUBJECT, action, sub);
+                if path.is_file() {
+                    let frames = read_take(&path)?;
+                    loaded.push((sub, path, frames));
+                }
+            }
+            let takes: Vec<(u8, usize)> = loaded.iter().map(|(s, _, f)| (*s, f.nrows())).collect();
+            let windows = validation::validation_windows(action, &takes, per_action);
+            cut_windows(&windows, loaded, dataset, action, horizon, true)
+        }
+    }
+}
+
 fn load_windows(
     dataset: &Path,
     action: &str,
     horizon: usize,
     cut_at_file_end: bool,
 ) -> Result<Vec<WindowData>, FormatError> {
-    let mut loaded: Vec<(u8, PathBuf, Array2<f64>)> = Vec::new();
+    let windows: Vec<TestWindow> = test_windows(action).copied().collect();
+    cut_windows(
+        &windows,
+        Vec::new(),
+        dataset,
+        action,
+        horizon,
+        cut_at_file_end,
+    )
+}
+
+/// Cuts `windows` out of their takes (those in `loaded` are used as read, the others read once).
+fn cut_windows(
+    windows: &[TestWindow],
+    mut loaded: Vec<(u8, PathBuf, Array2<f64>)>,
+    dataset: &Path,
+    action: &str,
+    horizon: usize,
+    cut_at_file_end: bool,
+) -> Result<Vec<WindowData>, FormatError> {
     let mut out = Vec::new();
-    for window in test_windows(action) {
+    for window in windows {
         if !loaded.iter().any(|(sub, _, _)| *sub == window.subaction) {
             let path = sequence_file(dataset, TEST_SUBJECT, action, window.subaction);
             let frames = read_take(&path)?;

@@ -1,0 +1,126 @@
+"""The rule that picks the game default (the model `Character`, `predict` and the engines load when given none)
+from `motion-cli eval --windows validation --horizon 1500 --json` reports, and the table of what each candidate does.
+
+    motion-cli eval --model FILE --windows validation --horizon 1500 --no-classifier --json > FILE.val.json
+    python -m training.select_game FILE.val.json ...
+
+The rule (written before any candidate of the action-conditioned intention runs was scored):
+
+1. Only action-conditioned files are eligible (the engines switch actions with `set_action`).
+2. Per action, *alive* means every grounded speed-ratio window to 60 s (0-2, 2-4, 4-8, 8-12, 12-20, ... 50-60 s) is
+   at least 0.5 (the body-frame joint speed against the action's real speed).
+3. The most actions alive wins; ties go to the highest mean over actions of the smallest fraction of frames whose
+   lowest foot is within 0.1 m of the floor (grounded, over the windows).
+
+Validation windows only (8 per action, disjoint from every test window); the test windows are scored once, for the
+chosen file, afterwards. Besides the rule, the table shows the issue's other targets per action (grounded): lean p95
+against the real p95, hip height within the real p5-p95, on-floor fraction >= 0.95, skating within the real S5
+continuation's + 0.05. Standard library only.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+ALIVE = 0.5
+ON_FLOOR = 0.95
+SKATING_MARGIN = 0.05
+
+
+def action_rows(report: dict) -> list[dict]:
+    """Per action: the numbers of the table and of the rule."""
+    rows = []
+    for a in report["actions"]:
+        raw, grounded = a["model"], a["model_grounded"]
+        speed_raw = min(w["ratio"] for w in raw["speed_ratio"]["windows"])
+        speed = min(w["ratio"] for w in grounded["speed_ratio"]["windows"])
+        ground = grounded["ground"]
+        real = ground["real"]
+        wins = ground["windows"]
+        rows.append({
+            "action": a["action"],
+            "speed_raw": speed_raw,
+            "speed": speed,
+            "alive": speed >= ALIVE,
+            "on_floor": min(w["on_floor_fraction"] for w in wins),
+            "penetrating": max(w["penetration_fraction"] for w in wins),
+            "skating": max(w["skating_fraction"] for w in wins),
+            "real_skating": real["s5_skating_fraction"],
+            "lean": max(w["lean_p95_deg"] for w in wins),
+            "real_lean": real["lean_p95_deg"],
+            "hip_low": min(w["hip_height_p5_mm"] for w in wins),
+            "hip_high": max(w["hip_height_p95_mm"] for w in wins),
+            "real_hip": (real["hip_height_p5_mm"], real["hip_height_p95_mm"]),
+        })
+    return rows
+
+
+def verdict(report: dict) -> dict:
+    rows = action_rows(report)
+    conditioned = bool(report["model"]["actions"])
+    return {
+        "source": report["model"]["source"],
+        "windows": report["protocol"]["windows"],
+        "conditioned": conditioned,
+        "alive": sum(r["alive"] for r in rows),
+        "actions": len(rows),
+        "floor": sum(r["on_floor"] for r in rows) / max(1, len(rows)),
+        "rows": rows,
+    }
+
+
+def key(v: dict) -> tuple:
+    """Sort key of the rule (smaller is better)."""
+    return (not v["conditioned"], -v["alive"], -v["floor"])
+
+
+def table(v: dict) -> str:
+    out = [f"`{v['source']}` ({v['windows']} windows): alive on {v['alive']} of {v['actions']}, mean smallest on-floor "
+           f"fraction {v['floor']:.3f}{'' if v['conditioned'] else ' (not action-conditioned: not eligible)'}",
+           "",
+           "| action | speed raw / grounded (min over windows) | on floor | penetrating | skating (real S5) | "
+           "lean p95 (real) | hip p5-p95 mm (real) |",
+           "|---|---|---|---|---|---|---|"]
+    for r in v["rows"]:
+        out.append(
+            f"| {r['action']} | {r['speed_raw']:.2f} / {r['speed']:.2f}{'' if r['alive'] else ' (frozen)'} | "
+            f"{r['on_floor']:.2f} | {r['penetrating']:.2f} | {r['skating']:.2f} ({r['real_skating']:.2f}) | "
+            f"{r['lean']:.1f} ({r['real_lean']:.1f}) | {r['hip_low']:.0f}-{r['hip_high']:.0f} "
+            f"({r['real_hip'][0]:.0f}-{r['real_hip'][1]:.0f}) |")
+    return "\n".join(out)
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(prog="python -m training.select_game", description=__doc__,
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("reports", nargs="+", type=Path, help="motion-cli eval --json outputs, one per candidate")
+    p.add_argument("--allow-test", action="store_true", help="accept test-window reports (for the final table only)")
+    args = p.parse_args(argv)
+    verdicts = []
+    for path in args.reports:
+        try:
+            report = json.loads(path.read_text())
+            v = verdict(report)
+        except (OSError, ValueError, KeyError, TypeError) as e:
+            print(f"error: {path}: not a motion-cli eval --json report with grounded measures ({e})", file=sys.stderr)
+            return 2
+        if v["windows"] != "validation" and not args.allow_test:
+            print(f"error: {path}: scored on {v['windows']} windows; the rule reads validation windows only "
+                  "(--allow-test to print a table)", file=sys.stderr)
+            return 2
+        verdicts.append(v)
+    for v in verdicts:
+        print(table(v))
+        print()
+    eligible = [v for v in verdicts if v["conditioned"]]
+    if eligible and not args.allow_test:
+        best = min(eligible, key=key)
+        print(f"chosen: {best['source']} (alive on {best['alive']} of {best['actions']}, floor {best['floor']:.3f})")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
