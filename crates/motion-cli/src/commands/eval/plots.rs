@@ -68,6 +68,7 @@ mod tests {
             action: "walking",
             label: None,
             windows: 8,
+            window_starts: vec![(1, 16); 8],
             samples: 1,
             horizon: 2,
             ground_truth_coverage: CoverageReport {
