@@ -6,8 +6,8 @@
 //!   is read once for all batch rows, in its stored dtype (f32, f16 or bf16, widened in
 //!   registers). A batch-1 step is bound by how fast weights stream from cache, so reading each
 //!   once, and half-size when the file is half-size, is what matters. The kernels of the
-//!   selected [`super::simd::SimdPath`]: `rows_avx512` (AVX-512), `rows_avx2` (AVX2 + FMA +
-//!   F16C), `rows_neon` (aarch64), or the portable loop. No heap memory. With
+//!   selected [`super::simd::SimdPath`]: `kernels::avx512` (AVX-512), `kernels::avx2` (AVX2 + FMA +
+//!   F16C), `kernels::neon` (aarch64), or the portable loop. No heap memory. With
 //!   AVX-512 or AVX2 (portable: at batch 1) and a matrix of at least 256 KiB, a product called from a rayon pool thread splits
 //!   its output rows over the pool (`rayon::join`, no allocation): one core streams weights from
 //!   L3 at about 25 GB/s on the 2-core Intel Xeon we measure on, two cores together at about
@@ -131,8 +131,8 @@ impl MatMul {
                     return;
                 }
                 let product = match path {
-                    SimdPath::Avx512 => super::rows_avx512::product,
-                    _ => super::rows_avx2::product,
+                    SimdPath::Avx512 => super::kernels::avx512::product,
+                    _ => super::kernels::avx2::product,
                 };
                 // SAFETY: the path is selected only on a CPU that has its features (AVX-512 F;
                 // or AVX2, FMA and F16C), `inputs > 0` and `check` asserted the slice lengths.
@@ -141,7 +141,7 @@ impl MatMul {
             #[cfg(target_arch = "aarch64")]
             SimdPath::Neon => {
                 // SAFETY: as above (NEON).
-                unsafe { super::rows_neon::product(self, x, w.rows(), y, accumulate) };
+                unsafe { super::kernels::neon::product(self, x, w.rows(), y, accumulate) };
             }
             _ => {
                 // Batch 1 splits like the AVX kernels above (its output ranges are disjoint
@@ -154,7 +154,7 @@ impl MatMul {
                 if parts > 1 {
                     self.portable_split(x, w, &mut y[..self.outputs], accumulate, parts);
                 } else {
-                    super::rows_portable::product(self, x, w, y, accumulate);
+                    super::kernels::portable::product(self, x, w, y, accumulate);
                 }
             }
         }
@@ -180,7 +180,7 @@ impl MatMul {
             parts: usize,
         ) {
             if parts <= 1 {
-                super::rows_portable::product_outputs(mm, x, w, y, accumulate, outputs);
+                super::kernels::portable::product_outputs(mm, x, w, y, accumulate, outputs);
                 return;
             }
             let (left, at) = split_point(&outputs, parts);
@@ -273,8 +273,8 @@ impl MatMul {
                 // element.
                 unsafe {
                     let product_outputs = match path {
-                        SimdPath::Avx512 => super::rows_avx512::product_outputs,
-                        _ => super::rows_avx2::product_outputs,
+                        SimdPath::Avx512 => super::kernels::avx512::product_outputs,
+                        _ => super::kernels::avx2::product_outputs,
                     };
                     product_outputs(mm, x.as_ptr(), w.rows(), y.0, accumulate, outputs)
                 };
@@ -536,7 +536,7 @@ mod tests {
     fn portable_f16_widening_is_exact_for_every_bit_pattern() {
         for h in 0..=u16::MAX {
             let want = half::f16::from_bits(h).to_f32();
-            let got = super::super::rows_portable::f16_to_f32(h);
+            let got = super::super::kernels::portable::f16_to_f32(h);
             if want.is_nan() {
                 assert!(got.is_nan(), "{h:#06x}");
                 assert_eq!(got.to_bits() & 0x8000_0000, want.to_bits() & 0x8000_0000);

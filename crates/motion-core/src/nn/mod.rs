@@ -10,22 +10,15 @@ pub mod body_gru;
 pub mod gates;
 pub mod gemm;
 pub mod gru;
+mod kernels;
 mod layout;
 pub mod linear;
 pub mod lstm;
 pub mod mlp;
 pub mod packed;
 pub mod parallel;
-#[cfg(target_arch = "x86_64")]
-mod rows_avx2;
-#[cfg(target_arch = "x86_64")]
-mod rows_avx512;
-#[cfg(target_arch = "aarch64")]
-mod rows_neon;
-mod rows_portable;
 pub mod sgemm_panels;
 pub mod simd;
-mod vec128;
 
 pub use body_gru::{BodyGruCell, BodyGruConfig};
 pub use gru::{GruCell, GruConfig, GruConvention, GruScratch};

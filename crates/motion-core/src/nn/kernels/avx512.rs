@@ -1,4 +1,4 @@
-//! AVX-512 row kernels for `Y = X Wᵀ` at small batches (see [`super::gemm::row_kernel_max_batch`]),
+//! AVX-512 row kernels for `Y = X Wᵀ` at small batches (see [`crate::nn::gemm::row_kernel_max_batch`]),
 //! over weight rows stored as f32, f16 or bf16 (widened to f32 in registers: `vcvtph2ps` for f16,
 //! a 16-bit shift for bf16, both exact).
 //!
@@ -8,8 +8,8 @@
 //! product whatever the batch (the inputs, at most 16 rows, stay in L1/L2). Ragged input widths
 //! use masked loads, so no element outside a row is read (prefetch hints may name lines past
 //! the matrix; they never fault).
-use super::layout::MatMul;
-use super::packed::Rows;
+use crate::nn::layout::MatMul;
+use crate::nn::packed::Rows;
 use std::arch::x86_64::*;
 
 /// A stored weight type and how 16 of them become one f32 vector.
@@ -70,7 +70,7 @@ impl Elem for Bf16 {
 /// `Y = X Wᵀ` (or `Y += X Wᵀ`) for the layout `mm` over `rows` `[mm.outputs, mm.inputs]`.
 ///
 /// # Safety
-/// The CPU must run [`super::simd::SimdPath::Avx512`], `mm.inputs > 0`, and the slices must be long enough for the
+/// The CPU must run [`crate::nn::simd::SimdPath::Avx512`], `mm.inputs > 0`, and the slices must be long enough for the
 /// layout (as `MatMul::run` asserts).
 #[target_feature(enable = "avx512f,avx512bw,avx512vl,f16c")]
 pub(crate) unsafe fn product(mm: &MatMul, x: &[f32], rows: &Rows, y: &mut [f32], accumulate: bool) {

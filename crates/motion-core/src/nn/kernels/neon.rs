@@ -1,5 +1,5 @@
 //! aarch64 NEON row kernels for `Y = X Wᵀ` at small batches: the 128-bit counterpart of
-//! [`super::rows_avx2`] (same tiling: `RW` weight rows x `RB` batch rows of 4-lane accumulators,
+//! [`super::avx2`] (same tiling: `RW` weight rows x `RB` batch rows of 4-lane accumulators,
 //! every weight read once per product whatever the batch).
 //!
 //! Weight rows stay in their stored dtype and are widened in registers: `fcvtl` for f16 (through
@@ -7,8 +7,8 @@
 //! are exact. A row's last `inputs % 4` elements are read as the row's last 4 with the lanes
 //! before them cleared (rows shorter than 4 are copied into a zeroed buffer), so no element
 //! outside a row is read.
-use super::layout::MatMul;
-use super::packed::Rows;
+use crate::nn::layout::MatMul;
+use crate::nn::packed::Rows;
 use std::arch::aarch64::*;
 use std::arch::asm;
 
@@ -82,7 +82,7 @@ const L: usize = 4;
 unsafe fn drive<E: Elem>(mm: &MatMul, x: *const f32, w: *const E::T, y: *mut f32, acc: bool) {
     let (n, k, batch) = (mm.outputs, mm.inputs, mm.batch);
     let (xs, ys) = (mm.x_stride, mm.y_stride);
-    // SAFETY: every tile stays inside the layout (see rows_avx2::drive).
+    // SAFETY: every tile stays inside the layout (see avx2::drive).
     unsafe {
         let mut o = 0;
         while o + RW <= n {
@@ -162,7 +162,7 @@ unsafe fn tile<E: Elem, const R: usize, const B: usize>(
         }
         if i < k && full > 0 {
             // The row's last 4 elements (all inside the row) with the lanes before `i` cleared,
-            // as in rows_avx2: no copy per row and tile.
+            // as in avx2: no copy per row and tile.
             let lanes: [u32; L] = [0, 1, 2, 3];
             let keep = vcgtq_u32(
                 vld1q_u32(lanes.as_ptr()),

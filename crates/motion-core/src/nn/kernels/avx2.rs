@@ -1,5 +1,5 @@
 //! AVX2 + FMA + F16C row kernels for `Y = X Wᵀ` at small batches: the 256-bit counterpart of
-//! [`super::rows_avx512`], for the CPUs without AVX-512 (most gaming PCs).
+//! [`super::avx512`], for the CPUs without AVX-512 (most gaming PCs).
 //!
 //! Weight rows stay in their stored dtype and are widened in registers: `vcvtph2ps` for f16, a
 //! 16-bit shift for bf16 (both exact). A tile holds `R` weight rows against `B` batch rows in
@@ -18,8 +18,8 @@
 //! read. Every (batch row, output) gets the same arithmetic
 //! in any tile (one accumulator per pair, the same lane-sum tree), so a character's numbers do not
 //! depend on the batch it runs in.
-use super::layout::MatMul;
-use super::packed::Rows;
+use crate::nn::layout::MatMul;
+use crate::nn::packed::Rows;
 use std::arch::x86_64::*;
 
 /// A stored weight type and how 8 of them become one f32 vector.
@@ -63,7 +63,7 @@ impl Elem for Bf16 {
 /// `Y = X Wᵀ` (or `Y += X Wᵀ`) for the layout `mm` over `rows` `[mm.outputs, mm.inputs]`.
 ///
 /// # Safety
-/// The CPU must run [`super::simd::SimdPath::Avx2`] (AVX2, FMA, F16C), `mm.inputs > 0`, and the
+/// The CPU must run [`crate::nn::simd::SimdPath::Avx2`] (AVX2, FMA, F16C), `mm.inputs > 0`, and the
 /// slices must be long enough for the layout (as `MatMul::run` asserts).
 #[target_feature(enable = "avx2,fma,f16c")]
 pub(crate) unsafe fn product(mm: &MatMul, x: &[f32], rows: &Rows, y: &mut [f32], accumulate: bool) {
@@ -237,7 +237,7 @@ unsafe fn tile<E: Elem, const R: usize, const B: usize, const PREFETCH: bool>(
                 *v = E::load(w.add(r * k + i));
             }
             if PREFETCH && R > 1 && i % 32 == 0 {
-                // Fetch the next tile's rows one tile ahead (see rows_avx512), one prefetch per
+                // Fetch the next tile's rows one tile ahead (see avx512), one prefetch per
                 // row and 32 inputs (a cache line of f16 weights).
                 for r in 0..R {
                     _mm_prefetch::<_MM_HINT_T0>(w.wrapping_add((R + r) * k + i).cast());

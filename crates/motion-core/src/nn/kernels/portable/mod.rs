@@ -15,11 +15,13 @@
 //!
 //! 16-bit rows are widened [`WIDEN_ROWS`] at a time into a stack buffer (a branch-free exact
 //! conversion the compiler vectorizes) and tiled from there; without AVX-512 a 16-bit matrix also
-//! holds an f32 copy of its rows for the large-batch GEMM (see [`super::packed`]), which these
+//! holds an f32 copy of its rows for the large-batch GEMM (see [`crate::nn::packed`]), which these
 //! kernels then read directly.
-use super::layout::MatMul;
-use super::packed::{PackedMatrix, Rows};
-use super::vec128::{prefetch, F4};
+use crate::nn::layout::MatMul;
+use crate::nn::packed::{PackedMatrix, Rows};
+use vec128::{prefetch, F4};
+
+pub(crate) mod vec128;
 
 /// f32 lanes per accumulator: one 128-bit vector.
 const PL: usize = 4;
