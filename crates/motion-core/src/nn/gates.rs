@@ -85,13 +85,14 @@ pub fn reset_times_hidden(
     hidden: usize,
 ) {
     let ops = Operands::new(Update::ResetTimesHidden, gi, gh, h, batch, hidden);
-    run(ops, rh, batch);
+    run(super::simd::active(), ops, rh, batch);
 }
 
 /// Paper convention, second half: `h[b] = (1 - z) ⊙ tanh(gi_n + gh_n) + z ⊙ h[b]`,
 /// `z = σ(gi_z + gh_z)` (here `gh_n` already holds `U_n (r ⊙ h) + b_hn`).
 pub fn paper_state_update(gi: &[f32], gh: &[f32], h: &mut [f32], batch: usize, hidden: usize) {
     run(
+        super::simd::active(),
         Operands::new(Update::PaperState, gi, gh, &[], batch, hidden),
         h,
         batch,
@@ -101,10 +102,36 @@ pub fn paper_state_update(gi: &[f32], gh: &[f32], h: &mut [f32], batch: usize, h
 /// PyTorch convention: `h[b] = (1 - z) ⊙ tanh(gi_n + r ⊙ gh_n) + z ⊙ h[b]`.
 pub fn pytorch_state_update(gi: &[f32], gh: &[f32], h: &mut [f32], batch: usize, hidden: usize) {
     run(
+        super::simd::active(),
         Operands::new(Update::PyTorchState, gi, gh, &[], batch, hidden),
         h,
         batch,
     );
+}
+
+/// The three updates on the vector code of `path` (which the CPU runs): `[rh, paper, pytorch]`
+/// as [`reset_times_hidden`] (into a new buffer), [`paper_state_update`] and
+/// [`pytorch_state_update`] (each on a copy of `h`) give them (the per-path kernel tests).
+#[cfg(test)]
+pub(crate) fn updates_on(
+    path: super::simd::SimdPath,
+    gi: &[f32],
+    gh: &[f32],
+    h: &[f32],
+    batch: usize,
+    hidden: usize,
+) -> [Vec<f32>; 3] {
+    assert!(path.supported(), "{path} not supported by this CPU");
+    let mut rh = vec![0.0; batch * hidden];
+    let ops = Operands::new(Update::ResetTimesHidden, gi, gh, h, batch, hidden);
+    run(path, ops, &mut rh, batch);
+    let mut paper = h[..batch * hidden].to_vec();
+    let ops = Operands::new(Update::PaperState, gi, gh, &[], batch, hidden);
+    run(path, ops, &mut paper, batch);
+    let mut torch = h[..batch * hidden].to_vec();
+    let ops = Operands::new(Update::PyTorchState, gi, gh, &[], batch, hidden);
+    run(path, ops, &mut torch, batch);
+    [rh, paper, torch]
 }
 
 /// The read-only operands of a range of rows: `read` is the state `h` for
@@ -155,8 +182,9 @@ impl<'a> Operands<'a> {
     }
 }
 
-/// Splits the rows over the rayon pool when there are enough of them.
-fn run(ops: Operands<'_>, out: &mut [f32], batch: usize) {
+/// The update in the vector code of `path` (which the CPU runs), the rows split over the rayon
+/// pool when there are enough of them.
+fn run(path: super::simd::SimdPath, ops: Operands<'_>, out: &mut [f32], batch: usize) {
     let hidden = ops.hidden;
     let out = &mut out[..batch * hidden];
     let threads = super::parallel::threads();
@@ -164,23 +192,25 @@ fn run(ops: Operands<'_>, out: &mut [f32], batch: usize) {
         let rows = batch.div_ceil(threads);
         out.par_chunks_mut(rows * hidden)
             .enumerate()
-            .for_each(|(c, out)| rows_dispatch(ops.rows(c * rows, out.len() / hidden), out));
+            .for_each(|(c, out)| rows_on(path, ops.rows(c * rows, out.len() / hidden), out));
     } else {
-        rows_dispatch(ops, out);
+        rows_on(path, ops, out);
     }
 }
 
-/// The update over consecutive rows, in the vector code of the selected SIMD path.
-fn rows_dispatch(ops: Operands<'_>, out: &mut [f32]) {
-    match super::simd::active() {
+/// The update over consecutive rows, in the vector code of `path`: the one loop of [`rows`],
+/// compiled with the path's target features. (This is all the per-path code of the gates, so it
+/// stays here rather than in `nn::kernels`.)
+fn rows_on(path: super::simd::SimdPath, ops: Operands<'_>, out: &mut [f32]) {
+    match path {
         #[cfg(target_arch = "x86_64")]
         super::simd::SimdPath::Avx512 => {
-            // SAFETY: the path is selected only on a CPU with AVX-512F.
+            // SAFETY: `path` is one the CPU runs (`run`'s contract): it has AVX-512F.
             unsafe { rows_avx512(ops, out) }
         }
         #[cfg(target_arch = "x86_64")]
         super::simd::SimdPath::Avx2 => {
-            // SAFETY: the path is selected only on a CPU with AVX2 and FMA.
+            // SAFETY: as above, AVX2 and FMA.
             unsafe { rows_avx2(ops, out) }
         }
         // NEON is part of the aarch64 baseline: the plain loop is already vectorized for it.
@@ -245,9 +275,12 @@ fn rows(ops: Operands<'_>, out: &mut [f32]) {
     }
 }
 
+/// The f64 checks of the updates, run here on the selected path and on every SIMD path by the
+/// kernel tests (`nn::kernels`).
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
+    use crate::nn::simd::SimdPath;
     use rand::{RngExt, SeedableRng};
 
     fn sigmoid64(x: f64) -> f64 {
@@ -283,24 +316,29 @@ mod tests {
         assert!(tanh_fast(f32::NAN).is_nan() && sigmoid_fast(f32::NAN).is_nan());
     }
 
-    /// The vectorized, row-split update equals the scalar formulas row by row (whatever the
-    /// thread split), for both conventions.
-    #[test]
-    fn updates_match_scalar_formulas() {
-        let (batch, hidden) = (70, 520); // above the parallel threshold, ragged split
+    /// Checks the three updates of `batch` rows of `hidden` units on the vector code of `path`
+    /// (which the CPU runs; `None`: the public functions on the selected path) against the f64
+    /// formulas, on pre-activations drawn from `[-3, 3)`.
+    pub(crate) fn check_updates(path: Option<SimdPath>, batch: usize, hidden: usize) {
         let g = 3 * hidden;
         let mut rng = rand::rngs::StdRng::seed_from_u64(11);
         let mut draw =
             |n: usize| -> Vec<f32> { (0..n).map(|_| rng.random_range(-3.0..3.0)).collect() };
         let (gi, gh, h0) = (draw(batch * g), draw(batch * g), draw(batch * hidden));
+        let [rh, paper, torch] = match path {
+            Some(path) => updates_on(path, &gi, &gh, &h0, batch, hidden),
+            None => {
+                let mut rh = vec![0.0; batch * hidden];
+                reset_times_hidden(&gi, &gh, &h0, &mut rh, batch, hidden);
+                let mut paper = h0.clone();
+                paper_state_update(&gi, &gh, &mut paper, batch, hidden);
+                let mut torch = h0.clone();
+                pytorch_state_update(&gi, &gh, &mut torch, batch, hidden);
+                [rh, paper, torch]
+            }
+        };
         let s = |x: f32| 1.0 / (1.0 + (-(x as f64)).exp());
         let t = |x: f32| (x as f64).tanh();
-        let mut rh = vec![0.0; batch * hidden];
-        reset_times_hidden(&gi, &gh, &h0, &mut rh, batch, hidden);
-        let mut paper = h0.clone();
-        paper_state_update(&gi, &gh, &mut paper, batch, hidden);
-        let mut torch = h0.clone();
-        pytorch_state_update(&gi, &gh, &mut torch, batch, hidden);
         let mut worst = 0f64;
         for b in 0..batch {
             for j in 0..hidden {
@@ -316,6 +354,17 @@ mod tests {
                 worst = worst.max((torch[k] as f64 - ((1.0 - z) * n + z * h)).abs());
             }
         }
-        assert!(worst < 1e-6, "max abs error {worst}");
+        let name = path.map_or("dispatch".to_string(), |p| p.to_string());
+        assert!(
+            worst < 1e-6,
+            "{name} batch {batch} hidden {hidden}: max abs error {worst}"
+        );
+    }
+
+    /// The vectorized, row-split update equals the scalar formulas row by row (whatever the
+    /// thread split), for both conventions.
+    #[test]
+    fn updates_match_scalar_formulas() {
+        check_updates(None, 70, 520); // above the parallel threshold, ragged split
     }
 }

@@ -6,12 +6,12 @@
 //!   is read once for all batch rows, in its stored dtype (f32, f16 or bf16, widened in
 //!   registers). A batch-1 step is bound by how fast weights stream from cache, so reading each
 //!   once, and half-size when the file is half-size, is what matters. The kernels of the
-//!   selected [`super::simd::SimdPath`]: `kernels::avx512` (AVX-512), `kernels::avx2` (AVX2 + FMA +
-//!   F16C), `kernels::neon` (aarch64), or the portable loop. No heap memory. With
-//!   AVX-512 or AVX2 (portable: at batch 1) and a matrix of at least 256 KiB, a product called from a rayon pool thread splits
-//!   its output rows over the pool (`rayon::join`, no allocation): one core streams weights from
-//!   L3 at about 25 GB/s on the 2-core Intel Xeon we measure on, two cores together at about
-//!   32-43 GB/s. Called from elsewhere it stays on the calling thread (see
+//!   selected [`super::simd::SimdPath`], from `nn::kernels`: `avx512` (AVX-512), `avx2` (AVX2 +
+//!   FMA + F16C), `neon` (aarch64), or `portable`. No heap memory. With AVX-512 or AVX2
+//!   (portable: at batch 1) and a matrix of at least 256 KiB, a product called from a rayon pool
+//!   thread splits its output rows over the pool (`rayon::join`, no allocation): one core
+//!   streams weights from L3 at about 25 GB/s on the 2-core Intel Xeon we measure on, two cores
+//!   together at about 32-43 GB/s. Called from elsewhere it stays on the calling thread (see
 //!   [`crate::model::BatchGenerator::set_row_split`]).
 //! - **GEMM** (larger batches): with AVX-512 or AVX2, [`sgemm_panels::gemm_panels`] over the weights
 //!   packed into column panels at load; otherwise `matrixmultiply::sgemm` over the f32 rows (its
@@ -19,6 +19,7 @@
 //!   product is big enough to pay for the fork.
 //!
 //! For a given machine and path every result is deterministic.
+use super::kernels;
 use super::packed::{PackedMatrix, RowDtype, Wide};
 use super::sgemm_panels;
 use super::simd::SimdPath;
@@ -113,7 +114,9 @@ impl MatMul {
         self.rows_on(super::simd::active(), x, w, y, accumulate);
     }
 
-    /// The row kernels of `path` (the caller checked the operands and that the CPU runs `path`).
+    /// The row kernels of `path` (the caller checked the operands, that `inputs > 0` and that the
+    /// CPU runs `path`), over threads when [`MatMul::row_split_parts`] says so: with AVX-512 or
+    /// AVX2 at any batch, on the portable path at batch 1.
     fn rows_on(
         &self,
         path: SimdPath,
@@ -122,75 +125,28 @@ impl MatMul {
         y: &mut [f32],
         accumulate: bool,
     ) {
-        match path {
-            #[cfg(target_arch = "x86_64")]
-            SimdPath::Avx512 | SimdPath::Avx2 => {
-                let parts = self.row_split_parts(w);
-                if parts > 1 {
-                    self.rows_split(path, x, w, y, accumulate, parts);
-                    return;
-                }
-                let product = match path {
-                    SimdPath::Avx512 => super::kernels::avx512::product,
-                    _ => super::kernels::avx2::product,
-                };
-                // SAFETY: the path is selected only on a CPU that has its features (AVX-512 F;
-                // or AVX2, FMA and F16C), `inputs > 0` and `check` asserted the slice lengths.
-                unsafe { product(self, x, w.rows(), y, accumulate) };
-            }
-            #[cfg(target_arch = "aarch64")]
-            SimdPath::Neon => {
-                // SAFETY: as above (NEON).
-                unsafe { super::kernels::neon::product(self, x, w.rows(), y, accumulate) };
-            }
-            _ => {
-                // Batch 1 splits like the AVX kernels above (its output ranges are disjoint
-                // slices of `Y`); the portable kernel then streams weights on every core too.
-                let parts = if self.batch == 1 {
-                    self.row_split_parts(w)
-                } else {
-                    1
-                };
-                if parts > 1 {
-                    self.portable_split(x, w, &mut y[..self.outputs], accumulate, parts);
-                } else {
-                    super::kernels::portable::product(self, x, w, y, accumulate);
-                }
-            }
+        let parts = match path {
+            SimdPath::Avx512 | SimdPath::Avx2 => self.row_split_parts(w),
+            SimdPath::Portable if self.batch == 1 => self.row_split_parts(w),
+            _ => 1,
+        };
+        if parts > 1 {
+            self.rows_split(path, x, w, y, accumulate, parts);
+            return;
         }
-    }
-
-    /// The portable row kernel at batch 1 over `parts` output ranges run by rayon (recursive
-    /// halving at multiples of 16 outputs, as [`MatMul::rows_split`]); `y` is the one output row.
-    fn portable_split(
-        &self,
-        x: &[f32],
-        w: &PackedMatrix,
-        y: &mut [f32],
-        accumulate: bool,
-        parts: usize,
-    ) {
-        fn split(
-            mm: &MatMul,
-            x: &[f32],
-            w: &PackedMatrix,
-            y: &mut [f32],
-            accumulate: bool,
-            outputs: std::ops::Range<usize>,
-            parts: usize,
-        ) {
-            if parts <= 1 {
-                super::kernels::portable::product_outputs(mm, x, w, y, accumulate, outputs);
-                return;
-            }
-            let (left, at) = split_point(&outputs, parts);
-            let (first, second) = y.split_at_mut(at - outputs.start);
-            super::parallel::pool::join(
-                || split(mm, x, w, first, accumulate, outputs.start..at, left),
-                || split(mm, x, w, second, accumulate, at..outputs.end, parts - left),
-            );
-        }
-        split(self, x, w, y, accumulate, 0..self.outputs, parts);
+        // SAFETY: the CPU runs `path`, `inputs > 0` and `check` asserted the slice lengths; `y`
+        // is exclusively borrowed.
+        unsafe {
+            kernels::product_outputs(
+                path,
+                self,
+                x.as_ptr(),
+                w,
+                y.as_mut_ptr(),
+                accumulate,
+                0..self.outputs,
+            )
+        };
     }
 
     /// [`MatMul::run_rows`] on the kernels of `path` whatever the selected one (tests and
@@ -237,9 +193,8 @@ impl MatMul {
         threads.min(self.outputs / ROW_SPLIT_MIN_OUTPUTS).max(1)
     }
 
-    /// The row kernels over `parts` output ranges run by rayon (recursive halving; the caller's
-    /// thread takes the first half of every split).
-    #[cfg(target_arch = "x86_64")]
+    /// The row kernels over `parts` output ranges run by rayon (recursive halving at multiples of
+    /// 16 outputs; the caller's thread takes the first half of every split).
     fn rows_split(
         &self,
         path: SimdPath,
@@ -272,11 +227,7 @@ impl MatMul {
                 // ranges of different calls are disjoint, so no two threads write the same
                 // element.
                 unsafe {
-                    let product_outputs = match path {
-                        SimdPath::Avx512 => super::kernels::avx512::product_outputs,
-                        _ => super::kernels::avx2::product_outputs,
-                    };
-                    product_outputs(mm, x.as_ptr(), w.rows(), y.0, accumulate, outputs)
+                    kernels::product_outputs(path, mm, x.as_ptr(), w, y.0, accumulate, outputs)
                 };
                 return;
             }
@@ -402,99 +353,7 @@ impl MatMul {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::weights::HalfDtype;
-
-    /// Deterministic values in [-1, 1) from a fixed-seed xorshift generator.
-    fn data(n: usize, seed: u64) -> Vec<f32> {
-        let mut s = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
-        (0..n)
-            .map(|_| {
-                s ^= s << 13;
-                s ^= s >> 7;
-                s ^= s << 17;
-                (s >> 40) as f32 / (1u64 << 23) as f32 - 1.0
-            })
-            .collect()
-    }
-
-    /// The matrix in each stored dtype (f16/bf16 rounded from `values`).
-    fn matrices(values: &[f32], outputs: usize, inputs: usize) -> Vec<PackedMatrix> {
-        let bf16 = values
-            .iter()
-            .map(|&v| half::bf16::from_f32(v).to_bits())
-            .collect();
-        let loaded = vec![
-            PackedMatrix::from_f32(values.to_vec(), outputs, inputs),
-            PackedMatrix::f16_from_f32(values, outputs, inputs),
-            PackedMatrix::from_half_bits(HalfDtype::Bf16, bf16, outputs, inputs),
-        ];
-        // Both layouts whatever the path the tests run under (panels or f32 copies).
-        let other: Vec<PackedMatrix> = loaded
-            .iter()
-            .cloned()
-            .map(PackedMatrix::without_panels)
-            .collect();
-        loaded.into_iter().chain(other).collect()
-    }
-
-    /// Checks `y` (row stride `ys`) against `init + X Wᵀ` in f64 with the widened weights; the
-    /// bound scales with `Σ|x w|` (f32 accumulation of `inputs` terms).
-    #[allow(clippy::too_many_arguments)]
-    fn assert_product(
-        what: &str,
-        mm: &MatMul,
-        x: &[f32],
-        w: &PackedMatrix,
-        init: &[f32],
-        y: &[f32],
-        accumulate: bool,
-    ) {
-        let wf = w.to_f32();
-        for b in 0..mm.batch {
-            for o in 0..mm.outputs {
-                let (mut dot, mut mag) = (0.0f64, 0.0f64);
-                for i in 0..mm.inputs {
-                    let t = f64::from(x[b * mm.x_stride + i]) * f64::from(wf[o * mm.inputs + i]);
-                    dot += t;
-                    mag += t.abs();
-                }
-                let k = b * mm.y_stride + o;
-                let expect = if accumulate {
-                    f64::from(init[k]) + dot
-                } else {
-                    dot
-                };
-                let got = f64::from(y[k]);
-                let bound = 1e-6 * (mag + f64::from(init[k]).abs()) + 1e-7;
-                assert!(
-                    (got - expect).abs() <= bound,
-                    "{what} {:?} batch {} in {} out {} acc {accumulate}: y[{b},{o}] = {got} vs {expect}",
-                    w.dtype(),
-                    mm.batch,
-                    mm.inputs,
-                    mm.outputs
-                );
-            }
-            // Columns past `outputs` of a strided row are never written.
-            for k in b * mm.y_stride + mm.outputs..((b + 1) * mm.y_stride).min(y.len()) {
-                assert_eq!(y[k], init[k], "{what}: wrote past the row");
-            }
-        }
-    }
-
-    /// Shapes with ragged input widths (masked tails), row counts off the 4-row tiles and batches
-    /// off the 4-row batch tiles.
-    const SHAPES: &[(usize, usize)] = &[
-        (1, 1),
-        (5, 3),
-        (16, 4),
-        (17, 9),
-        (37, 11),
-        (54, 1536),
-        (216, 13),
-        (512, 54),
-        (100, 300),
-    ];
+    use crate::nn::kernels::tests::{assert_product, data, matrices, SHAPES};
 
     /// A product under a name.
     type Path = (
@@ -502,10 +361,10 @@ mod tests {
         Box<dyn Fn(&MatMul, &[f32], &PackedMatrix, &mut [f32], bool)>,
     );
 
-    /// Every product the machine has: the dispatch, the GEMMs, and the row kernels of every
-    /// SIMD path this CPU runs (each selected explicitly, whatever `MOTION_SIMD` says).
+    /// The products of the selected SIMD path: the dispatch, the row kernels, the GEMMs. (The
+    /// kernels of every path are tested in `nn::kernels`.)
     fn paths() -> Vec<Path> {
-        let mut p: Vec<Path> = vec![
+        vec![
             (
                 "dispatch".into(),
                 Box::new(|m, x, w, y, a| m.run(x, w, y, a)),
@@ -522,43 +381,11 @@ mod tests {
                 "matrixmultiply".into(),
                 Box::new(|m, x, w, y, a| m.sgemm_threads(x, &w.to_f32(), y, a)),
             ),
-        ];
-        for path in SimdPath::available() {
-            p.push((
-                format!("rows {path}"),
-                Box::new(move |m, x, w, y, a| m.run_rows_on(path, x, w, y, a).unwrap()),
-            ));
-        }
-        p
+        ]
     }
 
     #[test]
-    fn portable_f16_widening_is_exact_for_every_bit_pattern() {
-        for h in 0..=u16::MAX {
-            let want = half::f16::from_bits(h).to_f32();
-            let got = super::super::kernels::portable::f16_to_f32(h);
-            if want.is_nan() {
-                assert!(got.is_nan(), "{h:#06x}");
-                assert_eq!(got.to_bits() & 0x8000_0000, want.to_bits() & 0x8000_0000);
-            } else {
-                assert_eq!(got.to_bits(), want.to_bits(), "{h:#06x}");
-            }
-        }
-    }
-
-    #[test]
-    fn every_available_simd_path_is_tested() {
-        let names: Vec<String> = paths().into_iter().map(|(n, _)| n).collect();
-        assert!(names.contains(&"rows portable".to_string()));
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2")
-            && std::arch::is_x86_feature_detected!("fma")
-            && std::arch::is_x86_feature_detected!("f16c")
-        {
-            assert!(names.contains(&"rows avx2".to_string()));
-        }
-        #[cfg(target_arch = "aarch64")]
-        assert!(names.contains(&"rows neon".to_string()));
+    fn run_rows_on_refuses_a_path_the_cpu_lacks() {
         let lacking = SimdPath::ALL.into_iter().find(|p| !p.supported()).unwrap();
         let w = PackedMatrix::from_f32(vec![1.0; 4], 2, 2);
         let mut y = [0.0; 2];
@@ -568,7 +395,7 @@ mod tests {
     }
 
     #[test]
-    fn every_kernel_and_dtype_matches_f64_reference() {
+    fn every_product_and_dtype_matches_f64_reference() {
         let paths = paths();
         for (seed, &(inputs, outputs)) in SHAPES.iter().enumerate() {
             let values = data(outputs * inputs, 2 * seed as u64 + 1);
@@ -644,50 +471,35 @@ mod tests {
         }
     }
 
+    /// A row-kernel product called from a pool thread splits its outputs over the pool (AVX-512
+    /// and AVX2 at any batch, portable at batch 1): the same bits as on one thread, for every
+    /// path this CPU runs.
+    #[cfg(feature = "parallel")]
     #[test]
-    fn a_row_sums_the_same_in_any_batch_or_tile() {
-        // The row kernels give every (batch row, output) the same arithmetic, so a character's
-        // step does not depend on the batch it runs in or the tile its output falls in (13
-        // outputs: 8-, 4-, 3- and 1-row tiles; 2, 3, 5 and 11 batch rows: pairs, groups of four
-        // and their tails).
-        let (inputs, outputs) = (216, 13);
-        let values = data(outputs * inputs, 9);
-        for path in SimdPath::available() {
-            for (w, batch) in matrices(&values, outputs, inputs)
-                .into_iter()
-                .flat_map(|w| [2, 3, 5, 11].map(|batch| (w.clone(), batch)))
-            {
-                let x = data(batch * inputs, 10);
-                let mut all = vec![0.0; batch * outputs];
-                MatMul::dense(batch, inputs, outputs)
-                    .run_rows_on(path, &x, &w, &mut all, false)
-                    .unwrap();
-                for b in 0..batch {
-                    let mut one = vec![0.0; outputs];
-                    MatMul::dense(1, inputs, outputs)
-                        .run_rows_on(path, &x[b * inputs..], &w, &mut one, false)
-                        .unwrap();
-                    assert_eq!(one, all[b * outputs..(b + 1) * outputs], "{path}");
-                }
-            }
-        }
-    }
-
-    #[test]
-    fn rows_wider_than_the_widening_buffer_match_f64_reference() {
-        // The portable 16-bit kernel widens up to 8,192 inputs at a time; wider rows take the
-        // one-row fallback.
-        let (inputs, outputs, batch) = (8_203, 3, 2);
-        let values = data(outputs * inputs, 11);
-        let x = data(batch * inputs, 12);
-        let init = data(batch * outputs, 13);
-        let mm = MatMul::dense(batch, inputs, outputs);
+    fn row_split_over_threads_gives_the_same_bits() {
+        let (inputs, outputs) = (512, 300); // 600 KiB of f32 weights, 300 KiB of f16
+        let values = data(outputs * inputs, 21);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .expect("thread pool");
         for path in SimdPath::available() {
             for w in matrices(&values, outputs, inputs) {
-                for accumulate in [false, true] {
-                    let mut y = init.clone();
-                    mm.run_rows_on(path, &x, &w, &mut y, accumulate).unwrap();
-                    assert_product(&format!("rows {path}"), &mm, &x, &w, &init, &y, accumulate);
+                for batch in [1, 3, 8] {
+                    let mm = MatMul::dense(batch, inputs, outputs);
+                    assert_eq!(pool.install(|| mm.row_split_parts(&w)), 2);
+                    let x = data(batch * inputs, 22);
+                    let init = data(batch * outputs, 23);
+                    for accumulate in [false, true] {
+                        let mut one = init.clone();
+                        mm.run_rows_on(path, &x, &w, &mut one, accumulate).unwrap();
+                        let mut split = init.clone();
+                        pool.install(|| mm.run_rows_on(path, &x, &w, &mut split, accumulate))
+                            .unwrap();
+                        assert_eq!(one, split, "{path} {:?} batch {batch}", w.dtype());
+                        let what = format!("split rows {path}");
+                        assert_product(&what, &mm, &x, &w, &init, &split, accumulate);
+                    }
                 }
             }
         }

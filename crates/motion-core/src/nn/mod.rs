@@ -5,6 +5,18 @@
 //! (share them with `Arc`); recurrent state and per-step scratch buffers belong to the caller and
 //! are sized once, so a step allocates nothing. Weight matrices are [`PackedMatrix`]es kept in
 //! their stored dtype (f32, f16 or bf16); all arithmetic is f32.
+//!
+//! The arithmetic:
+//! - [`gemm`]: `Y = X Wᵀ`, the one matrix product every layer uses; it picks the row kernels
+//!   (small batches) or the panel GEMM (large batches) and splits products over threads;
+//! - `kernels`: the row kernels, one module per SIMD path (`kernels::{portable, avx2, avx512,
+//!   neon}`, each supplying its register tiles) and the driver they share, with the per-path
+//!   tests of every kernel family;
+//! - [`sgemm_panels`]: the panel GEMM (weights packed into column panels at load) and its AVX-512,
+//!   AVX2 and portable kernels;
+//! - [`gates`]: the vectorized GRU gate non-linearities, compiled once per SIMD path;
+//! - [`simd`]: which [`SimdPath`] all of them run (`MOTION_SIMD`);
+//! - [`packed`]: the weight layout chosen at load; [`parallel`]: how many threads they may use.
 pub mod activation;
 pub mod body_gru;
 pub mod gates;

@@ -76,13 +76,11 @@ pub(crate) mod pool {
     }
 
     /// Never on a pool thread.
-    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))] // the AVX-512 row split's
     pub(crate) fn current_thread_index() -> Option<usize> {
         None
     }
 
     /// Runs `a` then `b`.
-    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))] // the AVX-512 row split's
     pub(crate) fn join<A, B, RA, RB>(a: A, b: B) -> (RA, RB)
     where
         A: FnOnce() -> RA,

@@ -19,6 +19,12 @@
 //! panel in two halves). On other paths [`panels_in_use`] is false and [`gemm_panels`] still
 //! computes the right numbers with portable loops over the same layout, only slowly; callers
 //! should use their own fallback then.
+//!
+//! The per-path kernels (the `avx512` and `avx2` submodules, the portable loop) live here, beside
+//! the panel layout they read, not in `nn::kernels` with the row kernels: those read
+//! [`super::packed`]'s rows, and `packed` holds [`PanelMatrix`]es, so panel kernels among them
+//! would make `kernels`, `packed` and this module depend on each other in a cycle. The kernel
+//! tests of `nn::kernels` check these kernels on every path.
 
 use super::simd::SimdPath;
 
@@ -743,8 +749,10 @@ mod avx2 {
     }
 }
 
+/// The f64 checks of the panel GEMM, run here through [`gemm_panels`] and on every SIMD path by
+/// the kernel tests (`nn::kernels`).
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// Deterministic values in [-1, 1) from a 64-bit LCG (fixed seed per call site).
@@ -803,9 +811,16 @@ mod tests {
         y
     }
 
-    /// Runs one case through `gemm_panels` and the kernel of every SIMD path the CPU has, and
-    /// compares with f64.
-    fn check(batch: usize, inputs: usize, outputs: usize, pad: (usize, usize), mode: Mode) {
+    /// Runs one case on the kernel of `path` (which the CPU runs; `None`: [`gemm_panels`] on the
+    /// selected path) and compares with f64.
+    fn check(
+        path: Option<SimdPath>,
+        batch: usize,
+        inputs: usize,
+        outputs: usize,
+        pad: (usize, usize),
+        mode: Mode,
+    ) {
         let (x_stride, y_stride) = (inputs + pad.0, outputs + pad.1);
         let seed = (batch * 1_000_003 + inputs * 1009 + outputs) as u64;
         let x = data(batch.max(1) * x_stride, seed);
@@ -824,43 +839,38 @@ mod tests {
         );
         // Sums of `inputs` products of values in [-1, 1): f32 rounding grows like sqrt(inputs).
         let tol = 2e-6 * (inputs as f64).sqrt().max(1.0) * 4.0;
-        let mut kernels: Vec<(String, Option<SimdPath>)> = vec![("dispatch".into(), None)];
-        kernels.extend(
-            SimdPath::available()
-                .into_iter()
-                .map(|p| (p.to_string(), Some(p))),
-        );
-        for (name, path) in kernels {
-            let mut y = y0.clone();
-            match path {
-                None => gemm_panels(batch, &x, x_stride, &packed, &mut y, y_stride, init),
-                Some(p) => {
-                    gemm_panels_on(p, batch, &x, x_stride, &packed, &mut y, y_stride, init).unwrap()
-                }
+        let name = path.map_or("dispatch".to_string(), |p| p.to_string());
+        let mut y = y0.clone();
+        match path {
+            None => gemm_panels(batch, &x, x_stride, &packed, &mut y, y_stride, init),
+            Some(p) => {
+                gemm_panels_on(p, batch, &x, x_stride, &packed, &mut y, y_stride, init).unwrap()
             }
-            for (i, (&got, &want)) in y.iter().zip(&expect).enumerate() {
-                assert!(
-                    (got as f64 - want).abs() <= tol * want.abs().max(1.0),
-                    "{name} batch {batch} in {inputs} out {outputs} pad {pad:?} {mode:?}: \
-                     y[{i}] = {got}, expected {want}"
-                );
-            }
+        }
+        for (i, (&got, &want)) in y.iter().zip(&expect).enumerate() {
+            assert!(
+                (got as f64 - want).abs() <= tol * want.abs().max(1.0),
+                "{name} batch {batch} in {inputs} out {outputs} pad {pad:?} {mode:?}: \
+                 y[{i}] = {got}, expected {want}"
+            );
         }
     }
 
-    #[test]
-    fn sgemm_matches_f64_reference_on_model_shapes() {
+    /// The products of the paper models' layers: batches 1 to 257, inputs 54 to 1024, outputs 54
+    /// to 1536, each [`Init`] in turn (see [`check`]).
+    pub(crate) fn model_shapes(path: Option<SimdPath>) {
         for &batch in &[1, 2, 13, 256, 257] {
             for &inputs in &[54, 216, 512, 1024] {
                 for &outputs in &[54, 1024, 1536] {
-                    check(batch, inputs, outputs, (0, 0), MODES[batch % 3]);
+                    check(path, batch, inputs, outputs, (0, 0), MODES[batch % 3]);
                 }
             }
         }
     }
 
-    #[test]
-    fn sgemm_ragged_shapes_strides_and_accumulate() {
+    /// Ragged shapes (partial tiles, panels and passes of inputs), padded row strides and every
+    /// [`Init`] (see [`check`]).
+    pub(crate) fn ragged_shapes(path: Option<SimdPath>) {
         for &(batch, inputs, outputs) in &[
             (1, 1, 1),
             (3, 5, 7),
@@ -877,10 +887,17 @@ mod tests {
         ] {
             for pad in [(0, 0), (3, 5), (16, 0)] {
                 for mode in MODES {
-                    check(batch, inputs, outputs, pad, mode);
+                    check(path, batch, inputs, outputs, pad, mode);
                 }
             }
         }
+    }
+
+    /// The selected path through [`gemm_panels`] (every path's kernel, on these shapes and the
+    /// model shapes, is tested by `nn::kernels`).
+    #[test]
+    fn sgemm_ragged_shapes_strides_and_accumulate() {
+        ragged_shapes(None);
     }
 
     #[cfg(feature = "parallel")]

@@ -1,26 +1,29 @@
-//! AVX2 + FMA + F16C row kernels for `Y = X Wᵀ` at small batches: the 256-bit counterpart of
-//! [`super::avx512`], for the CPUs without AVX-512 (most gaming PCs).
+//! AVX2 + FMA + F16C row tiles for `Y = X Wᵀ` at small batches: the 256-bit counterpart of
+//! [`super::avx512`], for the CPUs without AVX-512 (most gaming PCs). The shared driver
+//! ([`super::row_tiles`]) walks them.
 //!
 //! Weight rows stay in their stored dtype and are widened in registers: `vcvtph2ps` for f16, a
 //! 16-bit shift for bf16 (both exact). A tile holds `R` weight rows against `B` batch rows in
 //! `R x B` independent 8-lane accumulators: each weight vector loaded serves `B` batch rows and
-//! each input vector `R` weight rows. Weight rows are the outer loop, so every weight is read from
-//! memory once per product whatever the batch. Two tile shapes, by batch:
-//! - batch 1-3: 4 weight rows x 2 (or 1) batch rows, prefetching the next 4 rows: a batch-1 step
-//!   streams weights, and 4 accumulators per batch row hide the FMA latency;
+//! each input vector `R` weight rows. Two tile shapes, by batch:
+//! - batch 1-3: 4 weight rows x 2 (or 1) batch rows: a batch-1 step streams weights, and 4
+//!   accumulators per batch row hide the FMA latency;
 //! - batch >= 4: 3 weight rows x 4 batch rows (12 accumulators + 3 weight + 1 input vector = the
 //!   16 registers): 12 FMAs per 7 loads and 3 widenings, against 8 per 6 and 4 with 4 x 2 (on a
-//!   Zen 4 core, 8-14 % faster at batch 8-32 on `[1536, 512]`, f16 and f32). The tile's weight
-//!   rows stay in L1 while the batch groups pass over them; only the first group prefetches.
+//!   Zen 4 core, 8-14 % faster at batch 8-32 on `[1536, 512]`, f16 and f32).
+//!
+//! The first batch group over a tile's weight rows prefetches the next tile's rows; the later
+//! groups find the tile's rows in L1.
 //!
 //! A row's last `inputs % 8` elements are read as the row's last 8 with the lanes before them
 //! cleared (rows shorter than 8 are copied into a zeroed buffer), so no element outside a row is
-//! read. Every (batch row, output) gets the same arithmetic
-//! in any tile (one accumulator per pair, the same lane-sum tree), so a character's numbers do not
-//! depend on the batch it runs in.
+//! read. Every (batch row, output) gets the same arithmetic in any tile (one accumulator per
+//! pair, the same lane-sum tree), so a character's numbers do not depend on the batch it runs in.
+use super::{padded, row_tiles, RowKernels, Tiles};
 use crate::nn::layout::MatMul;
 use crate::nn::packed::Rows;
 use std::arch::x86_64::*;
+use std::marker::PhantomData;
 
 /// A stored weight type and how 8 of them become one f32 vector.
 trait Elem {
@@ -60,32 +63,12 @@ impl Elem for Bf16 {
     }
 }
 
-/// `Y = X Wᵀ` (or `Y += X Wᵀ`) for the layout `mm` over `rows` `[mm.outputs, mm.inputs]`.
+/// [`super::product_outputs`] on this path: `Y = X Wᵀ` (or `Y += X Wᵀ`) for the output columns
+/// `outputs` of the layout `mm` over `rows` `[mm.outputs, mm.inputs]`.
 ///
 /// # Safety
-/// The CPU must run [`crate::nn::simd::SimdPath::Avx2`] (AVX2, FMA, F16C), `mm.inputs > 0`, and the
-/// slices must be long enough for the layout (as `MatMul::run` asserts).
-#[target_feature(enable = "avx2,fma,f16c")]
-pub(crate) unsafe fn product(mm: &MatMul, x: &[f32], rows: &Rows, y: &mut [f32], accumulate: bool) {
-    // SAFETY: forwarded from the caller.
-    unsafe {
-        product_outputs(
-            mm,
-            x.as_ptr(),
-            rows,
-            y.as_mut_ptr(),
-            accumulate,
-            0..mm.outputs,
-        )
-    }
-}
-
-/// [`product`] for the output columns `outputs` only (weight rows `outputs`, columns `outputs`
-/// of every row of `Y`): disjoint ranges may run on different threads at once.
-///
-/// # Safety
-/// As [`product`], with `x` and `y` pointing at slices long enough for the whole layout `mm`,
-/// `outputs` inside `0..mm.outputs`, and no other thread writing those columns of `Y`.
+/// The CPU must run [`SimdPath::Avx2`](crate::nn::simd::SimdPath::Avx2) (AVX2, FMA, F16C); the
+/// rest as [`super::product_outputs`].
 #[target_feature(enable = "avx2,fma,f16c")]
 pub(crate) unsafe fn product_outputs(
     mm: &MatMul,
@@ -95,21 +78,8 @@ pub(crate) unsafe fn product_outputs(
     accumulate: bool,
     outputs: std::ops::Range<usize>,
 ) {
-    let part = MatMul {
-        outputs: outputs.len(),
-        ..*mm
-    };
-    let (first, k) = (outputs.start, mm.inputs);
-    // SAFETY: forwarded from the caller; `drive` reads and writes only inside the layout `part`,
-    // which is the part of `mm` at weight row `first` and output column `first`.
-    unsafe {
-        let y = y.add(first);
-        match rows {
-            Rows::F32(w) => drive::<F32>(&part, x, w.as_ptr().add(first * k), y, accumulate),
-            Rows::F16(w) => drive::<F16>(&part, x, w.as_ptr().add(first * k), y, accumulate),
-            Rows::Bf16(w) => drive::<Bf16>(&part, x, w.as_ptr().add(first * k), y, accumulate),
-        }
-    }
+    // SAFETY: forwarded from the caller.
+    unsafe { super::rows_product::<Avx2>(mm, x, rows, y, accumulate, outputs) }
 }
 
 /// f32 lanes per vector.
@@ -117,107 +87,57 @@ const L: usize = 8;
 /// Smallest batch for the 3 x 4 tiles.
 const WIDE_BATCH: usize = 4;
 
-#[inline(always)]
-unsafe fn drive<E: Elem>(mm: &MatMul, x: *const f32, w: *const E::T, y: *mut f32, acc: bool) {
-    let (n, k, batch) = (mm.outputs, mm.inputs, mm.batch);
-    let (xs, ys) = (mm.x_stride, mm.y_stride);
-    // SAFETY: every tile reads rows `o..o + R` of `w`, rows `b..b + B` of `x` (first `k`
-    // elements) and writes columns `o..o + R` of rows `b..b + B` of `y`, all inside the layout.
-    unsafe {
-        let mut o = 0;
-        if batch >= WIDE_BATCH {
-            while o + 3 <= n {
-                groups_of_four::<E, 3>(x, xs, w.add(o * k), k, y.add(o), ys, batch, acc);
-                o += 3;
-            }
-            while o < n {
-                groups_of_four::<E, 1>(x, xs, w.add(o * k), k, y.add(o), ys, batch, acc);
-                o += 1;
-            }
-        } else {
-            while o + 4 <= n {
-                pairs::<E, 4>(x, xs, w.add(o * k), k, y.add(o), ys, batch, acc);
-                o += 4;
-            }
-            while o < n {
-                pairs::<E, 1>(x, xs, w.add(o * k), k, y.add(o), ys, batch, acc);
-                o += 1;
+/// This path's row kernels.
+struct Avx2;
+
+impl RowKernels for Avx2 {
+    type F32 = Tile<F32>;
+    type F16 = Tile<F16>;
+    type Bf16 = Tile<Bf16>;
+
+    #[inline(always)]
+    unsafe fn drive<K: Tiles>(mm: &MatMul, x: *const f32, w: *const K::T, y: *mut f32, acc: bool) {
+        let n = mm.outputs;
+        // SAFETY: forwarded from the caller; the last call takes every row left.
+        unsafe {
+            if mm.batch >= WIDE_BATCH {
+                let o = row_tiles::<K, 3, 4>(mm, x, w, y, n, 0, acc);
+                row_tiles::<K, 1, 4>(mm, x, w, y, n, o, acc);
+            } else {
+                let o = row_tiles::<K, 4, 2>(mm, x, w, y, n, 0, acc);
+                row_tiles::<K, 1, 2>(mm, x, w, y, n, o, acc);
             }
         }
     }
 }
 
-/// All (1-3) batch rows, in pairs, against weight rows `w[0..R]`.
-#[inline(always)]
-#[allow(clippy::too_many_arguments)]
-unsafe fn pairs<E: Elem, const R: usize>(
-    x: *const f32,
-    xs: usize,
-    w: *const E::T,
-    k: usize,
-    y: *mut f32,
-    ys: usize,
-    batch: usize,
-    acc: bool,
-) {
-    // SAFETY: see `drive`.
-    unsafe {
-        let mut b = 0;
-        while b + 2 <= batch {
-            tile::<E, R, 2, true>(x.add(b * xs), xs, w, k, y.add(b * ys), ys, acc);
-            b += 2;
-        }
-        if batch - b == 1 {
-            tile::<E, R, 1, true>(x.add(b * xs), xs, w, k, y.add(b * ys), ys, acc);
-        }
+/// The tiles over weights of type `E`.
+struct Tile<E>(PhantomData<E>);
+
+impl<E: Elem> Tiles for Tile<E> {
+    type T = E::T;
+    /// Only the first batch group prefetches the next tile's rows.
+    const FIRST_APART: bool = true;
+
+    #[inline(always)]
+    unsafe fn tile<const R: usize, const B: usize, const FIRST: bool>(
+        x: *const f32,
+        xs: usize,
+        w: *const E::T,
+        k: usize,
+        y: *mut f32,
+        ys: usize,
+        accumulate: bool,
+    ) {
+        // SAFETY: forwarded from the caller.
+        unsafe { tile::<E, R, B, FIRST>(x, xs, w, k, y, ys, accumulate) }
     }
 }
 
-/// All batch rows (at least 4), in groups of 4, against weight rows `w[0..R]`; the first group
-/// prefetches the next tile's rows, the others find this tile's in L1.
+/// [`Tiles::tile`]; `FIRST`: fetch the next `R` weight rows into L1 as this tile streams its own
+/// (the later batch groups find this tile's rows in L1).
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
-unsafe fn groups_of_four<E: Elem, const R: usize>(
-    x: *const f32,
-    xs: usize,
-    w: *const E::T,
-    k: usize,
-    y: *mut f32,
-    ys: usize,
-    batch: usize,
-    acc: bool,
-) {
-    // SAFETY: see `drive`; `batch >= 4`.
-    unsafe {
-        tile::<E, R, 4, true>(x, xs, w, k, y, ys, acc);
-        let mut b = 4;
-        while b + 4 <= batch {
-            tile::<E, R, 4, false>(x.add(b * xs), xs, w, k, y.add(b * ys), ys, acc);
-            b += 4;
-        }
-        let (x, y) = (x.add(b * xs), y.add(b * ys));
-        match batch - b {
-            3 => tile::<E, R, 3, false>(x, xs, w, k, y, ys, acc),
-            2 => tile::<E, R, 2, false>(x, xs, w, k, y, ys, acc),
-            1 => tile::<E, R, 1, false>(x, xs, w, k, y, ys, acc),
-            _ => {}
-        }
-    }
-}
-
-/// `src[0..n]` (n < 8) followed by zeros, so a full-vector load reads nothing past the row.
-#[inline(always)]
-unsafe fn padded<T: Copy + Default>(src: *const T, n: usize) -> [T; L] {
-    let mut buf = [T::default(); L];
-    // SAFETY: the caller guarantees `src[0..n]` is readable; `n < L`.
-    unsafe { std::ptr::copy_nonoverlapping(src, buf.as_mut_ptr(), n) };
-    buf
-}
-
-/// `Y[b, r] (+)= Σ_i X[b, i] W[r, i]` for `r < R`, `b < B`; `PREFETCH`: fetch the next `R` weight
-/// rows into L1 as this tile streams its own.
-#[inline(always)]
-unsafe fn tile<E: Elem, const R: usize, const B: usize, const PREFETCH: bool>(
+unsafe fn tile<E: Elem, const R: usize, const B: usize, const FIRST: bool>(
     x: *const f32,
     xs: usize,
     w: *const E::T,
@@ -226,7 +146,8 @@ unsafe fn tile<E: Elem, const R: usize, const B: usize, const PREFETCH: bool>(
     ys: usize,
     accumulate: bool,
 ) {
-    // SAFETY: see `drive`; the tail reads only the row's last `k - full` elements.
+    // SAFETY: the caller's contract (`Tiles::tile`); the tail reads only the row's last
+    // `k - full` elements.
     unsafe {
         let mut acc = [[_mm256_setzero_ps(); R]; B];
         let full = k / L * L;
@@ -236,8 +157,8 @@ unsafe fn tile<E: Elem, const R: usize, const B: usize, const PREFETCH: bool>(
             for (r, v) in wv.iter_mut().enumerate() {
                 *v = E::load(w.add(r * k + i));
             }
-            if PREFETCH && R > 1 && i % 32 == 0 {
-                // Fetch the next tile's rows one tile ahead (see avx512), one prefetch per
+            if FIRST && R > 1 && i % 32 == 0 {
+                // Fetch the next tile's rows one tile ahead (as the AVX-512 tiles), one prefetch per
                 // row and 32 inputs (a cache line of f16 weights).
                 for r in 0..R {
                     _mm_prefetch::<_MM_HINT_T0>(w.wrapping_add((R + r) * k + i).cast());
@@ -275,11 +196,11 @@ unsafe fn tile<E: Elem, const R: usize, const B: usize, const PREFETCH: bool>(
             let rest = k - i;
             let mut wv = [_mm256_setzero_ps(); R];
             for (r, v) in wv.iter_mut().enumerate() {
-                let buf = padded(w.add(r * k + i), rest);
+                let buf = padded::<E::T, L>(w.add(r * k + i), rest);
                 *v = E::load(buf.as_ptr());
             }
             for (b, row) in acc.iter_mut().enumerate() {
-                let buf = padded(x.add(b * xs + i), rest);
+                let buf = padded::<f32, L>(x.add(b * xs + i), rest);
                 let xv = _mm256_loadu_ps(buf.as_ptr());
                 for (a, v) in row.iter_mut().zip(&wv) {
                     *a = _mm256_fmadd_ps(*v, xv, *a);

@@ -1,6 +1,7 @@
-//! AVX-512 row kernels for `Y = X Wᵀ` at small batches (see [`crate::nn::gemm::row_kernel_max_batch`]),
-//! over weight rows stored as f32, f16 or bf16 (widened to f32 in registers: `vcvtph2ps` for f16,
-//! a 16-bit shift for bf16, both exact).
+//! AVX-512 row tiles for `Y = X Wᵀ` at small batches (see
+//! [`crate::nn::gemm::row_kernel_max_batch`]), over weight rows stored as f32, f16 or bf16
+//! (widened to f32 in registers: `vcvtph2ps` for f16, a 16-bit shift for bf16, both exact). The
+//! shared driver ([`super::row_tiles`]) walks them.
 //!
 //! A tile holds `RW` weight rows against `RB` batch rows in `RW x RB` independent 16-lane
 //! accumulators: each weight vector loaded (and widened) serves `RB` batch rows, each input vector
@@ -8,9 +9,11 @@
 //! product whatever the batch (the inputs, at most 16 rows, stay in L1/L2). Ragged input widths
 //! use masked loads, so no element outside a row is read (prefetch hints may name lines past
 //! the matrix; they never fault).
+use super::{row_tiles, RowKernels, Tiles};
 use crate::nn::layout::MatMul;
 use crate::nn::packed::Rows;
 use std::arch::x86_64::*;
+use std::marker::PhantomData;
 
 /// A stored weight type and how 16 of them become one f32 vector.
 trait Elem {
@@ -67,32 +70,12 @@ impl Elem for Bf16 {
     }
 }
 
-/// `Y = X Wᵀ` (or `Y += X Wᵀ`) for the layout `mm` over `rows` `[mm.outputs, mm.inputs]`.
+/// [`super::product_outputs`] on this path: `Y = X Wᵀ` (or `Y += X Wᵀ`) for the output columns
+/// `outputs` of the layout `mm` over `rows` `[mm.outputs, mm.inputs]`.
 ///
 /// # Safety
-/// The CPU must run [`crate::nn::simd::SimdPath::Avx512`], `mm.inputs > 0`, and the slices must be long enough for the
-/// layout (as `MatMul::run` asserts).
-#[target_feature(enable = "avx512f,avx512bw,avx512vl,f16c")]
-pub(crate) unsafe fn product(mm: &MatMul, x: &[f32], rows: &Rows, y: &mut [f32], accumulate: bool) {
-    // SAFETY: forwarded from the caller.
-    unsafe {
-        product_outputs(
-            mm,
-            x.as_ptr(),
-            rows,
-            y.as_mut_ptr(),
-            accumulate,
-            0..mm.outputs,
-        )
-    }
-}
-
-/// [`product`] for the output columns `outputs` only (weight rows `outputs`, columns `outputs`
-/// of every row of `Y`): disjoint ranges may run on different threads at once.
-///
-/// # Safety
-/// As [`product`], with `x` and `y` pointing at slices long enough for the whole layout `mm`,
-/// `outputs` inside `0..mm.outputs`, and no other thread writing those columns of `Y`.
+/// The CPU must run [`SimdPath::Avx512`](crate::nn::simd::SimdPath::Avx512); the rest as
+/// [`super::product_outputs`].
 #[target_feature(enable = "avx512f,avx512bw,avx512vl,f16c")]
 pub(crate) unsafe fn product_outputs(
     mm: &MatMul,
@@ -102,21 +85,8 @@ pub(crate) unsafe fn product_outputs(
     accumulate: bool,
     outputs: std::ops::Range<usize>,
 ) {
-    let part = MatMul {
-        outputs: outputs.len(),
-        ..*mm
-    };
-    let (first, k) = (outputs.start, mm.inputs);
-    // SAFETY: forwarded from the caller; `drive` reads and writes only inside the layout `part`,
-    // which is the part of `mm` at weight row `first` and output column `first`.
-    unsafe {
-        let y = y.add(first);
-        match rows {
-            Rows::F32(w) => drive::<F32>(&part, x, w.as_ptr().add(first * k), y, accumulate),
-            Rows::F16(w) => drive::<F16>(&part, x, w.as_ptr().add(first * k), y, accumulate),
-            Rows::Bf16(w) => drive::<Bf16>(&part, x, w.as_ptr().add(first * k), y, accumulate),
-        }
-    }
+    // SAFETY: forwarded from the caller.
+    unsafe { super::rows_product::<Avx512>(mm, x, rows, y, accumulate, outputs) }
 }
 
 /// Weight rows per tile: 4 rows x 4 batch rows = 16 accumulators + 4 weight vectors + 1 input
@@ -126,55 +96,49 @@ const RW: usize = 4;
 /// Batch rows per tile.
 const RB: usize = 4;
 
-#[inline(always)]
-unsafe fn drive<E: Elem>(mm: &MatMul, x: *const f32, w: *const E::T, y: *mut f32, acc: bool) {
-    let (n, k, batch) = (mm.outputs, mm.inputs, mm.batch);
-    let (xs, ys) = (mm.x_stride, mm.y_stride);
-    // SAFETY: every tile reads rows `o..o + rw` of `w`, rows `b..b + rb` of `x` (first `k`
-    // elements) and writes columns `o..o + rw` of rows `b..b + rb` of `y`, all inside the layout.
-    unsafe {
-        let mut o = 0;
-        while o + RW <= n {
-            batch_tiles::<E, RW>(x, xs, w.add(o * k), k, y.add(o), ys, batch, acc);
-            o += RW;
-        }
-        while o < n {
-            batch_tiles::<E, 1>(x, xs, w.add(o * k), k, y.add(o), ys, batch, acc);
-            o += 1;
+/// This path's row kernels.
+struct Avx512;
+
+impl RowKernels for Avx512 {
+    type F32 = Tile<F32>;
+    type F16 = Tile<F16>;
+    type Bf16 = Tile<Bf16>;
+
+    #[inline(always)]
+    unsafe fn drive<K: Tiles>(mm: &MatMul, x: *const f32, w: *const K::T, y: *mut f32, acc: bool) {
+        let n = mm.outputs;
+        // SAFETY: forwarded from the caller; the last call takes every row left.
+        unsafe {
+            let o = row_tiles::<K, RW, RB>(mm, x, w, y, n, 0, acc);
+            row_tiles::<K, 1, RB>(mm, x, w, y, n, o, acc);
         }
     }
 }
 
-/// All batch rows against weight rows `w[0..R]`.
-#[inline(always)]
-#[allow(clippy::too_many_arguments)]
-unsafe fn batch_tiles<E: Elem, const R: usize>(
-    x: *const f32,
-    xs: usize,
-    w: *const E::T,
-    k: usize,
-    y: *mut f32,
-    ys: usize,
-    batch: usize,
-    acc: bool,
-) {
-    // SAFETY: see `drive`.
-    unsafe {
-        let mut b = 0;
-        while b + RB <= batch {
-            tile::<E, R, RB>(x.add(b * xs), xs, w, k, y.add(b * ys), ys, acc);
-            b += RB;
-        }
-        match batch - b {
-            1 => tile::<E, R, 1>(x.add(b * xs), xs, w, k, y.add(b * ys), ys, acc),
-            2 => tile::<E, R, 2>(x.add(b * xs), xs, w, k, y.add(b * ys), ys, acc),
-            3 => tile::<E, R, 3>(x.add(b * xs), xs, w, k, y.add(b * ys), ys, acc),
-            _ => {}
-        }
+/// The tiles over weights of type `E`.
+struct Tile<E>(PhantomData<E>);
+
+impl<E: Elem> Tiles for Tile<E> {
+    type T = E::T;
+    /// Every batch group prefetches the next tile's rows.
+    const FIRST_APART: bool = false;
+
+    #[inline(always)]
+    unsafe fn tile<const R: usize, const B: usize, const FIRST: bool>(
+        x: *const f32,
+        xs: usize,
+        w: *const E::T,
+        k: usize,
+        y: *mut f32,
+        ys: usize,
+        accumulate: bool,
+    ) {
+        // SAFETY: forwarded from the caller.
+        unsafe { tile::<E, R, B>(x, xs, w, k, y, ys, accumulate) }
     }
 }
 
-/// `Y[b, r] (+)= Σ_i X[b, i] W[r, i]` for `r < R`, `b < B`.
+/// [`Tiles::tile`], prefetching the next `R` weight rows in every batch group.
 #[inline(always)]
 unsafe fn tile<E: Elem, const R: usize, const B: usize>(
     x: *const f32,
@@ -185,7 +149,8 @@ unsafe fn tile<E: Elem, const R: usize, const B: usize>(
     ys: usize,
     accumulate: bool,
 ) {
-    // SAFETY: see `drive`; the tail uses masked loads limited to the row's last elements.
+    // SAFETY: the caller's contract (`Tiles::tile`); the tail uses masked loads limited to the
+    // row's last elements.
     unsafe {
         let mut acc = [[_mm512_setzero_ps(); R]; B];
         let full = k / 16 * 16;

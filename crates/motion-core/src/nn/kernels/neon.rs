@@ -1,16 +1,18 @@
-//! aarch64 NEON row kernels for `Y = X Wᵀ` at small batches: the 128-bit counterpart of
-//! [`super::avx2`] (same tiling: `RW` weight rows x `RB` batch rows of 4-lane accumulators,
-//! every weight read once per product whatever the batch).
+//! aarch64 NEON row tiles for `Y = X Wᵀ` at small batches: the 128-bit counterpart of the AVX2
+//! tiles (`RW` weight rows x `RB` batch rows of 4-lane accumulators, walked by the shared driver
+//! [`super::row_tiles`]).
 //!
 //! Weight rows stay in their stored dtype and are widened in registers: `fcvtl` for f16 (through
 //! `asm!`, as Rust's f16 NEON intrinsics are not stable), a 16-bit shift (`ushll`) for bf16; both
 //! are exact. A row's last `inputs % 4` elements are read as the row's last 4 with the lanes
 //! before them cleared (rows shorter than 4 are copied into a zeroed buffer), so no element
 //! outside a row is read.
+use super::{padded, row_tiles, RowKernels, Tiles};
 use crate::nn::layout::MatMul;
 use crate::nn::packed::Rows;
 use std::arch::aarch64::*;
 use std::arch::asm;
+use std::marker::PhantomData;
 
 /// A stored weight type and how 4 of them become one f32 vector.
 trait Elem {
@@ -53,22 +55,22 @@ impl Elem for Bf16 {
     }
 }
 
-/// `Y = X Wᵀ` (or `Y += X Wᵀ`) for the layout `mm` over `rows` `[mm.outputs, mm.inputs]`.
+/// [`super::product_outputs`] on this path: `Y = X Wᵀ` (or `Y += X Wᵀ`) for the output columns
+/// `outputs` of the layout `mm` over `rows` `[mm.outputs, mm.inputs]`.
 ///
 /// # Safety
-/// The CPU must have NEON, `mm.inputs > 0`, and the slices must be long enough for the layout
-/// (as `MatMul::run` asserts).
+/// The CPU must have NEON; the rest as [`super::product_outputs`].
 #[target_feature(enable = "neon")]
-pub(crate) unsafe fn product(mm: &MatMul, x: &[f32], rows: &Rows, y: &mut [f32], accumulate: bool) {
-    let (x, y) = (x.as_ptr(), y.as_mut_ptr());
+pub(crate) unsafe fn product_outputs(
+    mm: &MatMul,
+    x: *const f32,
+    rows: &Rows,
+    y: *mut f32,
+    accumulate: bool,
+    outputs: std::ops::Range<usize>,
+) {
     // SAFETY: forwarded from the caller.
-    unsafe {
-        match rows {
-            Rows::F32(w) => drive::<F32>(mm, x, w.as_ptr(), y, accumulate),
-            Rows::F16(w) => drive::<F16>(mm, x, w.as_ptr(), y, accumulate),
-            Rows::Bf16(w) => drive::<Bf16>(mm, x, w.as_ptr(), y, accumulate),
-        }
-    }
+    unsafe { super::rows_product::<Neon>(mm, x, rows, y, accumulate, outputs) }
 }
 
 /// Weight rows per tile (16 accumulators + 4 weights + 1 input of the 32 vector registers).
@@ -78,60 +80,49 @@ const RB: usize = 4;
 /// f32 lanes per vector.
 const L: usize = 4;
 
-#[inline(always)]
-unsafe fn drive<E: Elem>(mm: &MatMul, x: *const f32, w: *const E::T, y: *mut f32, acc: bool) {
-    let (n, k, batch) = (mm.outputs, mm.inputs, mm.batch);
-    let (xs, ys) = (mm.x_stride, mm.y_stride);
-    // SAFETY: every tile stays inside the layout (see avx2::drive).
-    unsafe {
-        let mut o = 0;
-        while o + RW <= n {
-            batch_tiles::<E, RW>(x, xs, w.add(o * k), k, y.add(o), ys, batch, acc);
-            o += RW;
-        }
-        while o < n {
-            batch_tiles::<E, 1>(x, xs, w.add(o * k), k, y.add(o), ys, batch, acc);
-            o += 1;
+/// This path's row kernels.
+struct Neon;
+
+impl RowKernels for Neon {
+    type F32 = Tile<F32>;
+    type F16 = Tile<F16>;
+    type Bf16 = Tile<Bf16>;
+
+    #[inline(always)]
+    unsafe fn drive<K: Tiles>(mm: &MatMul, x: *const f32, w: *const K::T, y: *mut f32, acc: bool) {
+        let n = mm.outputs;
+        // SAFETY: forwarded from the caller; the last call takes every row left.
+        unsafe {
+            let o = row_tiles::<K, RW, RB>(mm, x, w, y, n, 0, acc);
+            row_tiles::<K, 1, RB>(mm, x, w, y, n, o, acc);
         }
     }
 }
 
-#[inline(always)]
-#[allow(clippy::too_many_arguments)]
-unsafe fn batch_tiles<E: Elem, const R: usize>(
-    x: *const f32,
-    xs: usize,
-    w: *const E::T,
-    k: usize,
-    y: *mut f32,
-    ys: usize,
-    batch: usize,
-    acc: bool,
-) {
-    // SAFETY: see `drive`.
-    unsafe {
-        let mut b = 0;
-        while b + RB <= batch {
-            tile::<E, R, RB>(x.add(b * xs), xs, w, k, y.add(b * ys), ys, acc);
-            b += RB;
-        }
-        match batch - b {
-            1 => tile::<E, R, 1>(x.add(b * xs), xs, w, k, y.add(b * ys), ys, acc),
-            2 => tile::<E, R, 2>(x.add(b * xs), xs, w, k, y.add(b * ys), ys, acc),
-            3 => tile::<E, R, 3>(x.add(b * xs), xs, w, k, y.add(b * ys), ys, acc),
-            _ => {}
-        }
+/// The tiles over weights of type `E`.
+struct Tile<E>(PhantomData<E>);
+
+impl<E: Elem> Tiles for Tile<E> {
+    type T = E::T;
+    /// No prefetch: stable Rust has no prefetch instruction for aarch64.
+    const FIRST_APART: bool = false;
+
+    #[inline(always)]
+    unsafe fn tile<const R: usize, const B: usize, const FIRST: bool>(
+        x: *const f32,
+        xs: usize,
+        w: *const E::T,
+        k: usize,
+        y: *mut f32,
+        ys: usize,
+        accumulate: bool,
+    ) {
+        // SAFETY: forwarded from the caller.
+        unsafe { tile::<E, R, B>(x, xs, w, k, y, ys, accumulate) }
     }
 }
 
-#[inline(always)]
-unsafe fn padded<T: Copy + Default>(src: *const T, n: usize) -> [T; L] {
-    let mut buf = [T::default(); L];
-    // SAFETY: the caller guarantees `src[0..n]` is readable; `n < L`.
-    unsafe { std::ptr::copy_nonoverlapping(src, buf.as_mut_ptr(), n) };
-    buf
-}
-
+/// [`Tiles::tile`].
 #[inline(always)]
 unsafe fn tile<E: Elem, const R: usize, const B: usize>(
     x: *const f32,
@@ -142,7 +133,8 @@ unsafe fn tile<E: Elem, const R: usize, const B: usize>(
     ys: usize,
     accumulate: bool,
 ) {
-    // SAFETY: see `drive`; the tail reads only the row's last `k - full` elements.
+    // SAFETY: the caller's contract (`Tiles::tile`); the tail reads only the row's last
+    // `k - full` elements.
     unsafe {
         let mut acc = [[vdupq_n_f32(0.0); R]; B];
         let full = k / L * L;
@@ -162,7 +154,7 @@ unsafe fn tile<E: Elem, const R: usize, const B: usize>(
         }
         if i < k && full > 0 {
             // The row's last 4 elements (all inside the row) with the lanes before `i` cleared,
-            // as in avx2: no copy per row and tile.
+            // as in the AVX2 tiles: no copy per row and tile.
             let lanes: [u32; L] = [0, 1, 2, 3];
             let keep = vcgtq_u32(
                 vld1q_u32(lanes.as_ptr()),
@@ -185,11 +177,11 @@ unsafe fn tile<E: Elem, const R: usize, const B: usize>(
             let rest = k - i;
             let mut wv = [vdupq_n_f32(0.0); R];
             for (r, v) in wv.iter_mut().enumerate() {
-                let buf = padded(w.add(r * k + i), rest);
+                let buf = padded::<E::T, L>(w.add(r * k + i), rest);
                 *v = E::load(buf.as_ptr());
             }
             for (b, row) in acc.iter_mut().enumerate() {
-                let buf = padded(x.add(b * xs + i), rest);
+                let buf = padded::<f32, L>(x.add(b * xs + i), rest);
                 let xv = vld1q_f32(buf.as_ptr());
                 for (a, v) in row.iter_mut().zip(&wv) {
                     *a = vfmaq_f32(*a, *v, xv);

@@ -1,5 +1,5 @@
 //! `F4`: four f32 lanes in the target's baseline 128-bit vector register, for the portable
-//! kernels ([`super`]): SSE2 on x86-64 (part of the base instruction set),
+//! tiles ([`super`]): SSE2 on x86-64 (part of the base instruction set),
 //! SIMD128 on WebAssembly built with `+simd128`, NEON on aarch64, and a plain array anywhere
 //! else. No runtime feature detection: every operation is one the target always has.
 //!
