@@ -1,8 +1,8 @@
 //! Closed-loop generation: determinism, noise, batch/single agreement, streaming past the plan,
 //! typed errors for bad input, no heap allocation per step, parameter counts at paper size.
 use motion::core::model::{
-    generate_samples, Architecture, BatchGenerator, GenerateError, Generator, ModelConfig,
-    MotionModel, Noise, WeightStore,
+    generate_samples, intention::IntentionConfig, ArchConfig, Architecture, BatchGenerator,
+    DaeLstmFields, GenerateError, Generator, ModelConfig, MotionModel, Noise, WeightStore,
 };
 use ndarray::{Array2, Array3, ArrayView2};
 use std::path::PathBuf;
@@ -23,7 +23,11 @@ fn model(name: &str) -> Arc<MotionModel> {
     if name == "dae_lstm_actions" {
         // The parity fixture is unconditioned: a small random action-conditioned DAE-LSTM.
         let mut config = ModelConfig::paper(Architecture::DaeLstm);
-        (config.hidden, config.layers, config.dae_hidden) = (16, 2, Some(24));
+        (config.hidden, config.layers) = (16, 2);
+        config.arch = ArchConfig::DaeLstm(DaeLstmFields {
+            dae_hidden: 24,
+            dae_layers: 3,
+        });
         config.seed_frames = 10;
         return Arc::new(MotionModel::random(&config, 11).unwrap());
     }
@@ -205,7 +209,7 @@ fn batch_errors() {
 fn intention_z_per_row_seeded_or_explicit() {
     let m = model("intention");
     let s = seed();
-    let n = m.config().noise_dims.unwrap();
+    let n = IntentionConfig::of(m.config()).noise_dims;
     // Seeded z: reproducible, another seed another future.
     let a = run(&m, s.view(), None, Noise::Seed(7), 40);
     assert_eq!(a, run(&m, s.view(), None, Noise::Seed(7), 40));
@@ -308,7 +312,7 @@ fn intention_with_noise_scale(scale: f32) -> Result<Arc<MotionModel>, String> {
 fn intention_noise_scale_scales_drawn_z_only() {
     let base = model("intention");
     let s = seed();
-    let n = base.config().noise_dims.unwrap();
+    let n = IntentionConfig::of(base.config()).noise_dims;
     // The file without the key and with 1 draw the same z.
     let one = intention_with_noise_scale(1.0).unwrap();
     assert_eq!(

@@ -315,7 +315,11 @@ fn check_intention(name: &str) -> f32 {
     let (_, labels) = get(&expected, "seed_labels");
     let (cs, closed) = get(&expected, "closed_loop");
     let lookahead: usize = expected.metadata("lookahead").unwrap().parse().unwrap();
-    assert_eq!(model.config().lookahead, Some(lookahead), "{name}");
+    assert_eq!(
+        motion::core::model::intention::IntentionConfig::of(model.config()).lookahead,
+        lookahead,
+        "{name}"
+    );
     let width = ss[1];
     let seed = ArrayView2::from_shape((ss[0], width), &seed).unwrap();
 
@@ -788,7 +792,11 @@ fn intention_bad_configs_are_refused() {
             serde_json::json!(0),
         ),
         ("lookahead", "lookahead >= 1", serde_json::json!(0)),
-        ("intentions", "needs intentions", serde_json::Value::Null),
+        (
+            "intentions",
+            "missing field `intentions`",
+            serde_json::Value::Null,
+        ),
         ("residual", "residual", serde_json::json!(false)),
         ("derivative_order", "derivative_order", serde_json::json!(3)),
     ];

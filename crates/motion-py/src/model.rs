@@ -211,7 +211,7 @@ impl Model {
         let c = self.model.config();
         format!(
             "Model({:?}, {} fps, {} seed frames, {} actions)",
-            c.architecture,
+            c.architecture(),
             c.fps,
             c.seed_frames,
             c.actions.len()

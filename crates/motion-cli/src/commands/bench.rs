@@ -253,8 +253,8 @@ fn models(args: &Args) -> anyhow::Result<Vec<Arc<MotionModel>>> {
         .map(|arch| {
             let mut config = ModelConfig::paper(arch.architecture());
             config.hidden = args.hidden;
-            if config.plan_hidden.is_some() {
-                config.plan_hidden = Some(args.hidden);
+            if let motion_core::model::ArchConfig::VgruD(fields) = &mut config.arch {
+                fields.plan_hidden = args.hidden;
             }
             Ok(Arc::new(MotionModel::random(&config, args.seed)?))
         })
@@ -333,7 +333,7 @@ fn measure(
     let cfg = model.config();
     Ok(Measurement {
         simd: simd::active(),
-        arch: cfg.architecture.name(),
+        arch: cfg.architecture().name(),
         hidden: cfg.hidden,
         batch: run.batch,
         shards: shard_count,
@@ -354,7 +354,7 @@ fn time_steps(model: &Arc<MotionModel>, run: &TimedRun) -> anyhow::Result<(Vec<f
     // Within-plan segments: the plan computed at seeding covers seed + horizon steps; re-seed
     // (untimed) before it runs out. Plan buffers grow with the horizon, so keep it the model's.
     let horizon = cfg.horizon.max(WARM_UP_STEPS + 2);
-    let segment = if run.with_plan || cfg.architecture == Architecture::GruD {
+    let segment = if run.with_plan || cfg.architecture() == Architecture::GruD {
         run.steps
     } else {
         horizon - WARM_UP_STEPS - 1

@@ -71,85 +71,14 @@ fn text_summary(model: &MotionModel) -> String {
         let _ = writeln!(s, "{key:<15} {value}");
     };
     line("file", model.path().display().to_string());
-    let sizes = match c.architecture {
-        Architecture::VgruD => {
-            line(
-                "architecture",
-                "vgru-d (VTLN-RNN: plan GRU + body GRU + linear decoder, Gopalakrishnan et al. 2019)".into(),
-            );
-            format!(
-                "body GRU {} units, plan GRU {} units",
-                c.hidden,
-                c.plan_hidden.unwrap_or(0)
-            )
+    let mut sizes = String::new();
+    for (key, value) in c.arch.describe(c) {
+        if key == "sizes" {
+            sizes = value;
+        } else {
+            line(key, value);
         }
-        Architecture::GruD => {
-            line(
-                "architecture",
-                "gru-d (stacked GRU + linear decoder, Gopalakrishnan et al. 2019)".into(),
-            );
-            format!("{} GRU layers x {} units", c.layers, c.hidden)
-        }
-        Architecture::DaeLstm => {
-            line(
-                "architecture",
-                "dae-lstm (stacked LSTM + linear decoder, each output filtered by a dropout \
-                 autoencoder before it is fed back, Ghosh et al. 2017)"
-                    .into(),
-            );
-            format!(
-                "{} LSTM layers x {} units (first layer input {} = features + {} action one-hot); \
-                 autoencoder {} ReLU layers x {} units",
-                c.layers,
-                c.hidden,
-                c.rnn_input_dims(),
-                c.actions.len(),
-                c.dae_layers.unwrap_or(0),
-                c.dae_hidden.unwrap_or(0)
-            )
-        }
-        Architecture::Intention => {
-            line(
-                "architecture",
-                "intention (seed labelled with intentions, intention forecaster GRU, stacked GRU \
-                 pose generator on noise z and the intentions forecast ahead + linear decoder, \
-                 Tanke et al. 2021)"
-                    .into(),
-            );
-            let n = c.noise_dims.unwrap_or(0);
-            let (fe, g) = (c.intention_features.unwrap_or(0), c.lookahead.unwrap_or(0));
-            line(
-                "intentions",
-                format!(
-                    "{} intentions from {} pose clusters (labels.centroids, labels.merge); \
-                     forecaster GRUs (label_hidden) {} units; look-ahead {} frames, \
-                     intent_conv {} channels",
-                    c.intentions.unwrap_or(0),
-                    c.clusters.unwrap_or(0),
-                    c.label_hidden.unwrap_or(0),
-                    g,
-                    fe
-                ),
-            );
-            line(
-                "noise",
-                format!(
-                    "z ~ N(0, s² I) of noise_dims {n} per sample, s = noise_scale {}; pose \
-                     encoder {} units, decoder layers start at its state + z",
-                    c.noise_scale.unwrap_or(1.0),
-                    c.hidden.saturating_sub(n)
-                ),
-            );
-            format!(
-                "{} GRU layers x {} units (first layer input {} = pose {} + noise {n} + \
-                 intention features {fe})",
-                c.layers,
-                c.hidden,
-                c.output_dims() + n + fe,
-                c.output_dims()
-            )
-        }
-    };
+    }
     line(
         "sizes",
         format!(
@@ -194,7 +123,7 @@ fn text_summary(model: &MotionModel) -> String {
             "no".into()
         },
     );
-    if c.architecture != Architecture::DaeLstm {
+    if c.architecture() != Architecture::DaeLstm {
         line(
             "gru convention",
             format!(

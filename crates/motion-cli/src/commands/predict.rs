@@ -263,7 +263,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             GroundingConfig::default()
         },
     };
-    let architecture = job.model.config().architecture;
+    let architecture = job.model.config().architecture();
     if args.samples > 1 && !architecture.is_stochastic() {
         args.reporting.notice(format_args!(
             "note: the model is deterministic ({}): all {} samples are identical",

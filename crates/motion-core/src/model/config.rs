@@ -3,6 +3,10 @@ use crate::nn::GruConvention;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
+use super::dae_lstm::DaeLstmFields;
+use super::grud::GruDFields;
+use super::intention::IntentionFields;
+use super::vgru::VgruDFields;
 use super::weights::{WeightStore, WeightsError};
 
 /// The metadata `format` value of a motion-weights file.
@@ -49,11 +53,66 @@ impl Architecture {
     }
 }
 
+/// The fields of a config that belong to one architecture, tagged by the `architecture` key.
+/// Each architecture's file defines its fields and their checks; this enum is the one place the
+/// architectures are registered for configs (and [`Network`](super::Network) for weights).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "architecture")]
+pub enum ArchConfig {
+    /// `vgru-d`.
+    #[serde(rename = "vgru-d")]
+    VgruD(VgruDFields),
+    /// `gru-d`.
+    #[serde(rename = "gru-d")]
+    GruD(GruDFields),
+    /// `dae-lstm`.
+    #[serde(rename = "dae-lstm")]
+    DaeLstm(DaeLstmFields),
+    /// `intention`.
+    #[serde(rename = "intention")]
+    Intention(IntentionFields),
+}
+
+impl ArchConfig {
+    /// Which architecture.
+    pub fn architecture(&self) -> Architecture {
+        match self {
+            ArchConfig::VgruD(_) => Architecture::VgruD,
+            ArchConfig::GruD(_) => Architecture::GruD,
+            ArchConfig::DaeLstm(_) => Architecture::DaeLstm,
+            ArchConfig::Intention(_) => Architecture::Intention,
+        }
+    }
+
+    /// The architecture's own checks of its fields against the shared ones.
+    fn validate(&self, config: &ModelConfig) -> Result<(), String> {
+        match self {
+            ArchConfig::VgruD(f) => f.validate(config),
+            ArchConfig::GruD(f) => f.validate(config),
+            ArchConfig::DaeLstm(f) => f.validate(config),
+            ArchConfig::Intention(f) => f.validate(config),
+        }
+    }
+
+    /// What the architecture is and its own sizes in words, as `(key, value)` lines (`motion-cli
+    /// info`; the last is `sizes`).
+    pub fn describe(&self, config: &ModelConfig) -> Vec<(&'static str, String)> {
+        match self {
+            ArchConfig::VgruD(f) => f.describe(config),
+            ArchConfig::GruD(f) => f.describe(config),
+            ArchConfig::DaeLstm(f) => f.describe(config),
+            ArchConfig::Intention(f) => f.describe(config),
+        }
+    }
+}
+
 /// The `config` JSON object: everything an engine needs to build and drive the model.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ModelConfig {
-    /// `vgru-d`, `gru-d`, `dae-lstm` or `intention`.
-    pub architecture: Architecture,
+    /// The architecture (`vgru-d`, `gru-d`, `dae-lstm` or `intention`, the `architecture` key)
+    /// and the fields only it has.
+    #[serde(flatten)]
+    pub arch: ArchConfig,
     /// Width of a full frame as callers see it (99 for H3.6M).
     pub frame_dims: usize,
     /// Indices of the full-frame dims the model predicts; the others are restored to the mean.
@@ -64,42 +123,6 @@ pub struct ModelConfig {
     /// Stacked GRU (`gru-d`, `intention`'s pose decoder) or LSTM (`dae-lstm`) layers; 1 for
     /// `vgru-d`.
     pub layers: usize,
-    /// Plan GRU units (`vgru-d` only).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub plan_hidden: Option<usize>,
-    /// Units of each hidden layer of the dropout autoencoder (`dae-lstm` only).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub dae_hidden: Option<usize>,
-    /// Hidden layers of the dropout autoencoder (`dae-lstm` only; Ghosh et al. 2017: 3).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub dae_layers: Option<usize>,
-    /// Width `N` of the noise `z ~ N(0, I)` appended to the pose decoder's initial state and to
-    /// its every input (`intention` only; `0 < N < hidden`, the pose encoder has `hidden - N`
-    /// units).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub noise_dims: Option<usize>,
-    /// Standard deviation `s` of the noise drawn per sample, `z ~ N(0, s² I)` (`intention` only;
-    /// absent = 1, the paper's `N(0, I)`): an inference-time choice stored with the weights, as a
-    /// GAN's truncation. Training always draws `N(0, I)`; an explicit `z` is used as given.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub noise_scale: Option<f32>,
-    /// Units of the intention forecaster's encoder and decoder GRUs (`intention` only).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub label_hidden: Option<usize>,
-    /// Number of intention labels `C` (`intention` only; Tanke et al. 2021: 8).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub intentions: Option<usize>,
-    /// Pose clusters `K` whose centroids label the seed frames (`intention` only).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub clusters: Option<usize>,
-    /// Look-ahead `γ`: intention probabilities of frames `τ-1 .. τ+γ-2` are read by the step
-    /// producing frame `τ` (`intention` only; Tanke et al. 2021: 10).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub lookahead: Option<usize>,
-    /// Output channels `Fe` of the temporal convolution over those probabilities (`intention`
-    /// only).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub intention_features: Option<usize>,
     /// Candidate convention of every GRU cell in the file (no GRU in `dae-lstm`: ignored there).
     pub gru_convention: GruConvention,
     /// How `norm.mean` / `norm.std` were computed: `standard` (mean and standard deviation) or
@@ -163,7 +186,22 @@ impl ModelConfig {
             key: "config".into(),
             problem,
         };
-        let config: ModelConfig = serde_json::from_str(json).map_err(|e| bad(e.to_string()))?;
+        // The architecture first, so that a file of another kind (an action classifier) is named
+        // as such rather than by the first field it lacks.
+        let value: serde_json::Value =
+            serde_json::from_str(json).map_err(|e| bad(e.to_string()))?;
+        const KNOWN: [&str; 4] = ["vgru-d", "gru-d", "dae-lstm", "intention"];
+        match value.get("architecture") {
+            Some(serde_json::Value::String(name)) if !KNOWN.contains(&name.as_str()) => {
+                return Err(bad(format!(
+                    "unknown architecture `{name}`, expected one of `{}`",
+                    KNOWN.join("`, `")
+                )));
+            }
+            None => return Err(bad("missing field `architecture`".into())),
+            _ => {}
+        }
+        let config: ModelConfig = serde_json::from_value(value).map_err(|e| bad(e.to_string()))?;
         config.validate().map_err(bad)?;
         Ok(config)
     }
@@ -179,36 +217,10 @@ impl ModelConfig {
         };
         at_most("frame_dims", self.frame_dims, limits::FRAME_DIMS)?;
         at_most("hidden", self.hidden, limits::UNITS)?;
-        at_most("plan_hidden", self.plan_hidden.unwrap_or(0), limits::UNITS)?;
-        at_most("dae_hidden", self.dae_hidden.unwrap_or(0), limits::UNITS)?;
         at_most("layers", self.layers, limits::LAYERS)?;
-        at_most("dae_layers", self.dae_layers.unwrap_or(0), limits::LAYERS)?;
         at_most("seed_frames", self.seed_frames, limits::FRAMES)?;
         at_most("horizon", self.horizon, limits::FRAMES)?;
         at_most("actions", self.actions.len(), limits::ACTIONS)?;
-        at_most("noise_dims", self.noise_dims.unwrap_or(0), limits::UNITS)?;
-        at_most(
-            "label_hidden",
-            self.label_hidden.unwrap_or(0),
-            limits::UNITS,
-        )?;
-        at_most(
-            "intention_features",
-            self.intention_features.unwrap_or(0),
-            limits::UNITS,
-        )?;
-        at_most(
-            "intentions",
-            self.intentions.unwrap_or(0),
-            limits::INTENTIONS,
-        )?;
-        at_most("clusters", self.clusters.unwrap_or(0), limits::INTENTIONS)?;
-        at_most("lookahead", self.lookahead.unwrap_or(0), limits::LOOKAHEAD)?;
-        at_most(
-            "lookahead * intentions",
-            self.lookahead.unwrap_or(0) * self.intentions.unwrap_or(0),
-            limits::WINDOW_VALUES,
-        )?;
         at_most(
             "(seed_frames + horizon) * frame_dims",
             (self.seed_frames + self.horizon) * self.frame_dims,
@@ -243,89 +255,11 @@ impl ModelConfig {
                 limits::FPS
             ));
         }
-        match self.architecture {
-            Architecture::GruD if self.layers == 0 => return Err("gru-d with 0 layers".into()),
-            Architecture::VgruD => {
-                if self.plan_hidden.unwrap_or(0) == 0 {
-                    return Err("vgru-d needs plan_hidden > 0".into());
-                }
-                if self.actions.is_empty() {
-                    return Err("vgru-d needs at least one action label".into());
-                }
-                if self.horizon == 0 {
-                    return Err("vgru-d needs horizon > 0".into());
-                }
-            }
-            Architecture::GruD => {}
-            Architecture::DaeLstm => {
-                if self.layers == 0 {
-                    return Err("dae-lstm with 0 LSTM layers".into());
-                }
-                if self.dae_hidden.unwrap_or(0) == 0 {
-                    return Err("dae-lstm needs dae_hidden > 0".into());
-                }
-                if self.dae_layers.is_none() {
-                    return Err("dae-lstm needs dae_layers".into());
-                }
-            }
-            Architecture::Intention => self.validate_intention()?,
-        }
+        self.arch.validate(self)?;
         if !matches!(self.normalization.as_str(), "standard" | "min-max") {
             return Err(format!(
                 "normalization {:?} is neither \"standard\" nor \"min-max\"",
                 self.normalization
-            ));
-        }
-        Ok(())
-    }
-
-    /// The `intention` fields: present, in range, and the fixed choices of the model.
-    fn validate_intention(&self) -> Result<(), String> {
-        let need = |field: &str, value: Option<usize>| {
-            value.ok_or_else(|| format!("intention needs {field}"))
-        };
-        let noise = need("noise_dims", self.noise_dims)?;
-        if noise == 0 || noise >= self.hidden {
-            return Err(format!(
-                "intention needs 0 < noise_dims < hidden, got noise_dims {noise}, hidden {}",
-                self.hidden
-            ));
-        }
-        if let Some(scale) = self.noise_scale {
-            if !(0.0..=limits::NOISE_SCALE).contains(&scale) {
-                return Err(format!(
-                    "noise_scale {scale} is not in [0, {}]",
-                    limits::NOISE_SCALE
-                ));
-            }
-        }
-        for (field, value) in [
-            ("label_hidden", self.label_hidden),
-            ("intentions", self.intentions),
-            ("clusters", self.clusters),
-            ("lookahead", self.lookahead),
-            ("intention_features", self.intention_features),
-        ] {
-            if need(field, value)? == 0 {
-                return Err(format!("intention needs {field} >= 1"));
-            }
-        }
-        if self.layers == 0 {
-            return Err("intention with 0 GRU layers".into());
-        }
-        if !self.residual {
-            return Err("intention is residual (output = previous pose + decoder)".into());
-        }
-        if self.derivative_order != 0 {
-            return Err(format!(
-                "intention reads plain poses: derivative_order {} (expected 0)",
-                self.derivative_order
-            ));
-        }
-        if self.gru_convention != GruConvention::PyTorch {
-            return Err(format!(
-                "intention's GRUs use the pytorch convention, the config says `{}`",
-                self.gru_convention.name()
             ));
         }
         Ok(())
@@ -345,22 +279,15 @@ impl ModelConfig {
     /// Width of the first recurrent layer's input: the features, plus the action one-hot for a
     /// DAE-LSTM with actions.
     pub fn rnn_input_dims(&self) -> usize {
-        match self.architecture {
-            Architecture::DaeLstm => self.input_dims() + self.actions.len(),
+        match self.arch {
+            ArchConfig::DaeLstm(_) => self.input_dims() + self.actions.len(),
             _ => self.input_dims(),
         }
     }
 
-    /// The dropout autoencoder's layer widths `[O, dae_hidden x dae_layers, O]` (`dae-lstm`).
-    pub fn dae_widths(&self) -> Vec<usize> {
-        let o = self.output_dims();
-        let mut widths = vec![o];
-        widths.extend(std::iter::repeat_n(
-            self.dae_hidden.unwrap_or(0),
-            self.dae_layers.unwrap_or(0),
-        ));
-        widths.push(o);
-        widths
+    /// Which architecture (the `architecture` key).
+    pub fn architecture(&self) -> Architecture {
+        self.arch.architecture()
     }
 
     /// The index of an action label in one-hot order.
@@ -466,21 +393,11 @@ mod tests {
 
     fn vgru() -> ModelConfig {
         ModelConfig {
-            architecture: Architecture::VgruD,
+            arch: ArchConfig::VgruD(VgruDFields { plan_hidden: 4 }),
             frame_dims: 99,
             dims_used: (6..99).collect(),
             hidden: 8,
             layers: 1,
-            plan_hidden: Some(4),
-            dae_hidden: None,
-            dae_layers: None,
-            noise_dims: None,
-            noise_scale: None,
-            label_hidden: None,
-            intentions: None,
-            clusters: None,
-            lookahead: None,
-            intention_features: None,
             gru_convention: serde_json::from_str("\"pytorch\"").unwrap(),
             normalization: "standard".into(),
             residual: true,
@@ -508,7 +425,11 @@ mod tests {
             ("fps", |c| c.fps = 1e9),
             ("fps", |c| c.fps = 0.5),
             ("hidden", |c| c.hidden = usize::MAX / 2),
-            ("plan_hidden", |c| c.plan_hidden = Some(1 << 40)),
+            ("plan_hidden", |c| {
+                c.arch = ArchConfig::VgruD(VgruDFields {
+                    plan_hidden: 1 << 40,
+                })
+            }),
             ("frame_dims", |c| c.frame_dims = 1 << 62),
             ("layers", |c| c.layers = 1000),
         ];
@@ -531,27 +452,44 @@ mod tests {
         // Other architectures do not write the fields.
         let vgru_json = serde_json::to_string(&vgru()).unwrap();
         assert!(!vgru_json.contains("noise_dims"), "{vgru_json}");
+        // Missing fields are refused by the parser, naming them.
+        let mut missing: serde_json::Value = serde_json::from_str(&json).unwrap();
+        missing.as_object_mut().unwrap().remove("noise_dims");
+        let e = ModelConfig::from_json(&missing.to_string(), Path::new("x")).unwrap_err();
+        assert!(e.to_string().contains("noise_dims"), "{e}");
         type Break = fn(&mut ModelConfig);
-        let cases: [(&str, Break); 14] = [
-            ("0 < noise_dims < hidden", |c| c.noise_dims = Some(0)),
-            ("0 < noise_dims < hidden", |c| c.noise_dims = Some(256)),
-            ("intention needs noise_dims", |c| c.noise_dims = None),
-            ("intention needs lookahead >= 1", |c| c.lookahead = Some(0)),
-            ("intention needs intentions >= 1", |c| {
-                c.intentions = Some(0)
+        fn fields(c: &mut ModelConfig) -> &mut IntentionFields {
+            match &mut c.arch {
+                ArchConfig::Intention(f) => f,
+                _ => unreachable!(),
+            }
+        }
+        let cases: [(&str, Break); 13] = [
+            ("0 < noise_dims < hidden", |c| fields(c).noise_dims = 0),
+            ("0 < noise_dims < hidden", |c| fields(c).noise_dims = 256),
+            ("intention needs lookahead >= 1", |c| {
+                fields(c).lookahead = 0
             }),
-            ("intention needs clusters >= 1", |c| c.clusters = Some(0)),
-            ("intention needs label_hidden", |c| c.label_hidden = None),
+            ("intention needs intentions >= 1", |c| {
+                fields(c).intentions = 0
+            }),
+            ("intention needs clusters >= 1", |c| fields(c).clusters = 0),
+            ("intention needs label_hidden", |c| {
+                fields(c).label_hidden = 0
+            }),
             ("intention with 0 GRU layers", |c| c.layers = 0),
             ("intention is residual", |c| c.residual = false),
             ("intention reads plain poses", |c| c.derivative_order = 1),
             ("intention's GRUs use the pytorch", |c| {
                 c.gru_convention = GruConvention::Paper
             }),
-            ("lookahead 20000 is over", |c| c.lookahead = Some(20_000)),
-            ("intentions 20000 is over", |c| c.intentions = Some(20_000)),
+            ("lookahead 20000 is over", |c| fields(c).lookahead = 20_000),
+            ("intentions 20000 is over", |c| {
+                fields(c).intentions = 20_000
+            }),
             ("lookahead * intentions", |c| {
-                (c.lookahead, c.intentions) = (Some(5_000), Some(5_000))
+                let f = fields(c);
+                (f.lookahead, f.intentions) = (5_000, 5_000)
             }),
         ];
         for (needle, break_it) in cases {

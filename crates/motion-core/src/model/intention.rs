@@ -38,10 +38,154 @@
 //! a`), as `training/models.py` does. [`Intention::set_action`] switches a row's one-hot: the
 //! next pose step reads the new action, and so does every intention frame not yet forecast (the
 //! forecaster runs `γ - 2` frames ahead of the poses).
-use super::config::ModelConfig;
+use super::config::{limits, ArchConfig, ModelConfig};
 use super::vgru::NoiseSource;
 use super::weights::{WeightStore, WeightsError};
+use crate::nn::GruConvention as Convention;
 use crate::nn::{GruCell, GruConfig, GruConvention, GruScratch, Linear, LinearConfig};
+
+/// The config fields only `intention` has.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct IntentionFields {
+    /// Width `N` of the noise `z` the pose decoder's initial state ends with and its every
+    /// input reads (`0 < N < hidden`; the pose encoder has `hidden - N` units).
+    pub noise_dims: usize,
+    /// Standard deviation `s` of the noise drawn per sample, `z ~ N(0, s² I)` (absent = 1, the
+    /// paper's `N(0, I)`): an inference-time choice stored with the weights, as a GAN's
+    /// truncation. Training always draws `N(0, I)`; an explicit `z` is used as given.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub noise_scale: Option<f32>,
+    /// Units of the intention forecaster's encoder and decoder GRUs.
+    pub label_hidden: usize,
+    /// Number of intention labels `C` (Tanke et al. 2021: 8).
+    pub intentions: usize,
+    /// Pose clusters `K` whose centroids label the seed frames.
+    pub clusters: usize,
+    /// Look-ahead `γ`: intention probabilities of frames `τ-1 .. τ+γ-2` are read by the step
+    /// producing frame `τ` (Tanke et al. 2021: 10).
+    pub lookahead: usize,
+    /// Output channels `Fe` of the temporal convolution over those probabilities.
+    pub intention_features: usize,
+}
+
+impl IntentionFields {
+    /// In range, and the fixed choices of the model (plain poses, residual, PyTorch GRUs).
+    pub(crate) fn validate(&self, config: &ModelConfig) -> Result<(), String> {
+        let at_most = |what: &str, value: usize, limit: usize| {
+            if value > limit {
+                Err(format!("{what} {value} is over the limit of {limit}"))
+            } else {
+                Ok(())
+            }
+        };
+        at_most("noise_dims", self.noise_dims, limits::UNITS)?;
+        at_most("label_hidden", self.label_hidden, limits::UNITS)?;
+        at_most("intention_features", self.intention_features, limits::UNITS)?;
+        at_most("intentions", self.intentions, limits::INTENTIONS)?;
+        at_most("clusters", self.clusters, limits::INTENTIONS)?;
+        at_most("lookahead", self.lookahead, limits::LOOKAHEAD)?;
+        at_most(
+            "lookahead * intentions",
+            self.lookahead * self.intentions,
+            limits::WINDOW_VALUES,
+        )?;
+        let noise = self.noise_dims;
+        if noise == 0 || noise >= config.hidden {
+            return Err(format!(
+                "intention needs 0 < noise_dims < hidden, got noise_dims {noise}, hidden {}",
+                config.hidden
+            ));
+        }
+        if let Some(scale) = self.noise_scale {
+            if !(0.0..=limits::NOISE_SCALE).contains(&scale) {
+                return Err(format!(
+                    "noise_scale {scale} is not in [0, {}]",
+                    limits::NOISE_SCALE
+                ));
+            }
+        }
+        for (field, value) in [
+            ("label_hidden", self.label_hidden),
+            ("intentions", self.intentions),
+            ("clusters", self.clusters),
+            ("lookahead", self.lookahead),
+            ("intention_features", self.intention_features),
+        ] {
+            if value == 0 {
+                return Err(format!("intention needs {field} >= 1"));
+            }
+        }
+        if config.layers == 0 {
+            return Err("intention with 0 GRU layers".into());
+        }
+        if !config.residual {
+            return Err("intention is residual (output = previous pose + decoder)".into());
+        }
+        if config.derivative_order != 0 {
+            return Err(format!(
+                "intention reads plain poses: derivative_order {} (expected 0)",
+                config.derivative_order
+            ));
+        }
+        if config.gru_convention != Convention::PyTorch {
+            return Err(format!(
+                "intention's GRUs use the pytorch convention, the config says `{}`",
+                config.gru_convention.name()
+            ));
+        }
+        Ok(())
+    }
+
+    /// `motion-cli info`'s lines: what the architecture is, its intentions and noise, then its
+    /// sizes (last).
+    pub(crate) fn describe(&self, config: &ModelConfig) -> Vec<(&'static str, String)> {
+        let c = IntentionConfig::of(config);
+        let (n, fe) = (c.noise_dims, c.features);
+        let conditioned = if c.actions > 0 {
+            format!(" + action one-hot {}", c.actions)
+        } else {
+            String::new()
+        };
+        vec![
+            (
+                "architecture",
+                "intention (seed labelled with intentions, intention forecaster GRU, stacked GRU \
+                 pose generator on noise z and the intentions forecast ahead + linear decoder, \
+                 Tanke et al. 2021)"
+                    .into(),
+            ),
+            (
+                "intentions",
+                format!(
+                    "{} intentions from {} pose clusters (labels.centroids, labels.merge); \
+                     forecaster GRUs (label_hidden) {} units; look-ahead {} frames, \
+                     intent_conv {fe} channels",
+                    c.intentions, c.clusters, c.label_hidden, c.lookahead
+                ),
+            ),
+            (
+                "noise",
+                format!(
+                    "z ~ N(0, s² I) of noise_dims {n} per sample, s = noise_scale {}; pose \
+                     encoder {} units, decoder layers start at its state + z",
+                    c.noise_scale,
+                    c.pose_hidden()
+                ),
+            ),
+            (
+                "sizes",
+                format!(
+                    "{} GRU layers x {} units (first layer input {} = pose {} + noise {n} + \
+                     intention features {fe}{conditioned})",
+                    c.layers,
+                    c.hidden,
+                    c.rnn_input_dims(),
+                    c.outputs
+                ),
+            ),
+        ]
+    }
+}
 
 /// The sizes of an intention model, read from its config.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -71,19 +215,32 @@ pub struct IntentionConfig {
 }
 
 impl IntentionConfig {
-    /// The sizes of `config` (an `intention` config that passed validation; absent fields read 0).
+    /// The sizes of `config` (an `intention` config that passed validation; another
+    /// architecture's reads 0 for the intention sizes).
     pub fn of(config: &ModelConfig) -> Self {
+        let f = match &config.arch {
+            ArchConfig::Intention(f) => *f,
+            _ => IntentionFields {
+                noise_dims: 0,
+                noise_scale: None,
+                label_hidden: 0,
+                intentions: 0,
+                clusters: 0,
+                lookahead: 0,
+                intention_features: 0,
+            },
+        };
         Self {
             outputs: config.output_dims(),
             hidden: config.hidden,
             layers: config.layers,
-            noise_dims: config.noise_dims.unwrap_or(0),
-            noise_scale: config.noise_scale.unwrap_or(1.0),
-            label_hidden: config.label_hidden.unwrap_or(0),
-            intentions: config.intentions.unwrap_or(0),
-            clusters: config.clusters.unwrap_or(0),
-            lookahead: config.lookahead.unwrap_or(0),
-            features: config.intention_features.unwrap_or(0),
+            noise_dims: f.noise_dims,
+            noise_scale: f.noise_scale.unwrap_or(1.0),
+            label_hidden: f.label_hidden,
+            intentions: f.intentions,
+            clusters: f.clusters,
+            lookahead: f.lookahead,
+            features: f.intention_features,
             actions: config.actions.len(),
         }
     }

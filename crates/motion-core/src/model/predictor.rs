@@ -58,7 +58,7 @@ impl MotionModel {
             None => Provenance::new(),
         };
         let norm = Normalization::load(store, config.frame_dims, &config.dims_used)?;
-        let network = match config.architecture {
+        let network = match config.architecture() {
             Architecture::VgruD => Network::Vgru(Box::new(VgruD::load(store, &config)?)),
             Architecture::GruD => Network::Grud(GruD::load(store, &config)?),
             Architecture::DaeLstm => Network::DaeLstm(Box::new(DaeLstm::load(store, &config)?)),

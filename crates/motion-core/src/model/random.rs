@@ -1,8 +1,14 @@
 //! Motion-weights files with random weights, for benchmarks and tests of the engine (never for
 //! motion): every tensor the schema names, uniform in `±1/sqrt(fan)` like PyTorch's default
 //! init, serialized to real safetensors bytes so the normal loader (and its checks) is used.
-use super::config::{Architecture, ModelConfig, DERIVATIVE_PADDING, FORMAT_NAME, FORMAT_VERSION};
+use super::config::{
+    ArchConfig, Architecture, ModelConfig, DERIVATIVE_PADDING, FORMAT_NAME, FORMAT_VERSION,
+};
+use super::dae_lstm::DaeLstmFields;
+use super::grud::GruDFields;
+use super::intention::IntentionFields;
 use super::predictor::MotionModel;
+use super::vgru::VgruDFields;
 use super::weights::{serialize_f32, WeightStore, WeightsError};
 use crate::nn::GruConvention;
 use crate::skeleton::{H36M_ACTIONS, H36M_DIMS_USED, H36M_FRAME_DIMS};
@@ -23,8 +29,25 @@ impl ModelConfig {
         let vgru = architecture == Architecture::VgruD;
         let dae = architecture == Architecture::DaeLstm;
         let intention = architecture == Architecture::Intention;
+        let arch = match architecture {
+            Architecture::VgruD => ArchConfig::VgruD(VgruDFields { plan_hidden: 512 }),
+            Architecture::GruD => ArchConfig::GruD(GruDFields {}),
+            Architecture::DaeLstm => ArchConfig::DaeLstm(DaeLstmFields {
+                dae_hidden: 3000,
+                dae_layers: 3,
+            }),
+            Architecture::Intention => ArchConfig::Intention(IntentionFields {
+                noise_dims: 32,
+                noise_scale: None,
+                label_hidden: 128,
+                intentions: 8,
+                clusters: 32,
+                lookahead: 10,
+                intention_features: 32,
+            }),
+        };
         ModelConfig {
-            architecture,
+            arch,
             frame_dims: H36M_FRAME_DIMS,
             dims_used: H36M_DIMS_USED.to_vec(),
             hidden: match architecture {
@@ -37,16 +60,6 @@ impl ModelConfig {
                 Architecture::GruD => 2,
                 Architecture::DaeLstm | Architecture::Intention => 3,
             },
-            plan_hidden: vgru.then_some(512),
-            dae_hidden: dae.then_some(3000),
-            dae_layers: dae.then_some(3),
-            noise_dims: intention.then_some(32),
-            noise_scale: None,
-            label_hidden: intention.then_some(128),
-            intentions: intention.then_some(8),
-            clusters: intention.then_some(32),
-            lookahead: intention.then_some(10),
-            intention_features: intention.then_some(32),
             normalization: if dae { "min-max" } else { "standard" }.into(),
             gru_convention: if vgru {
                 GruConvention::Paper
@@ -86,8 +99,8 @@ impl ModelConfig {
             shapes.push((format!("{prefix}.bias_ih"), vec![3 * hidden]));
             shapes.push((format!("{prefix}.bias_hh"), vec![3 * hidden]));
         }
-        match self.architecture {
-            Architecture::GruD => {
+        match &self.arch {
+            ArchConfig::GruD(_) => {
                 for k in 0..self.layers {
                     gru(
                         &mut shapes,
@@ -97,21 +110,21 @@ impl ModelConfig {
                     );
                 }
             }
-            Architecture::VgruD => {
-                let p = self.plan_hidden.unwrap_or(0);
+            ArchConfig::VgruD(fields) => {
+                let p = fields.plan_hidden;
                 gru(&mut shapes, "plan.cell", self.actions.len(), p);
                 gru(&mut shapes, "body", i, h);
                 shapes.push(("plan.mu".into(), vec![p]));
                 shapes.push(("plan.sigma".into(), vec![p]));
                 shapes.push(("body.weight_ph".into(), vec![3 * h, p]));
             }
-            Architecture::Intention => {
+            ArchConfig::Intention(_) => {
                 let c = super::intention::IntentionConfig::of(self);
                 let (l, n) = (c.label_hidden, c.intentions);
                 shapes.push(("labels.centroids".into(), vec![c.clusters, o]));
                 shapes.push(("labels.merge".into(), vec![c.clusters]));
-                gru(&mut shapes, "label_encoder", o + n, l);
-                gru(&mut shapes, "label_decoder", n, l);
+                gru(&mut shapes, "label_encoder", c.label_input_dims(), l);
+                gru(&mut shapes, "label_decoder", c.label_decoder_dims(), l);
                 shapes.push(("label_out.weight".into(), vec![n, l]));
                 shapes.push(("label_out.bias".into(), vec![n]));
                 gru(&mut shapes, "pose_encoder", o, c.pose_hidden());
@@ -129,7 +142,7 @@ impl ModelConfig {
                     );
                 }
             }
-            Architecture::DaeLstm => {
+            ArchConfig::DaeLstm(fields) => {
                 for k in 0..self.layers {
                     let inputs = if k == 0 { self.rnn_input_dims() } else { h };
                     shapes.push((format!("rnn.{k}.weight_ih"), vec![4 * h, inputs]));
@@ -137,7 +150,7 @@ impl ModelConfig {
                     shapes.push((format!("rnn.{k}.bias_ih"), vec![4 * h]));
                     shapes.push((format!("rnn.{k}.bias_hh"), vec![4 * h]));
                 }
-                for (k, w) in self.dae_widths().windows(2).enumerate() {
+                for (k, w) in fields.widths(o).windows(2).enumerate() {
                     shapes.push((format!("dae.layers.{k}.weight"), vec![w[1], w[0]]));
                     shapes.push((format!("dae.layers.{k}.bias"), vec![w[1]]));
                 }
@@ -163,7 +176,9 @@ pub fn random_weights_bytes(config: &ModelConfig, seed: u64) -> Vec<u8> {
                 "norm.mean" | "plan.mu" | "plan.sigma" => vec![0.0; n],
                 "norm.std" => vec![1.0; n],
                 "labels.merge" => {
-                    let c = config.intentions.unwrap_or(1).max(1);
+                    let c = super::intention::IntentionConfig::of(config)
+                        .intentions
+                        .max(1);
                     (0..n).map(|k| (k % c) as f32).collect()
                 }
                 _ => {

@@ -687,7 +687,7 @@ fn full_report(
     saved: Option<SavedPredictions>,
 ) -> EvalReport {
     let config = model.config();
-    let stochastic = config.architecture.is_stochastic();
+    let stochastic = config.architecture().is_stochastic();
     let mean_over_actions = MeansOverActions {
         actions: results.len(),
         model: Means::of(&results.iter().map(|r| &r.model).collect::<Vec<_>>()),
@@ -702,7 +702,7 @@ fn full_report(
     EvalReport {
         model: ModelInfo {
             source: options.model_name.clone(),
-            architecture: config.architecture.name(),
+            architecture: config.architecture().name(),
             hidden: config.hidden,
             actions: config.actions.clone(),
             actions_trained: selection::trained_actions(model),

@@ -184,13 +184,13 @@ pub fn select_actions(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use motion_core::model::{Architecture, ModelConfig};
+    use motion_core::model::{ArchConfig, Architecture, ModelConfig, VgruDFields};
 
     fn small_model(architecture: Architecture, actions: &[&str]) -> MotionModel {
         let mut config = ModelConfig::paper(architecture);
         config.hidden = 4;
         if architecture == Architecture::VgruD {
-            config.plan_hidden = Some(2);
+            config.arch = ArchConfig::VgruD(VgruDFields { plan_hidden: 2 });
         }
         config.actions = actions.iter().map(|a| a.to_string()).collect();
         MotionModel::random(&config, 7).unwrap()
