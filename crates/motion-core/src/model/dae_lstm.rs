@@ -11,78 +11,9 @@
 //! The first LSTM layer reads the frame's features followed by the action one-hot when the
 //! config names actions. The autoencoder maps the decoded (normalized) pose to its filtered
 //! version in the same space; that filtered pose is both the output and the next input.
-use super::config::{limits, ArchConfig, ModelConfig};
+use super::config::{ArchConfig, ModelConfig};
 use super::weights::{WeightStore, WeightsError};
 use crate::nn::{LstmCell, LstmConfig, LstmScratch, Mlp, MlpConfig, MlpScratch};
-
-/// The config fields only `dae-lstm` has.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-pub struct DaeLstmFields {
-    /// Units of each hidden layer of the dropout autoencoder.
-    pub dae_hidden: usize,
-    /// Hidden layers of the dropout autoencoder (Ghosh et al. 2017: 3).
-    pub dae_layers: usize,
-}
-
-impl DaeLstmFields {
-    /// LSTM layers and an autoencoder with units, within the limits.
-    pub(crate) fn validate(&self, config: &ModelConfig) -> Result<(), String> {
-        if self.dae_hidden > limits::UNITS {
-            return Err(format!(
-                "dae_hidden {} is over the limit of {}",
-                self.dae_hidden,
-                limits::UNITS
-            ));
-        }
-        if self.dae_layers > limits::LAYERS {
-            return Err(format!(
-                "dae_layers {} is over the limit of {}",
-                self.dae_layers,
-                limits::LAYERS
-            ));
-        }
-        if config.layers == 0 {
-            return Err("dae-lstm with 0 LSTM layers".into());
-        }
-        if self.dae_hidden == 0 {
-            return Err("dae-lstm needs dae_hidden > 0".into());
-        }
-        Ok(())
-    }
-
-    /// The autoencoder's layer widths `[O, dae_hidden x dae_layers, O]`.
-    pub fn widths(&self, outputs: usize) -> Vec<usize> {
-        let mut widths = vec![outputs];
-        widths.extend(std::iter::repeat_n(self.dae_hidden, self.dae_layers));
-        widths.push(outputs);
-        widths
-    }
-
-    /// `motion-cli info`'s lines: what the architecture is, then its sizes (last).
-    pub(crate) fn describe(&self, config: &ModelConfig) -> Vec<(&'static str, String)> {
-        vec![
-            (
-                "architecture",
-                "dae-lstm (stacked LSTM + linear decoder, each output filtered by a dropout \
-                 autoencoder before it is fed back, Ghosh et al. 2017)"
-                    .into(),
-            ),
-            (
-                "sizes",
-                format!(
-                    "{} LSTM layers x {} units (first layer input {} = features + {} action \
-                     one-hot); autoencoder {} ReLU layers x {} units",
-                    config.layers,
-                    config.hidden,
-                    config.rnn_input_dims(),
-                    config.actions.len(),
-                    self.dae_layers,
-                    self.dae_hidden
-                ),
-            ),
-        ]
-    }
-}
 
 /// DAE-LSTM weights (immutable, shareable).
 #[derive(Debug, Clone)]

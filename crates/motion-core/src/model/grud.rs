@@ -7,34 +7,6 @@ use super::config::ModelConfig;
 use super::weights::{WeightStore, WeightsError};
 use crate::nn::{GruCell, GruConfig, GruScratch};
 
-/// The config fields only `gru-d` has: none; its sizes are the shared `hidden` and `layers`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
-pub struct GruDFields {}
-
-impl GruDFields {
-    /// At least one layer.
-    pub(crate) fn validate(&self, config: &ModelConfig) -> Result<(), String> {
-        if config.layers == 0 {
-            return Err("gru-d with 0 layers".into());
-        }
-        Ok(())
-    }
-
-    /// `motion-cli info`'s lines: what the architecture is, then its sizes (last).
-    pub(crate) fn describe(&self, config: &ModelConfig) -> Vec<(&'static str, String)> {
-        vec![
-            (
-                "architecture",
-                "gru-d (stacked GRU + linear decoder, Gopalakrishnan et al. 2019)".into(),
-            ),
-            (
-                "sizes",
-                format!("{} GRU layers x {} units", config.layers, config.hidden),
-            ),
-        ]
-    }
-}
-
 /// GRU-d recurrent weights (immutable, shareable).
 #[derive(Debug, Clone)]
 pub struct GruD {

@@ -49,14 +49,13 @@ pub use crate::weights;
 pub use batch::{BatchGenerator, FrameScalar, Noise};
 pub use character::{Character, CharacterError};
 pub use classifier::{ActionClassifier, ClassifierConfig, ClassifyError, CLASSIFIER_ARCHITECTURE};
-pub use config::{ArchConfig, Architecture, ModelConfig, Provenance};
-pub use dae_lstm::DaeLstmFields;
+pub use config::{
+    ArchConfig, Architecture, DaeLstmFields, GruDFields, IntentionFields, ModelConfig, Provenance,
+    VgruDFields,
+};
 pub use generate_error::GenerateError;
 pub use generator::Generator;
-pub use grud::GruDFields;
-pub use intention::IntentionFields;
 pub use pose_stream::PoseStream;
 pub use predictor::{MotionModel, Network};
 pub use samples::generate_samples;
-pub use vgru::VgruDFields;
 pub use weights::{WeightStore, WeightsError};

@@ -2,13 +2,10 @@
 //! motion): every tensor the schema names, uniform in `±1/sqrt(fan)` like PyTorch's default
 //! init, serialized to real safetensors bytes so the normal loader (and its checks) is used.
 use super::config::{
-    ArchConfig, Architecture, ModelConfig, DERIVATIVE_PADDING, FORMAT_NAME, FORMAT_VERSION,
+    ArchConfig, Architecture, DaeLstmFields, GruDFields, IntentionFields, ModelConfig, VgruDFields,
+    DERIVATIVE_PADDING, FORMAT_NAME, FORMAT_VERSION,
 };
-use super::dae_lstm::DaeLstmFields;
-use super::grud::GruDFields;
-use super::intention::IntentionFields;
 use super::predictor::MotionModel;
-use super::vgru::VgruDFields;
 use super::weights::{serialize_f32, WeightStore, WeightsError};
 use crate::nn::GruConvention;
 use crate::skeleton::{H36M_ACTIONS, H36M_DIMS_USED, H36M_FRAME_DIMS};

@@ -23,61 +23,13 @@
 //! the seed of the current block, into a second guide buffer that becomes the current one when
 //! the block starts: no step pays for a whole block (a stall of `T` plan steps), and the guides
 //! are bit-identical to planning the block at once.
-use super::config::{limits, ArchConfig, ModelConfig};
+use super::config::{ArchConfig, ModelConfig};
 use super::weights::{WeightStore, WeightsError};
 use crate::nn::activation::softplus;
 use crate::nn::{BodyGruCell, BodyGruConfig, GruCell, GruConfig, GruScratch};
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
 use rand_distr::StandardNormal;
-
-/// The config fields only `vgru-d` has.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-pub struct VgruDFields {
-    /// Plan GRU units `P`.
-    pub plan_hidden: usize,
-}
-
-impl VgruDFields {
-    /// A plan, actions to feed it and a horizon to plan over.
-    pub(crate) fn validate(&self, config: &ModelConfig) -> Result<(), String> {
-        if self.plan_hidden == 0 {
-            return Err("vgru-d needs plan_hidden > 0".into());
-        }
-        if self.plan_hidden > limits::UNITS {
-            return Err(format!(
-                "plan_hidden {} is over the limit of {}",
-                self.plan_hidden,
-                limits::UNITS
-            ));
-        }
-        if config.actions.is_empty() {
-            return Err("vgru-d needs at least one action label".into());
-        }
-        if config.horizon == 0 {
-            return Err("vgru-d needs horizon > 0".into());
-        }
-        Ok(())
-    }
-
-    /// `motion-cli info`'s lines: what the architecture is, then its sizes (last).
-    pub(crate) fn describe(&self, config: &ModelConfig) -> Vec<(&'static str, String)> {
-        vec![
-            (
-                "architecture",
-                "vgru-d (VTLN-RNN: plan GRU + body GRU + linear decoder, Gopalakrishnan et al. 2019)"
-                    .into(),
-            ),
-            (
-                "sizes",
-                format!(
-                    "body GRU {} units, plan GRU {} units",
-                    config.hidden, self.plan_hidden
-                ),
-            ),
-        ]
-    }
-}
 
 /// VGRU-d recurrent weights (immutable, shareable).
 #[derive(Debug, Clone)]

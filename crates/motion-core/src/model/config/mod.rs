@@ -3,11 +3,9 @@ use crate::nn::GruConvention;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
-use super::dae_lstm::DaeLstmFields;
-use super::grud::GruDFields;
-use super::intention::IntentionFields;
-use super::vgru::VgruDFields;
+pub mod fields;
 use super::weights::{WeightStore, WeightsError};
+pub use fields::{DaeLstmFields, GruDFields, IntentionFields, VgruDFields};
 
 /// The metadata `format` value of a motion-weights file.
 pub const FORMAT_NAME: &str = "motion-weights";
