@@ -163,6 +163,8 @@ INTENTION_SIZES = {
     "hidden": 24, "noise_dims": 6, "label_hidden": 10, "intentions": 4, "clusters": 7, "intention_features": 5,
     "layers": 2,
 }  # fmt: skip
+# The action-conditioned fixture is narrower (hidden 16), which keeps every fixture under 1 MB together.
+INTENTION_ACTIONS_SIZES = INTENTION_SIZES | {"hidden": 16}
 # Smallest gap between a seed frame's nearest and second-nearest centroid (squared distance in
 # normalized units), so that the engine's f32 labelling cannot pick another cluster.
 LABEL_MARGIN = 1e-2
@@ -274,7 +276,8 @@ def intention_fixture(stem: str, gen: torch.Generator) -> tuple[Fixture, Fixture
     lookahead = INTENTION_SPECS[stem]
     conditioned = stem == "intention_actions"
     config = make_config(
-        "intention", H36M_DIMS_USED, seed_frames=SEED_FRAMES, horizon=HORIZON, lookahead=lookahead, **INTENTION_SIZES
+        "intention", H36M_DIMS_USED, seed_frames=SEED_FRAMES, horizon=HORIZON, lookahead=lookahead,
+        **(INTENTION_ACTIONS_SIZES if conditioned else INTENTION_SIZES),
     ) | ({"actions": INTENTION_ACTIONS} if conditioned else {})
     model = build_model(config)
     hidden, label_hidden = config["hidden"], config["label_hidden"]
