@@ -7,6 +7,7 @@ use pyo3::prelude::*;
 
 use motion_core::model::builtin::default_action_classifier;
 use motion_core::model::ActionClassifier;
+use motion_core::protocol::WindowSet;
 use motion_metrics::evaluation::{
     check_request, evaluate as run, resolve_dataset, EvalError, EvalOptions,
 };
@@ -31,9 +32,11 @@ fn eval_error(e: EvalError) -> PyErr {
 /// returns the report of `motion-cli eval --json` as a dict: per action the model, the
 /// zero-velocity baseline and the real continuation, every metric, beside the published numbers.
 /// `classifier=True` runs the action-classifier protocol with the built-in classifier (a path
-/// gives another), `False` skips it.
+/// gives another), `False` skips it. `windows="validation"` runs the S5 windows disjoint from the
+/// test windows (choose checkpoints and settings on those; report test windows); `any_action=True`
+/// evaluates a single-action model on other actions too.
 #[pyfunction]
-#[pyo3(signature = (model = None, data = None, actions = None, horizon = 100, samples = 1, rng_seed = 0, classifier = None))]
+#[pyo3(signature = (model = None, data = None, actions = None, horizon = 100, samples = 1, rng_seed = 0, classifier = None, windows = "test", any_action = false))]
 #[allow(clippy::too_many_arguments)]
 fn evaluate<'py>(
     py: Python<'py>,
@@ -44,7 +47,14 @@ fn evaluate<'py>(
     samples: usize,
     rng_seed: u64,
     classifier: Option<&Bound<'py, PyAny>>,
+    windows: &str,
+    any_action: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
+    let windows = WindowSet::from_name(windows).ok_or_else(|| {
+        pyo3::exceptions::PyValueError::new_err(format!(
+            "windows={windows:?}: expected \"test\" (the protocol's test windows) or \"validation\" (S5 windows disjoint from them)"
+        ))
+    })?;
     let (model, name) = match model {
         Some(m) => (Arc::clone(&m.model), m.model.path().display().to_string()),
         None => (
@@ -84,6 +94,8 @@ fn evaluate<'py>(
     options.samples = samples;
     options.rng_seed = rng_seed;
     options.classifier = classifier;
+    options.windows = windows;
+    options.any_action = any_action;
     let report = py
         .detach(|| run(&model, &options, &mut |_| {}))
         .map_err(eval_error)?;

@@ -32,7 +32,7 @@ use super::norm::Normalization;
 use super::weights::{WeightStore, WeightsError};
 use crate::derivatives::DerivativeBuffer;
 use crate::nn::parallel::pool::prelude::*;
-use crate::nn::{Linear, LinearConfig, LstmCell, LstmConfig, LstmScratch};
+use crate::nn::{Linear, LinearConfig, LstmCell, LstmConfig, Stack};
 use ndarray::{s, Array2, ArrayView3};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -173,7 +173,7 @@ pub struct ActionClassifier {
     config: ClassifierConfig,
     provenance: Provenance,
     norm: Normalization,
-    rnn: Vec<LstmCell>,
+    rnn: Stack<LstmCell>,
     head: Linear,
 }
 
@@ -201,23 +201,18 @@ impl ActionClassifier {
             None => Provenance::new(),
         };
         let norm = Normalization::load(store, config.frame_dims, &config.dims_used)?;
-        let rnn = (0..config.layers)
-            .map(|k| {
-                let inputs = if k == 0 {
-                    config.input_dims()
-                } else {
-                    config.hidden
+        let rnn = Stack::load(
+            config.layers,
+            config.input_dims(),
+            config.hidden,
+            |k, inputs| {
+                let cfg = LstmConfig {
+                    inputs,
+                    hidden: config.hidden,
                 };
-                LstmCell::load(
-                    store,
-                    &format!("rnn.{k}"),
-                    LstmConfig {
-                        inputs,
-                        hidden: config.hidden,
-                    },
-                )
-            })
-            .collect::<Result<Vec<_>, _>>()?;
+                LstmCell::load(store, &format!("rnn.{k}"), cfg)
+            },
+        )?;
         let head = Linear::load(
             store,
             "head",
@@ -253,11 +248,7 @@ impl ActionClassifier {
 
     /// Trainable parameters (normalization statistics excluded).
     pub fn parameter_count(&self) -> usize {
-        self.rnn
-            .iter()
-            .map(LstmCell::parameter_count)
-            .sum::<usize>()
-            + self.head.parameter_count()
+        self.rnn.parameter_count() + self.head.parameter_count()
     }
 
     /// Logits `[N, actions]` of `N` windows of `T` full frames each (`windows [N, T, frame_dims]`,
@@ -363,7 +354,6 @@ impl ActionClassifier {
         let c = &self.config;
         let used = c.dims_used.len();
         let input = c.input_dims();
-        let hidden = c.hidden;
         let mut derivs: Vec<DerivativeBuffer<f32>> = (0..rows)
             .map(|_| DerivativeBuffer::new(used, c.derivative_order))
             .collect();
@@ -394,9 +384,7 @@ impl ActionClassifier {
             }
         }
         let mut x = vec![0.0f32; rows * input];
-        let mut h = vec![vec![0.0f32; rows * hidden]; c.layers];
-        let mut cell = vec![vec![0.0f32; rows * hidden]; c.layers];
-        let mut scratch = LstmScratch::new(hidden, rows);
+        let mut state = self.rnn.new_state(rows);
         for t in 0..steps {
             for (r, buffer) in derivs.iter_mut().enumerate() {
                 let at = (r * steps + t) * used;
@@ -405,15 +393,11 @@ impl ActionClassifier {
                     &mut x[r * input..(r + 1) * input],
                 );
             }
-            for (k, layer) in self.rnn.iter().enumerate() {
-                let (below, above) = h.split_at_mut(k);
-                let layer_input: &[f32] = if k == 0 { &x } else { &below[k - 1] };
-                layer.step(layer_input, &mut above[0], &mut cell[k], rows, &mut scratch);
-            }
+            self.rnn.step(&mut state, &x, rows);
         }
         let classes = c.actions.len();
         let mut logits = vec![0.0f32; rows * classes];
-        self.head.forward(&h[c.layers - 1], rows, &mut logits);
+        self.head.forward(state.top(), rows, &mut logits);
         logits
     }
 }

@@ -13,12 +13,12 @@
 //! version in the same space; that filtered pose is both the output and the next input.
 use super::config::{ArchConfig, ModelConfig};
 use super::weights::{WeightStore, WeightsError};
-use crate::nn::{LstmCell, LstmConfig, LstmScratch, Mlp, MlpConfig, MlpScratch};
+use crate::nn::{LstmCell, LstmConfig, LstmScratch, Mlp, MlpConfig, MlpScratch, Stack, StackState};
 
 /// DAE-LSTM weights (immutable, shareable).
 #[derive(Debug, Clone)]
 pub struct DaeLstm {
-    layers: Vec<LstmCell>,
+    rnn: Stack<LstmCell>,
     dae: Mlp,
     features: usize,
     actions: usize,
@@ -29,9 +29,7 @@ pub struct DaeLstm {
 /// and work buffers, all sized once.
 #[derive(Debug, Clone)]
 pub struct DaeLstmState {
-    hidden: Vec<Vec<f32>>,
-    cell: Vec<Vec<f32>>,
-    scratch: Vec<LstmScratch>,
+    rnn: StackState<LstmScratch>,
     input: Vec<f32>,
     action: Vec<usize>,
     /// Per row, a crossfade in progress: (previous action, steps done, steps in all).
@@ -43,19 +41,18 @@ pub struct DaeLstmState {
 impl DaeLstm {
     /// Reads `rnn.{k}.*` for `k in 0..layers` and `dae.layers.{k}.*` for the config's widths.
     pub fn load(store: &WeightStore, config: &ModelConfig) -> Result<Self, WeightsError> {
-        let layers = (0..config.layers)
-            .map(|k| {
+        let rnn = Stack::load(
+            config.layers,
+            config.rnn_input_dims(),
+            config.hidden,
+            |k, inputs| {
                 let cfg = LstmConfig {
-                    inputs: if k == 0 {
-                        config.rnn_input_dims()
-                    } else {
-                        config.hidden
-                    },
+                    inputs,
                     hidden: config.hidden,
                 };
                 LstmCell::load(store, &format!("rnn.{k}"), cfg)
-            })
-            .collect::<Result<Vec<_>, _>>()?;
+            },
+        )?;
         let dae = Mlp::load(
             store,
             "dae",
@@ -67,7 +64,7 @@ impl DaeLstm {
             },
         )?;
         Ok(Self {
-            layers,
+            rnn,
             dae,
             features: config.input_dims(),
             actions: config.actions.len(),
@@ -77,16 +74,12 @@ impl DaeLstm {
 
     /// Number of trainable parameters (LSTM layers and autoencoder).
     pub fn parameter_count(&self) -> usize {
-        self.layers
-            .iter()
-            .map(LstmCell::parameter_count)
-            .sum::<usize>()
-            + self.dae.parameter_count()
+        self.rnn.parameter_count() + self.dae.parameter_count()
     }
 
     /// Units per LSTM layer.
     pub fn hidden(&self) -> usize {
-        self.layers[0].config().hidden
+        self.rnn.hidden()
     }
 
     /// The dropout autoencoder.
@@ -96,21 +89,8 @@ impl DaeLstm {
 
     /// Zeroed state for up to `capacity` rows.
     pub fn new_state(&self, capacity: usize) -> DaeLstmState {
-        let h = self.hidden();
-        let zeros = || {
-            self.layers
-                .iter()
-                .map(|_| vec![0.0; capacity * h])
-                .collect()
-        };
         DaeLstmState {
-            hidden: zeros(),
-            cell: zeros(),
-            scratch: self
-                .layers
-                .iter()
-                .map(|_| LstmScratch::new(h, capacity))
-                .collect(),
+            rnn: self.rnn.new_state(capacity),
             input: vec![0.0; capacity * (self.features + self.actions)],
             action: vec![0; capacity],
             fade: vec![(0, 0, 0); capacity],
@@ -122,10 +102,7 @@ impl DaeLstm {
     /// Zeroes the state of `actions.len()` rows and sets each row's action index (ignored by a
     /// model without actions).
     pub fn begin(&self, state: &mut DaeLstmState, actions: &[usize]) {
-        let n = actions.len() * self.hidden();
-        for layer in state.hidden.iter_mut().chain(state.cell.iter_mut()) {
-            layer[..n].fill(0.0);
-        }
+        self.rnn.reset(&mut state.rnn, actions.len());
         state.action[..actions.len()].copy_from_slice(actions);
         state.fade[..actions.len()].fill((0, 0, 0));
     }
@@ -152,7 +129,6 @@ impl DaeLstm {
 
     /// One step for `batch` rows of features `x [batch, I]`; returns the top hidden `[batch, H]`.
     pub fn step<'s>(&self, state: &'s mut DaeLstmState, x: &[f32], batch: usize) -> &'s [f32] {
-        let h = self.hidden();
         let width = self.features + self.actions;
         for (b, row) in state.input[..batch * width]
             .chunks_exact_mut(width)
@@ -173,23 +149,8 @@ impl DaeLstm {
                 }
             }
         }
-        for (k, cell) in self.layers.iter().enumerate() {
-            let (below, rest) = state.hidden.split_at_mut(k);
-            let input: &[f32] = if k == 0 {
-                &state.input[..batch * width]
-            } else {
-                &below[k - 1][..batch * h]
-            };
-            cell.step(
-                input,
-                &mut rest[0],
-                &mut state.cell[k],
-                batch,
-                &mut state.scratch[k],
-            );
-        }
-        let top = state.hidden.last().expect("at least one layer");
-        &top[..batch * h]
+        self.rnn
+            .step(&mut state.rnn, &state.input[..batch * width], batch)
     }
 
     /// Replaces `batch` decoded poses `pose [batch, O]` by the autoencoder's filtering of them.

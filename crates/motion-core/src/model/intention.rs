@@ -41,7 +41,9 @@
 use super::config::{ArchConfig, IntentionFields, ModelConfig};
 use super::vgru::NoiseSource;
 use super::weights::{WeightStore, WeightsError};
-use crate::nn::{GruCell, GruConfig, GruConvention, GruScratch, Linear, LinearConfig};
+use crate::nn::{
+    GruCell, GruConfig, GruConvention, GruScratch, Linear, LinearConfig, Stack, StackState,
+};
 
 /// The sizes of an intention model, read from its config.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -138,7 +140,7 @@ pub struct Intention {
     /// contiguous).
     conv_weight: Vec<f32>,
     conv_bias: Vec<f32>,
-    layers: Vec<GruCell>,
+    rnn: Stack<GruCell>,
 }
 
 /// Per-batch state of an [`Intention`] model, all sized once in [`Intention::new_state`].
@@ -171,8 +173,7 @@ pub struct IntentionState {
     /// First decoder layer's input per row, `x ⊕ z ⊕ features ⊕ action one-hot`
     /// `[capacity, O + N + Fe + A]`.
     input: Vec<f32>,
-    hidden: Vec<Vec<f32>>,
-    scratch: Vec<GruScratch>,
+    rnn: StackState<GruScratch>,
 }
 
 /// `out` (empty for unconditioned models) set to the one-hot of `index`.
@@ -252,12 +253,9 @@ impl Intention {
             }
         }
         let conv_bias = store.tensor("intent_conv.bias", &[fe])?;
-        let layers = (0..c.layers)
-            .map(|l| {
-                let inputs = if l == 0 { c.rnn_input_dims() } else { c.hidden };
-                gru(store, &format!("rnn.{l}"), inputs, c.hidden)
-            })
-            .collect::<Result<Vec<_>, _>>()?;
+        let rnn = Stack::load(c.layers, c.rnn_input_dims(), c.hidden, |l, inputs| {
+            gru(store, &format!("rnn.{l}"), inputs, c.hidden)
+        })?;
         Ok(Self {
             config: c,
             centroids,
@@ -268,7 +266,7 @@ impl Intention {
             pose_encoder,
             conv_weight,
             conv_bias,
-            layers,
+            rnn,
         })
     }
 
@@ -287,11 +285,7 @@ impl Intention {
             + self.pose_encoder.parameter_count()
             + self.conv_weight.len()
             + self.conv_bias.len()
-            + self
-                .layers
-                .iter()
-                .map(GruCell::parameter_count)
-                .sum::<usize>()
+            + self.rnn.parameter_count()
     }
 
     /// Noise width `N` (the length of an explicit `z`).
@@ -345,16 +339,7 @@ impl Intention {
             pose_h: vec![0.0; capacity * c.pose_hidden()],
             pose_scratch: GruScratch::new(c.pose_hidden(), capacity),
             input: vec![0.0; capacity * c.rnn_input_dims()],
-            hidden: self
-                .layers
-                .iter()
-                .map(|_| vec![0.0; capacity * c.hidden])
-                .collect(),
-            scratch: self
-                .layers
-                .iter()
-                .map(|_| GruScratch::new(c.hidden, capacity))
-                .collect(),
+            rnn: self.rnn.new_state(capacity),
         }
     }
 
@@ -463,7 +448,7 @@ impl Intention {
     fn finish_seed(&self, state: &mut IntentionState, batch: usize) {
         let c = &self.config;
         let (n, g, nd, ph) = (c.intentions, c.lookahead, c.noise_dims, c.pose_hidden());
-        for layer in &mut state.hidden {
+        for layer in state.rnn.hidden_mut() {
             for (b, h) in layer[..batch * c.hidden]
                 .chunks_exact_mut(c.hidden)
                 .enumerate()
@@ -572,17 +557,7 @@ impl Intention {
                 *out = acc;
             }
         }
-        let h = c.hidden;
-        for (k, cell) in self.layers.iter().enumerate() {
-            let (below, rest) = state.hidden.split_at_mut(k);
-            let input: &[f32] = if k == 0 {
-                &state.input[..batch * width]
-            } else {
-                &below[k - 1][..batch * h]
-            };
-            cell.step(input, &mut rest[0], batch, &mut state.scratch[k]);
-        }
-        let top = state.hidden.last().expect("at least one layer");
-        &top[..batch * h]
+        self.rnn
+            .step(&mut state.rnn, &state.input[..batch * width], batch)
     }
 }

@@ -1,4 +1,5 @@
-//! Neural-network layers (Linear, GRU cells in both conventions, body GRU, LSTM, MLP).
+//! Neural-network layers (Linear, GRU cells in both conventions, body GRU, LSTM, MLP) and
+//! [`Stack`], the stacked recurrent layers every multi-layer model runs.
 //!
 //! Every layer is a `Config` plus `load(store, prefix, config)` reading PyTorch state-dict names
 //! from a [`WeightStore`](crate::weights::WeightStore). Weights are immutable after loading
@@ -31,6 +32,7 @@ pub mod packed;
 pub mod parallel;
 pub mod sgemm_panels;
 pub mod simd;
+pub mod stack;
 
 pub use body_gru::{BodyGruCell, BodyGruConfig};
 pub use gru::{GruCell, GruConfig, GruConvention, GruScratch};
@@ -39,3 +41,4 @@ pub use lstm::{LstmCell, LstmConfig, LstmScratch};
 pub use mlp::{Mlp, MlpConfig, MlpScratch};
 pub use packed::{PackedMatrix, RowDtype};
 pub use simd::{set_simd_path, SimdError, SimdPath};
+pub use stack::{Recurrent, Stack, StackState};

@@ -39,6 +39,14 @@ impl WindowSet {
             WindowSet::Validation => "validation",
         }
     }
+
+    /// The set named `test` or `validation` (what [`WindowSet::name`] gives); `None` for any
+    /// other name.
+    pub fn from_name(name: &str) -> Option<WindowSet> {
+        [WindowSet::Test, WindowSet::Validation]
+            .into_iter()
+            .find(|set| set.name() == name)
+    }
 }
 
 /// Window starts (25 Hz) of `length` frames in a take of `frames` frames, tiled from

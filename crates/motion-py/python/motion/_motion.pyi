@@ -68,8 +68,13 @@ def evaluate(
     samples: int = 1,
     rng_seed: int = 0,
     classifier: Union[bool, Path, None] = None,
+    windows: str = "test",
+    any_action: bool = False,
 ) -> dict[str, Any]:
-    """The H3.6M protocol: the report of ``motion-cli eval --json`` as a dict."""
+    """The H3.6M protocol: the report of ``motion-cli eval --json`` as a dict.
+
+    ``windows="validation"`` runs the S5 windows disjoint from the test windows
+    (``motion-cli eval --windows validation``)."""
 
 def read_bvh(path: Path) -> dict[str, Any]:
     """``{"channels", "fps", "joints", "parents", "offsets", "expmap"}`` of a BVH file."""
