@@ -26,9 +26,9 @@
 //! a re-normalized copy of the full frame it returns.
 use super::config::ModelConfig;
 use super::generate_error::GenerateError;
+use super::net::NoiseSource;
 use super::net::{Begin, NetState};
 use super::predictor::MotionModel;
-use super::vgru::NoiseSource;
 use crate::derivatives::DerivativeBuffer;
 use ndarray::{ArrayView2, ArrayView3};
 use std::sync::Arc;

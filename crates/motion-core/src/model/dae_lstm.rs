@@ -12,6 +12,8 @@
 //! config names actions. The autoencoder maps the decoded (normalized) pose to its filtered
 //! version in the same space; that filtered pose is both the output and the next input.
 use super::config::{ArchConfig, ModelConfig};
+use super::generate_error::GenerateError;
+use super::net::{own, Begin, Net, NetState};
 use super::weights::{WeightStore, WeightsError};
 use crate::nn::{LstmCell, LstmConfig, LstmScratch, Mlp, MlpConfig, MlpScratch, Stack, StackState};
 
@@ -163,5 +165,53 @@ impl DaeLstm {
             &mut state.dae_scratch,
         );
         pose[..n].copy_from_slice(&state.filtered[..n]);
+    }
+}
+
+impl Net for DaeLstm {
+    fn parameter_count(&self) -> usize {
+        DaeLstm::parameter_count(self)
+    }
+    fn needs_action(&self) -> bool {
+        true
+    }
+    fn new_state(&self, rows: usize, _config: &ModelConfig) -> Box<dyn NetState> {
+        Box::new(self.new_state(rows))
+    }
+    fn begin(&self, state: &mut dyn NetState, begin: Begin<'_>) {
+        DaeLstm::begin(
+            self,
+            own::<DaeLstmState>(state),
+            &begin.actions[..begin.rows],
+        );
+    }
+    fn step<'s>(
+        &self,
+        state: &'s mut dyn NetState,
+        features: &[f32],
+        rows: usize,
+        _body_step: usize,
+    ) -> Option<&'s [f32]> {
+        Some(DaeLstm::step(
+            self,
+            own::<DaeLstmState>(state),
+            features,
+            rows,
+        ))
+    }
+    fn filter(&self, state: &mut dyn NetState, out_norm: &mut [f32], rows: usize) {
+        DaeLstm::filter(self, own::<DaeLstmState>(state), out_norm, rows);
+    }
+    fn set_action(
+        &self,
+        state: &mut dyn NetState,
+        _rows: usize,
+        row: usize,
+        action: usize,
+        crossfade: usize,
+        _body_step: usize,
+    ) -> Result<(), GenerateError> {
+        DaeLstm::set_action(self, own::<DaeLstmState>(state), row, action, crossfade);
+        Ok(())
     }
 }

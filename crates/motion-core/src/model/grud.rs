@@ -4,6 +4,7 @@
 //! Motion Prediction", CVPR 2019 — Gopalakrishnan et al. 2019, sections 3.2-3.3 (the GRU-d baseline: two layers of
 //! 512 units with derivative inputs). Tensors `rnn.{k}.*` as in `training/models.py`.
 use super::config::ModelConfig;
+use super::net::{own, Begin, Net, NetState};
 use super::weights::{WeightStore, WeightsError};
 use crate::nn::{GruCell, GruConfig, GruScratch, Stack, StackState};
 
@@ -58,5 +59,26 @@ impl GruD {
     /// One step for `batch` rows of features `x [batch, I]`; returns the top hidden `[batch, H]`.
     pub fn step<'s>(&self, state: &'s mut GruDState, x: &[f32], batch: usize) -> &'s [f32] {
         self.rnn.step(state, x, batch)
+    }
+}
+
+impl Net for GruD {
+    fn parameter_count(&self) -> usize {
+        GruD::parameter_count(self)
+    }
+    fn new_state(&self, rows: usize, _config: &ModelConfig) -> Box<dyn NetState> {
+        Box::new(self.new_state(rows))
+    }
+    fn begin(&self, state: &mut dyn NetState, begin: Begin<'_>) {
+        self.reset(own::<GruDState>(state), begin.rows);
+    }
+    fn step<'s>(
+        &self,
+        state: &'s mut dyn NetState,
+        features: &[f32],
+        rows: usize,
+        _body_step: usize,
+    ) -> Option<&'s [f32]> {
+        Some(GruD::step(self, own::<GruDState>(state), features, rows))
     }
 }

@@ -39,7 +39,9 @@
 //! next pose step reads the new action, and so does every intention frame not yet forecast (the
 //! forecaster runs `γ - 2` frames ahead of the poses).
 use super::config::{ArchConfig, IntentionFields, ModelConfig};
-use super::vgru::NoiseSource;
+use super::generate_error::GenerateError;
+use super::net::NoiseSource;
+use super::net::{own, Begin, Net, NetState};
 use super::weights::{WeightStore, WeightsError};
 use crate::nn::{
     GruCell, GruConfig, GruConvention, GruScratch, Linear, LinearConfig, Stack, StackState,
@@ -559,5 +561,63 @@ impl Intention {
         }
         self.rnn
             .step(&mut state.rnn, &state.input[..batch * width], batch)
+    }
+}
+
+impl Net for Intention {
+    fn parameter_count(&self) -> usize {
+        Intention::parameter_count(self)
+    }
+    fn noise_dims(&self) -> usize {
+        Intention::noise_dims(self)
+    }
+    fn teacher_forced(&self) -> bool {
+        false
+    }
+    fn needs_action(&self) -> bool {
+        self.is_conditioned()
+    }
+    fn new_state(&self, rows: usize, _config: &ModelConfig) -> Box<dyn NetState> {
+        Box::new(self.new_state(rows))
+    }
+    fn begin(&self, state: &mut dyn NetState, begin: Begin<'_>) {
+        Intention::begin(
+            self,
+            own::<IntentionState>(state),
+            begin.noise,
+            begin.actions,
+            begin.seed_len,
+        );
+    }
+    /// Switches at once (`crossfade` is not used: the model was trained on hard switches).
+    fn set_action(
+        &self,
+        state: &mut dyn NetState,
+        _rows: usize,
+        row: usize,
+        action: usize,
+        _crossfade: usize,
+        _body_step: usize,
+    ) -> Result<(), GenerateError> {
+        if !self.is_conditioned() {
+            return Err(GenerateError::NotConditioned);
+        }
+        Intention::set_action(self, own::<IntentionState>(state), row, action);
+        Ok(())
+    }
+    fn step<'s>(
+        &self,
+        state: &'s mut dyn NetState,
+        features: &[f32],
+        rows: usize,
+        body_step: usize,
+    ) -> Option<&'s [f32]> {
+        Intention::step(
+            self,
+            own::<IntentionState>(state),
+            features,
+            rows,
+            body_step,
+        )
     }
 }

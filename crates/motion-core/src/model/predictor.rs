@@ -10,6 +10,7 @@ use super::config::{check_format, parse_provenance, Architecture, ModelConfig, P
 use super::dae_lstm::DaeLstm;
 use super::grud::GruD;
 use super::intention::Intention;
+use super::net::Net;
 use super::norm::Normalization;
 use super::vgru::VgruD;
 use super::weights::{WeightStore, WeightsError};
@@ -125,17 +126,23 @@ impl MotionModel {
 
     /// Trainable parameters (normalization statistics excluded), as PyTorch counts them.
     pub fn parameter_count(&self) -> usize {
-        let net = match &self.network {
-            Network::Vgru(v) => v.parameter_count(),
-            Network::Grud(g) => g.parameter_count(),
-            Network::DaeLstm(d) => d.parameter_count(),
-            Network::Intention(i) => i.parameter_count(),
-        };
-        net + self.decoder.parameter_count()
+        self.network.net().parameter_count() + self.decoder.parameter_count()
     }
 
     /// Width of the hidden state the decoder reads.
     pub fn top_hidden(&self) -> usize {
         self.config.hidden
+    }
+}
+
+impl Network {
+    /// The network as the generators drive it: the one list of architectures.
+    pub fn net(&self) -> &dyn Net {
+        match self {
+            Network::Vgru(n) => n.as_ref(),
+            Network::Grud(n) => n,
+            Network::DaeLstm(n) => n.as_ref(),
+            Network::Intention(n) => n.as_ref(),
+        }
     }
 }

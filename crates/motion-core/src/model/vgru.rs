@@ -24,12 +24,11 @@
 //! the block starts: no step pays for a whole block (a stall of `T` plan steps), and the guides
 //! are bit-identical to planning the block at once.
 use super::config::{ArchConfig, ModelConfig};
+use super::generate_error::GenerateError;
+use super::net::{own, Begin, Net, NetState, NoiseSource};
 use super::weights::{WeightStore, WeightsError};
 use crate::nn::activation::softplus;
 use crate::nn::{BodyGruCell, BodyGruConfig, GruCell, GruConfig, GruScratch};
-use rand::rngs::StdRng;
-use rand::{RngExt, SeedableRng};
-use rand_distr::StandardNormal;
 
 /// VGRU-d recurrent weights (immutable, shareable).
 #[derive(Debug, Clone)]
@@ -40,35 +39,6 @@ pub struct VgruD {
     scale: Vec<f32>,
     body: BodyGruCell,
     actions: usize,
-}
-
-/// Where a row's noise `N(0, I)` comes from: VGRU-d's plan noise `eps`, also the intention
-/// model's `z` ([`super::intention`]).
-#[derive(Debug)]
-pub enum NoiseSource {
-    /// A seeded generator: every plan block draws a fresh `eps`.
-    Rng(Box<StdRng>),
-    /// A fixed `eps` (parity tests, reproducible demos): every block reuses it.
-    Fixed(Vec<f32>),
-}
-
-impl NoiseSource {
-    /// A seeded source (`StdRng::seed_from_u64`).
-    pub fn seeded(seed: u64) -> Self {
-        NoiseSource::Rng(Box::new(StdRng::seed_from_u64(seed)))
-    }
-
-    /// The next `eps` (a seeded source draws `N(0, I)`; a fixed one copies its vector).
-    pub(crate) fn fill(&mut self, eps: &mut [f32]) {
-        match self {
-            NoiseSource::Rng(rng) => {
-                for e in eps {
-                    *e = rng.sample(StandardNormal);
-                }
-            }
-            NoiseSource::Fixed(v) => eps.copy_from_slice(v),
-        }
-    }
 }
 
 /// Per-batch recurrent state of [`VgruD`]: the planned guides, the body hidden state and buffers.
@@ -370,5 +340,57 @@ impl VgruD {
             &mut state.body_scratch,
         );
         &state.hidden[..batch * self.hidden()]
+    }
+}
+
+impl Net for VgruD {
+    fn parameter_count(&self) -> usize {
+        VgruD::parameter_count(self)
+    }
+    fn noise_dims(&self) -> usize {
+        self.plan_hidden()
+    }
+    fn needs_action(&self) -> bool {
+        true
+    }
+    fn new_state(&self, rows: usize, config: &ModelConfig) -> Box<dyn NetState> {
+        Box::new(self.new_state(rows, config.seed_frames + config.horizon))
+    }
+    fn begin(&self, state: &mut dyn NetState, begin: Begin<'_>) {
+        VgruD::begin(
+            self,
+            own::<VgruState>(state),
+            &begin.actions[..begin.rows],
+            begin.noise,
+            begin.seed_len,
+            begin.plan_horizon,
+        );
+    }
+    fn step<'s>(
+        &self,
+        state: &'s mut dyn NetState,
+        features: &[f32],
+        rows: usize,
+        body_step: usize,
+    ) -> Option<&'s [f32]> {
+        Some(VgruD::step(
+            self,
+            own::<VgruState>(state),
+            features,
+            rows,
+            body_step,
+        ))
+    }
+    fn set_action(
+        &self,
+        state: &mut dyn NetState,
+        rows: usize,
+        row: usize,
+        action: usize,
+        _crossfade: usize,
+        body_step: usize,
+    ) -> Result<(), GenerateError> {
+        VgruD::set_action(self, own::<VgruState>(state), rows, row, action, body_step);
+        Ok(())
     }
 }
