@@ -38,7 +38,7 @@ pub(crate) struct BuiltinModel(pub(crate) Result<Arc<MotionModel>, String>);
 
 impl BuiltinModel {
     pub(crate) fn load() -> BuiltinModel {
-        BuiltinModel(match motion_core::model::builtin::default_model() {
+        BuiltinModel(match motion_core::model::builtin::game_model() {
             Some(Ok(model)) => Ok(Arc::new(model)),
             Some(Err(e)) => Err(e.to_string()),
             None => Err("this build has no built-in weights".into()),

@@ -732,3 +732,79 @@ fn classifier_metric_reports_a_curve() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("--action"));
 }
+
+/// A BVH continuation scored after its BVH seed starts from the seed's last pose (not from the
+/// origin, which lifted the hips by their height), and `--seed-frames` scores one file holding
+/// both: real S5 walking stays within the real hip drift either way, with equal reports.
+#[test]
+fn a_bvh_continuation_is_scored_from_its_seed() {
+    use motion_core::formats::bvh::write_bvh;
+    use motion_core::formats::expmap_bvh::expmap_to_bvh;
+    use motion_core::motion::Motion;
+    let root = data_root();
+    let dataset = dataset_dir(&root);
+    if !dataset.join("S5/walking_1.txt.gz").is_file() {
+        eprintln!(
+            "SKIPPED: a BVH continuation needs the H3.6M data at {} (set MOTION_DATA_DIR)",
+            dataset.display()
+        );
+        return;
+    }
+    let dir = Scratch::new("continuation");
+    let window = &load_action_windows(&dataset, "walking", LONG_TERM_HORIZON).unwrap()[0];
+    let seed_len = window.seed.nrows();
+    let whole =
+        ndarray::concatenate(Axis(0), &[window.seed.view(), window.ground_truth.view()]).unwrap();
+    let motion = Motion::expmap_of_width(whole, 25.0).unwrap().unwrap();
+    let bvh = expmap_to_bvh(&motion).unwrap();
+    let part = |name: &str, rows: std::ops::Range<usize>| {
+        let mut b = bvh.clone();
+        b.frames = bvh.frames.slice(ndarray::s![rows, ..]).to_owned();
+        let path = dir.path(name);
+        write_bvh(&path, &b).unwrap();
+        path
+    };
+    let [seed, cont, all] = [
+        part("seed.bvh", 0..seed_len),
+        part("cont.bvh", seed_len..bvh.frames.nrows()),
+        part("all.bvh", 0..bvh.frames.nrows()),
+    ];
+    let run = |args: &[&str]| {
+        let mut all_args = args.to_vec();
+        all_args.extend([
+            "--action",
+            "walking",
+            "--data",
+            p(&root),
+            "--metric",
+            "speed_ratio,drift,foot_contact",
+            "--json",
+        ]);
+        json_of(&score(&all_args))
+    };
+    let paired = run(&["--pred", p(&cont), "--seed", p(&seed)]);
+    let split = run(&["--pred", p(&all), "--seed-frames", &seed_len.to_string()]);
+    for report in [&paired, &split] {
+        let drift = &report["drift"]["windows"][0];
+        assert!(
+            drift["hip_height_mm"].as_f64().unwrap() < drift["hip_height_p95_mm"].as_f64().unwrap(),
+            "{drift}"
+        );
+    }
+    for key in ["speed_ratio", "drift", "foot_contact"] {
+        let (a, b) = (&paired[key]["windows"], &split[key]["windows"]);
+        for (wa, wb) in a.as_array().unwrap().iter().zip(b.as_array().unwrap()) {
+            for (field, va) in wa.as_object().unwrap() {
+                if let (Some(x), Some(y)) = (va.as_f64(), wb[field].as_f64()) {
+                    assert!(
+                        (x - y).abs() <= 1e-6 * (1.0 + x.abs()),
+                        "{key}.{field}: {x} vs {y}"
+                    );
+                }
+            }
+        }
+    }
+    // Nothing is left after the seed: a usage error.
+    let output = score(&["--pred", p(&seed), "--seed-frames", &seed_len.to_string()]);
+    assert_eq!(output.status.code(), Some(2));
+}

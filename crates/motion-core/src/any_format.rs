@@ -410,6 +410,68 @@ fn frames_positions(
     Ok((skeleton, motion.positions()))
 }
 
+/// A BVH continuation as exp-map frames whose root deltas continue from `seed` (a BVH on the same
+/// skeleton at the same rate): H3.6M frames store each frame's root motion relative to the
+/// previous frame, so the first frame of a continuation read on its own would start from the
+/// origin (its delta the whole world offset: a jump of the hips by their height). Read together,
+/// the continuation's first delta is taken from the seed's last pose, as `predict` meant it.
+/// Checks as [`read_array`]; returns `T x D`.
+pub fn read_bvh_continuation(seed: &Path, motion: &Path) -> Result<ArrayD<f64>, AnyMotionError> {
+    let (seed_bvh, motion_bvh) = (read_bvh(seed)?, read_bvh(motion)?);
+    if seed_bvh.skeleton.channel_count() != motion_bvh.skeleton.channel_count()
+        || seed_bvh
+            .skeleton
+            .joints()
+            .iter()
+            .zip(motion_bvh.skeleton.joints())
+            .any(|(a, b)| a.name != b.name || a.channels != b.channels)
+    {
+        return Err(invalid(
+            motion,
+            format!(
+                "its hierarchy differs from its seed's ({}): a continuation is on the seed's skeleton",
+                seed.display()
+            ),
+        ));
+    }
+    if (seed_bvh.frame_time - motion_bvh.frame_time).abs() > 1e-9 * seed_bvh.frame_time.abs() {
+        return Err(invalid(
+            motion,
+            format!(
+                "Frame Time {} differs from its seed's {} ({})",
+                motion_bvh.frame_time,
+                seed_bvh.frame_time,
+                seed.display()
+            ),
+        ));
+    }
+    let seed_frames = seed_bvh.frames.nrows();
+    let joined = Bvh {
+        skeleton: motion_bvh.skeleton,
+        frames: ndarray::concatenate(
+            ndarray::Axis(0),
+            &[seed_bvh.frames.view(), motion_bvh.frames.view()],
+        )
+        .map_err(|e| invalid(motion, e))?,
+        frame_time: motion_bvh.frame_time,
+    };
+    let target = ExpMapTarget::detect(&joined).map_err(|e| {
+        invalid(
+            motion,
+            format!("{e} (scoring reads H3.6M or CMU skeletons)"),
+        )
+    })?;
+    let frames = bvh_to_expmap(&joined, target)
+        .map_err(|e| invalid(motion, e))?
+        .frames()
+        .slice(s![seed_frames.., ..])
+        .to_owned();
+    if frames.is_empty() {
+        return Err(invalid(motion, "empty input (no frames)"));
+    }
+    Ok(frames.into_dyn())
+}
+
 /// One file as an array, for scoring: `.npy` as stored (any rank), exp-map text and BVH (H3.6M
 /// or CMU skeleton) as `T x D` exp-map frames (`downsample_text`: keep the even frames of text
 /// files, the protocol's 50 -> 25 Hz). Not empty; every value finite (the error gives the index).

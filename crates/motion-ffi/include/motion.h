@@ -45,8 +45,8 @@ const char *motion_last_error(void);
 // `path` is NULL or a valid NUL-terminated string.
 struct motion_model *motion_model_load(const char *path);
 
-// The default model built into this library (`weights/vgru_d_multi.safetensors`); NULL if this
-// build has none.
+// The game default built into this library (`weights/intention_actions.safetensors`); NULL if
+// this build has none.
 struct motion_model *motion_model_default(void);
 
 // Frees a model (NULL is ignored). Generators made from it keep their own reference.

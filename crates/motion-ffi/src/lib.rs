@@ -164,12 +164,12 @@ pub unsafe extern "C" fn motion_model_load(path: *const c_char) -> *mut motion_m
     })
 }
 
-/// The default model built into this library (`weights/vgru_d_multi.safetensors`); NULL if this
-/// build has none.
+/// The game default built into this library (`weights/intention_actions.safetensors`); NULL if
+/// this build has none.
 #[no_mangle]
 pub extern "C" fn motion_model_default() -> *mut motion_model {
     guard_ptr(|| {
-        let model = builtin::default_model()
+        let model = builtin::game_model()
             .ok_or("no default weights were built into this library; use motion_model_load")?
             .map_err(|e| e.to_string())?;
         Ok(Box::new(motion_model::new(model)))

@@ -13,7 +13,7 @@ use motion_metrics::evaluation::{
 };
 
 use crate::errors::{format, value, weights};
-use crate::model::Model;
+use crate::model::{BuiltIn, Model};
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(evaluate, m)?)?;
@@ -58,11 +58,8 @@ fn evaluate<'py>(
     let (model, name) = match model {
         Some(m) => (Arc::clone(&m.model), m.model.path().display().to_string()),
         None => (
-            Model::builtin()?.model,
-            format!(
-                "built-in {}",
-                motion_core::model::builtin::DEFAULT_WEIGHTS_NAME
-            ),
+            Model::builtin(BuiltIn::Forecast)?.model,
+            format!("built-in {}", BuiltIn::Forecast.file_name()),
         ),
     };
     let actions: Vec<String> = match actions {

@@ -4,7 +4,7 @@ use std::sync::Arc;
 
 use motion_core::formats::expmap_bvh::ExpMapTarget;
 use motion_core::grounding::GroundingConfig;
-use motion_core::model::builtin::default_model;
+pub use motion_core::model::builtin::BuiltIn;
 use motion_core::model::samples::check_sample_size;
 use motion_core::model::{generate_samples, Generator as CoreGenerator, MotionModel, Noise};
 use motion_core::seed::{
@@ -30,9 +30,10 @@ pub struct Model {
 }
 
 impl Model {
-    /// The built-in default model.
-    pub(crate) fn builtin() -> PyResult<Model> {
-        match default_model() {
+    /// A built-in model: the game default (`Model.default()`) or the forecasting default
+    /// (`motion.evaluate`).
+    pub(crate) fn builtin(which: BuiltIn) -> PyResult<Model> {
+        match which.model() {
             Some(Ok(model)) => Ok(Model {
                 model: Arc::new(model),
             }),
@@ -92,7 +93,7 @@ impl Model {
     /// The built-in default model (the shipped weights).
     #[staticmethod]
     fn default() -> PyResult<Model> {
-        Model::builtin()
+        Model::builtin(BuiltIn::Game)
     }
 
     /// The configuration and provenance: `{"config": {...}, "provenance": {...}, "parameters": n}`.

@@ -23,7 +23,7 @@ use glam::{Quat, Vec3};
 use motion_core::formats::bvh::parse_bvh;
 use motion_core::formats::expmap_bvh::ExpMapTarget;
 use motion_core::model::batch::Noise;
-use motion_core::model::builtin::default_model;
+use motion_core::model::builtin::game_model;
 use motion_core::model::{Character, MotionModel};
 use motion_core::seed::seed_from_bvh;
 use motion_core::Skeleton;
@@ -35,7 +35,7 @@ pub const WALK_SEED_BVH: &str = include_str!("../../../examples/walk_seed.bvh");
 
 thread_local! {
     /// The built-in model, parsed once per thread (a page has one) and shared by its characters.
-    static MODEL: Result<Arc<MotionModel>, String> = match default_model() {
+    static MODEL: Result<Arc<MotionModel>, String> = match game_model() {
         Some(Ok(model)) => Ok(Arc::new(model)),
         Some(Err(e)) => Err(e.to_string()),
         None => Err("this build has no built-in weights (weights/ was empty at build time)".into()),

@@ -241,7 +241,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 /// The models to time: the file given, or random paper-size models of each architecture asked.
 fn models(args: &Args) -> anyhow::Result<Vec<Arc<MotionModel>>> {
     if let Some(path) = &args.model {
-        return Ok(vec![crate::model_source::load_model(Some(path))?]);
+        return Ok(vec![crate::model_source::load_model(
+            Some(path),
+            crate::model_source::BuiltIn::Game,
+        )?]);
     }
     let arches = if args.arch.is_empty() {
         vec![ArchArg::GruD, ArchArg::VgruD]

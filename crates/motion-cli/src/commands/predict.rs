@@ -20,7 +20,7 @@ use rayon::prelude::*;
 use serde_json::{json, Value};
 
 use super::UsageError;
-use crate::model_source::{describe, load_model};
+use crate::model_source::{describe, load_model, BuiltIn};
 use motion_core::clip::{check_not_an_input, check_output, write_clips, Clips};
 use motion_core::seed::{load_seed, model_window, WrittenClip};
 
@@ -212,7 +212,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         ))
         .into());
     }
-    let model = load_model(args.model.as_deref())?;
+    let model = load_model(args.model.as_deref(), BuiltIn::Game)?;
     check_sample_size(args.samples, args.frames, model.config().frame_dims).map_err(|e| {
         UsageError(format!(
             "--samples {} --frames {}: {e}",
@@ -244,7 +244,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     let defaulted = args.action.is_none() && infer.is_none() && model.config().actions.len() > 1;
     let job = Job {
-        target: target_of(model.config(), &describe(args.model.as_deref()))?,
+        target: target_of(
+            model.config(),
+            &describe(args.model.as_deref(), BuiltIn::Game),
+        )?,
         action,
         infer,
         defaulted,
@@ -278,7 +281,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         done.notices.iter().for_each(|n| args.reporting.notice(n));
         if args.reporting.json {
             let report = json!({
-                "model": describe(args.model.as_deref()),
+                "model": describe(args.model.as_deref(), BuiltIn::Game),
                 "action": done.action,
                 "action_inferred": done.inferred,
                 "fps": job.model.config().fps,
@@ -627,7 +630,7 @@ fn run_batch(args: &Args, job: &Job) -> anyhow::Result<()> {
     let succeeded = files.len() - failed;
     if args.reporting.json {
         let report = json!({
-            "model": describe(args.model.as_deref()),
+            "model": describe(args.model.as_deref(), BuiltIn::Game),
             "action": if job.infer.is_some() { Value::Null } else { json!(job.action) },
             "action_inferred": job.infer.is_some(),
             "fps": job.model.config().fps,

@@ -15,7 +15,7 @@ use motion_metrics::evaluation::{
 };
 
 use super::UsageError;
-use crate::model_source;
+use crate::model_source::{self, BuiltIn};
 
 /// The long help after the options.
 const LONG_HELP: &str = "\
@@ -139,7 +139,7 @@ pub fn run(args: Args) -> Result<()> {
     }
     // Cheap checks first: the data directory and the options, before the model is built.
     let dataset = resolve_dataset(args.data.as_deref()).map_err(usage)?;
-    let model = model_source::load_model(args.model.as_deref())?;
+    let model = model_source::load_model(args.model.as_deref(), BuiltIn::Forecast)?;
     let classifier = if args.no_classifier {
         None
     } else {
@@ -147,7 +147,7 @@ pub fn run(args: Args) -> Result<()> {
     };
     let options = EvalOptions {
         dataset,
-        model_name: model_source::describe(args.model.as_deref()),
+        model_name: model_source::describe(args.model.as_deref(), BuiltIn::Forecast),
         actions: args.actions.clone(),
         horizon: args.horizon,
         samples: args.samples,

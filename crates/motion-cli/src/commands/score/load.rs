@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use anyhow::Result;
 use ndarray::{concatenate, Array4, ArrayD, Axis, Ix2, Ix3, Ix4, Ix5};
 
-use motion_core::any_format::read_array;
+use motion_core::any_format::{read_array, read_bvh_continuation};
 use motion_core::file_sets::{check_paired_by_name, expand};
 use motion_core::formats::FileFormat;
 use motion_core::motion::expmap_layout_for_width;
@@ -44,7 +44,11 @@ pub fn inputs(args: &Args) -> Result<Inputs> {
     use anyhow::Context;
     check_paired_by_name(&args.pred, &args.gt).context("--pred and --gt")?;
     check_paired_by_name(&args.pred, &args.seed).context("--pred and --seed")?;
-    let pred_raw = load_group(&args.pred, "--pred")?;
+    let mut pred_raw = load_predictions(&args.pred, &args.seed)?;
+    let seed_split = match args.seed_frames {
+        Some(n) => Some(split_seeds(&mut pred_raw, n)?),
+        None => None,
+    };
     let space = args.input_space.unwrap_or_else(|| default_space(&pred_raw));
     let pred = classify_group(pred_raw, space, "--pred")?;
     if let Some(path) = &args.skeleton {
@@ -67,7 +71,9 @@ pub fn inputs(args: &Args) -> Result<Inputs> {
             )));
         }
     }
-    let seed = if args.seed.is_empty() {
+    let seed = if let Some(seeds) = seed_split {
+        Some(classify_group(seeds, space, "--seed-frames")?)
+    } else if args.seed.is_empty() {
         None
     } else {
         Some(classify_group(
@@ -82,6 +88,76 @@ pub fn inputs(args: &Args) -> Result<Inputs> {
         gt,
         seed,
     })
+}
+
+/// `--seed-frames n`: the first `n` frames of every `T x D` prediction become its seed (returned),
+/// the rest stays the prediction.
+fn split_seeds(
+    preds: &mut [(PathBuf, ArrayD<f64>)],
+    n: usize,
+) -> Result<Vec<(PathBuf, ArrayD<f64>)>> {
+    if n == 0 {
+        return Err(usage("--seed-frames must be at least 1".to_string()));
+    }
+    preds
+        .iter_mut()
+        .map(|(path, array)| {
+            let frames = match array.view().into_dimensionality::<Ix2>() {
+                Ok(frames) => frames,
+                Err(_) => {
+                    return Err(usage(format!(
+                        "{}: --seed-frames splits T x D frames, not shape {:?}",
+                        path.display(),
+                        array.shape()
+                    )))
+                }
+            };
+            if frames.nrows() <= n {
+                return Err(usage(format!(
+                    "{}: {} frames leave nothing after --seed-frames {n}",
+                    path.display(),
+                    frames.nrows()
+                )));
+            }
+            let seed = frames.slice(ndarray::s![..n, ..]).to_owned().into_dyn();
+            let rest = frames.slice(ndarray::s![n.., ..]).to_owned().into_dyn();
+            *array = rest;
+            Ok((path.clone(), seed))
+        })
+        .collect()
+}
+
+/// The arrays of `--pred`, as read, except that a BVH prediction paired with a BVH seed is read
+/// as the seed's continuation ([`read_bvh_continuation`]: its first root delta from the seed's
+/// last pose, not from the origin).
+fn load_predictions(paths: &[PathBuf], seeds: &[PathBuf]) -> Result<Vec<(PathBuf, ArrayD<f64>)>> {
+    let files = expand(paths)?;
+    let seeds = if seeds.is_empty() {
+        Vec::new()
+    } else {
+        expand(seeds)?
+    };
+    if files.is_empty() {
+        return Err(usage("--pred: no files given".to_string()));
+    }
+    let is_bvh = |p: &Path| matches!(FileFormat::from_path(p), Ok(FileFormat::Bvh));
+    files
+        .into_iter()
+        .enumerate()
+        .map(|(k, path)| {
+            // Paired by position; one seed for every prediction is that seed's.
+            let seed = seeds.get(k).or(if seeds.len() == 1 {
+                seeds.first()
+            } else {
+                None
+            });
+            let array = match seed {
+                Some(seed) if is_bvh(&path) && is_bvh(seed) => read_bvh_continuation(seed, &path)?,
+                _ => read_array(&path, false)?,
+            };
+            Ok((path, array))
+        })
+        .collect()
 }
 
 /// The arrays of every file of a flag, as read.

@@ -114,8 +114,16 @@ pub struct Args {
     /// Observed frames before each prediction (N x T_s x D): NDMS then prepends their last κ-1
     /// frames so that the first word straddles the seam; drift starts from their last frame and
     /// foot_contact's floor is their lowest foot joint (both need it).
-    #[arg(long, num_args = 1..)]
+    /// A BVH prediction after a BVH seed is read as its continuation (root motion from the
+    /// seed's last pose) and must be in the seed's frame: `predict` writes its output in the
+    /// seed's floor frame, so score a `predict` output with --seed-frames instead.
+    #[arg(long, num_args = 1.., conflicts_with = "seed_frames")]
     pub seed: Vec<PathBuf>,
+    /// The first N frames of each --pred file are its seed and the rest its prediction: what
+    /// `predict` writes without --prediction-only (the seed, moved into its floor frame, then
+    /// the continuation in the same frame), e.g. `--seed-frames 50` for the shipped models.
+    #[arg(long, value_name = "N")]
+    pub seed_frames: Option<usize>,
     /// The action the predictions should show (H3.6M name): speed_ratio and drift compare them
     /// with that action's real data.
     #[arg(long, value_name = "NAME")]
