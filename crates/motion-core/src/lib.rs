@@ -29,7 +29,7 @@
 //! use motion_core::seed::load_seed;
 //!
 //! let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");
-//! // A small random-weight fixture; `weights/vgru_d_multi.safetensors` is the shipped model.
+//! // A small random-weight fixture; `weights/` holds the shipped models.
 //! let model = Arc::new(MotionModel::load(format!("{root}/tests/fixtures/parity/vgru_d.safetensors"))?);
 //! let (fps, needed) = (model.config().fps, model.config().seed_frames);
 //! // The one seed loader: format by extension, units checked, resampled to the model's rate.

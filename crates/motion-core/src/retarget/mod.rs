@@ -755,11 +755,102 @@ pub fn demo_rig(prefix: &str, z_up: bool, units_per_mm: f64) -> Skeleton {
     Skeleton::new(joints).unwrap()
 }
 
+/// A Mixamo-style rig for examples and tests (not from any asset): the `mixamorig:` bone names of
+/// a Mixamo export without fingers, centimetres, y up, a T-pose, three spine bones, per-joint
+/// rotation orders.
+pub fn demo_mixamo_rig() -> Skeleton {
+    let m = |n: &str| format!("mixamorig:{n}");
+    let names: Vec<String> = [
+        "Hips",
+        "Spine",
+        "Spine1",
+        "Spine2",
+        "Neck",
+        "Head",
+        "LeftShoulder",
+        "LeftArm",
+        "LeftForeArm",
+        "LeftHand",
+        "LeftHandIndex1",
+        "RightShoulder",
+        "RightArm",
+        "RightForeArm",
+        "RightHand",
+        "LeftUpLeg",
+        "LeftLeg",
+        "LeftFoot",
+        "LeftToeBase",
+        "RightUpLeg",
+        "RightLeg",
+        "RightFoot",
+        "RightToeBase",
+    ]
+    .iter()
+    .map(|n| m(n))
+    .collect();
+    let n = |k: usize| names[k].as_str();
+    rig_from_rows(&[
+        (n(0), "", [0.0, 100.0, 0.0], "YXZ"),
+        (n(1), n(0), [0.0, 10.0, 0.0], "ZXY"),
+        (n(2), n(1), [0.0, 12.0, 0.0], "ZXY"),
+        (n(3), n(2), [0.0, 14.0, 0.0], "ZXY"),
+        (n(4), n(3), [0.0, 16.0, 0.0], "ZXY"),
+        (n(5), n(4), [0.0, 10.0, 2.0], "ZXY"),
+        (n(6), n(3), [6.0, 12.0, 0.0], "ZXY"),
+        (n(7), n(6), [12.0, 0.0, 0.0], "ZXY"),
+        (n(8), n(7), [27.0, 0.0, 0.0], "XZY"),
+        (n(9), n(8), [26.0, 0.0, 0.0], "ZXY"),
+        (n(10), n(9), [9.0, 0.0, 2.0], "ZXY"),
+        (n(11), n(3), [-6.0, 12.0, 0.0], "ZXY"),
+        (n(12), n(11), [-12.0, 0.0, 0.0], "ZXY"),
+        (n(13), n(12), [-27.0, 0.0, 0.0], "XZY"),
+        (n(14), n(13), [-26.0, 0.0, 0.0], "ZXY"),
+        (n(15), n(0), [9.0, -6.0, 0.0], "ZXY"),
+        (n(16), n(15), [0.0, -42.0, 0.0], "ZXY"),
+        (n(17), n(16), [0.0, -41.0, 0.0], "ZXY"),
+        (n(18), n(17), [0.0, -8.0, 11.0], "ZXY"),
+        (n(19), n(0), [-9.0, -6.0, 0.0], "ZXY"),
+        (n(20), n(19), [0.0, -42.0, 0.0], "ZXY"),
+        (n(21), n(20), [0.0, -41.0, 0.0], "ZXY"),
+        (n(22), n(21), [0.0, -8.0, 11.0], "ZXY"),
+    ])
+}
+
+/// A rig from rows `(name, parent ("" for the root), offset, rotation order)`; the root gets
+/// position channels too.
+fn rig_from_rows(rows: &[(&str, &str, [f64; 3], &str)]) -> Skeleton {
+    use crate::skeleton::{Channel, Joint};
+    let mut names: Vec<&str> = Vec::new();
+    let joints = rows
+        .iter()
+        .map(|&(name, parent, offset, order)| {
+            let parent = names.iter().position(|n| *n == parent);
+            names.push(name);
+            let mut channels: Vec<Channel> = order
+                .chars()
+                .map(|c| match c {
+                    'X' => Channel::Xrotation,
+                    'Y' => Channel::Yrotation,
+                    _ => Channel::Zrotation,
+                })
+                .collect();
+            if parent.is_none() {
+                channels.splice(
+                    0..0,
+                    [Channel::Xposition, Channel::Yposition, Channel::Zposition],
+                );
+            }
+            Joint::new(name, parent, offset, channels)
+        })
+        .collect();
+    Skeleton::new(joints).unwrap()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::kinematics::channel_positions;
-    use crate::skeleton::{Channel, Joint};
+    use crate::skeleton::Joint;
 
     fn cmu_rig(prefix: &str, z_up: bool) -> Skeleton {
         demo_rig(prefix, z_up, 1.0 / 70.0)
@@ -896,89 +987,11 @@ mod tests {
 
     /// A rig from `(name, parent, offset, rotation order)` rows (the root also gets positions).
     fn rig(rows: &[(&str, &str, [f64; 3], &str)]) -> Skeleton {
-        let mut names: Vec<&str> = Vec::new();
-        let joints = rows
-            .iter()
-            .map(|&(name, parent, offset, order)| {
-                let parent = names.iter().position(|n| *n == parent);
-                names.push(name);
-                let mut channels: Vec<Channel> = order
-                    .chars()
-                    .map(|c| match c {
-                        'X' => Channel::Xrotation,
-                        'Y' => Channel::Yrotation,
-                        _ => Channel::Zrotation,
-                    })
-                    .collect();
-                if parent.is_none() {
-                    channels.splice(
-                        0..0,
-                        [Channel::Xposition, Channel::Yposition, Channel::Zposition],
-                    );
-                }
-                Joint::new(name, parent, offset, channels)
-            })
-            .collect();
-        Skeleton::new(joints).unwrap()
+        rig_from_rows(rows)
     }
 
-    /// A Mixamo-style rig: centimetres, y up, T-pose, three spine bones, per-joint orders.
     fn mixamo() -> Skeleton {
-        let m = |n: &str| format!("mixamorig:{n}");
-        let names: Vec<String> = [
-            "Hips",
-            "Spine",
-            "Spine1",
-            "Spine2",
-            "Neck",
-            "Head",
-            "LeftShoulder",
-            "LeftArm",
-            "LeftForeArm",
-            "LeftHand",
-            "LeftHandIndex1",
-            "RightShoulder",
-            "RightArm",
-            "RightForeArm",
-            "RightHand",
-            "LeftUpLeg",
-            "LeftLeg",
-            "LeftFoot",
-            "LeftToeBase",
-            "RightUpLeg",
-            "RightLeg",
-            "RightFoot",
-            "RightToeBase",
-        ]
-        .iter()
-        .map(|n| m(n))
-        .collect();
-        let n = |k: usize| names[k].as_str();
-        rig(&[
-            (n(0), "", [0.0, 100.0, 0.0], "YXZ"),
-            (n(1), n(0), [0.0, 10.0, 0.0], "ZXY"),
-            (n(2), n(1), [0.0, 12.0, 0.0], "ZXY"),
-            (n(3), n(2), [0.0, 14.0, 0.0], "ZXY"),
-            (n(4), n(3), [0.0, 16.0, 0.0], "ZXY"),
-            (n(5), n(4), [0.0, 10.0, 2.0], "ZXY"),
-            (n(6), n(3), [6.0, 12.0, 0.0], "ZXY"),
-            (n(7), n(6), [12.0, 0.0, 0.0], "ZXY"),
-            (n(8), n(7), [27.0, 0.0, 0.0], "XZY"),
-            (n(9), n(8), [26.0, 0.0, 0.0], "ZXY"),
-            (n(10), n(9), [9.0, 0.0, 2.0], "ZXY"),
-            (n(11), n(3), [-6.0, 12.0, 0.0], "ZXY"),
-            (n(12), n(11), [-12.0, 0.0, 0.0], "ZXY"),
-            (n(13), n(12), [-27.0, 0.0, 0.0], "XZY"),
-            (n(14), n(13), [-26.0, 0.0, 0.0], "ZXY"),
-            (n(15), n(0), [9.0, -6.0, 0.0], "ZXY"),
-            (n(16), n(15), [0.0, -42.0, 0.0], "ZXY"),
-            (n(17), n(16), [0.0, -41.0, 0.0], "ZXY"),
-            (n(18), n(17), [0.0, -8.0, 11.0], "ZXY"),
-            (n(19), n(0), [-9.0, -6.0, 0.0], "ZXY"),
-            (n(20), n(19), [0.0, -42.0, 0.0], "ZXY"),
-            (n(21), n(20), [0.0, -41.0, 0.0], "ZXY"),
-            (n(22), n(21), [0.0, -8.0, 11.0], "ZXY"),
-        ])
+        demo_mixamo_rig()
     }
 
     /// An Unreal-mannequin-style rig: centimetres, z up (x forward, y left), A-pose arms, a
