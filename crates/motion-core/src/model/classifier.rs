@@ -32,7 +32,7 @@ use super::norm::Normalization;
 use super::weights::{WeightStore, WeightsError};
 use crate::derivatives::DerivativeBuffer;
 use crate::nn::parallel::pool::prelude::*;
-use crate::nn::{Linear, LinearConfig, LstmCell, LstmConfig, Stack};
+use crate::nn::{Linear, LinearConfig, LstmCell, Stack};
 use ndarray::{s, Array2, ArrayView3};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -201,17 +201,12 @@ impl ActionClassifier {
             None => Provenance::new(),
         };
         let norm = Normalization::load(store, config.frame_dims, &config.dims_used)?;
-        let rnn = Stack::load(
+        let rnn = Stack::load_lstm(
+            store,
+            "rnn",
             config.layers,
             config.input_dims(),
             config.hidden,
-            |k, inputs| {
-                let cfg = LstmConfig {
-                    inputs,
-                    hidden: config.hidden,
-                };
-                LstmCell::load(store, &format!("rnn.{k}"), cfg)
-            },
         )?;
         let head = Linear::load(
             store,

@@ -15,7 +15,7 @@ use super::config::{ArchConfig, ModelConfig};
 use super::generate_error::GenerateError;
 use super::net::{own, Begin, Net, NetState};
 use super::weights::{WeightStore, WeightsError};
-use crate::nn::{LstmCell, LstmConfig, LstmScratch, Mlp, MlpConfig, MlpScratch, Stack, StackState};
+use crate::nn::{LstmCell, LstmScratch, Mlp, MlpConfig, MlpScratch, Stack, StackState};
 
 /// DAE-LSTM weights (immutable, shareable).
 #[derive(Debug, Clone)]
@@ -43,17 +43,12 @@ pub struct DaeLstmState {
 impl DaeLstm {
     /// Reads `rnn.{k}.*` for `k in 0..layers` and `dae.layers.{k}.*` for the config's widths.
     pub fn load(store: &WeightStore, config: &ModelConfig) -> Result<Self, WeightsError> {
-        let rnn = Stack::load(
+        let rnn = Stack::load_lstm(
+            store,
+            "rnn",
             config.layers,
             config.rnn_input_dims(),
             config.hidden,
-            |k, inputs| {
-                let cfg = LstmConfig {
-                    inputs,
-                    hidden: config.hidden,
-                };
-                LstmCell::load(store, &format!("rnn.{k}"), cfg)
-            },
         )?;
         let dae = Mlp::load(
             store,

@@ -6,7 +6,7 @@
 use super::config::ModelConfig;
 use super::net::{own, Begin, Net, NetState};
 use super::weights::{WeightStore, WeightsError};
-use crate::nn::{GruCell, GruConfig, GruScratch, Stack, StackState};
+use crate::nn::{GruCell, GruScratch, Stack, StackState};
 
 /// GRU-d recurrent weights (immutable, shareable).
 #[derive(Debug, Clone)]
@@ -20,18 +20,13 @@ pub type GruDState = StackState<GruScratch>;
 impl GruD {
     /// Reads `rnn.{k}.weight_ih/weight_hh/bias_ih/bias_hh` for `k in 0..layers`.
     pub fn load(store: &WeightStore, config: &ModelConfig) -> Result<Self, WeightsError> {
-        let rnn = Stack::load(
+        let rnn = Stack::load_gru(
+            store,
+            "rnn",
             config.layers,
             config.input_dims(),
             config.hidden,
-            |k, inputs| {
-                let cfg = GruConfig {
-                    inputs,
-                    hidden: config.hidden,
-                    convention: config.gru_convention,
-                };
-                GruCell::load(store, &format!("rnn.{k}"), cfg)
-            },
+            config.gru_convention,
         )?;
         Ok(Self { rnn })
     }

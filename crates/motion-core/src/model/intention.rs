@@ -255,9 +255,14 @@ impl Intention {
             }
         }
         let conv_bias = store.tensor("intent_conv.bias", &[fe])?;
-        let rnn = Stack::load(c.layers, c.rnn_input_dims(), c.hidden, |l, inputs| {
-            gru(store, &format!("rnn.{l}"), inputs, c.hidden)
-        })?;
+        let rnn = Stack::load_gru(
+            store,
+            "rnn",
+            c.layers,
+            c.rnn_input_dims(),
+            c.hidden,
+            GruConvention::PyTorch,
+        )?;
         Ok(Self {
             config: c,
             centroids,

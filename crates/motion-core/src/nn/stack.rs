@@ -5,8 +5,9 @@
 //! classifier.
 use std::fmt::Debug;
 
-use super::gru::{GruCell, GruScratch};
-use super::lstm::{LstmCell, LstmScratch};
+use super::gru::{GruCell, GruConfig, GruConvention, GruScratch};
+use super::lstm::{LstmCell, LstmConfig, LstmScratch};
+use crate::weights::{WeightStore, WeightsError};
 
 /// A recurrent cell a [`Stack`] can hold.
 pub trait Recurrent {
@@ -172,6 +173,46 @@ impl<C: Recurrent> Stack<C> {
     }
 }
 
+impl Stack<GruCell> {
+    /// `layers` GRU layers `{prefix}.{k}` of `hidden` units over `inputs` features.
+    pub fn load_gru(
+        store: &WeightStore,
+        prefix: &str,
+        layers: usize,
+        inputs: usize,
+        hidden: usize,
+        convention: GruConvention,
+    ) -> Result<Self, WeightsError> {
+        Self::load(layers, inputs, hidden, |k, inputs| {
+            let config = GruConfig {
+                inputs,
+                hidden,
+                convention,
+            };
+            GruCell::load(store, &format!("{prefix}.{k}"), config)
+        })
+    }
+}
+
+impl Stack<LstmCell> {
+    /// `layers` LSTM layers `{prefix}.{k}` of `hidden` units over `inputs` features.
+    pub fn load_lstm(
+        store: &WeightStore,
+        prefix: &str,
+        layers: usize,
+        inputs: usize,
+        hidden: usize,
+    ) -> Result<Self, WeightsError> {
+        Self::load(layers, inputs, hidden, |k, inputs| {
+            LstmCell::load(
+                store,
+                &format!("{prefix}.{k}"),
+                LstmConfig { inputs, hidden },
+            )
+        })
+    }
+}
+
 impl<S> StackState<S> {
     /// Every layer's hidden state `[capacity, hidden]`, bottom first (to set an initial state).
     pub fn hidden_mut(&mut self) -> &mut [Vec<f32>] {
@@ -187,8 +228,7 @@ impl<S> StackState<S> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::nn::{GruConfig, GruConvention, LstmConfig};
-    use crate::weights::{serialize_f32, WeightStore};
+    use crate::weights::serialize_f32;
     use std::collections::BTreeMap;
 
     /// Weights of the given shapes with values spread over [-0.5, 0.5).
@@ -229,23 +269,16 @@ mod tests {
             }
         }
         let store = store(&shapes);
-        let gru = Stack::load(layers, inputs, hidden, |k, width| {
-            let config = GruConfig {
-                inputs: width,
-                hidden,
-                convention: GruConvention::PyTorch,
-            };
-            GruCell::load(&store, &format!("gru.{k}"), config)
-        })
+        let gru = Stack::load_gru(
+            &store,
+            "gru",
+            layers,
+            inputs,
+            hidden,
+            GruConvention::PyTorch,
+        )
         .unwrap();
-        let lstm = Stack::load(layers, inputs, hidden, |k, width| {
-            let config = LstmConfig {
-                inputs: width,
-                hidden,
-            };
-            LstmCell::load(&store, &format!("lstm.{k}"), config)
-        })
-        .unwrap();
+        let lstm = Stack::load_lstm(&store, "lstm", layers, inputs, hidden).unwrap();
         let xs: Vec<Vec<f32>> = (0..3)
             .map(|t| {
                 (0..batch * inputs)
