@@ -6,7 +6,7 @@ architecture and config, e.g. the shipped VGRU-d and a long-horizon fine-tune st
 reloaded from that file, on the S5 **validation** windows: the protocol's mean reference NPSS (4 s) and the 8-12 s
 speed ratio per action of a 300-frame closed loop (``long_horizon.speed_ratios``, plan noise 0).
 
-The choice rule (fixed before any interpolation was scored, session 14): eligible are the α > 0 whose validation
+The choice rule (fixed before any interpolation was scored): eligible are the α > 0 whose validation
 NPSS is at most ``1 + NPSS_SLACK`` times α = 0's (the short-term fit kept within 10 %); among them the most actions
 with an 8-12 s speed ratio >= ``long_horizon.ELIGIBLE_RATIO``, ties to the lower NPSS; none when no α > 0 is
 eligible. α = 0 is always scored (it is the reference of the rule).

@@ -1,4 +1,4 @@
-"""Choosing an intention checkpoint and its noise scale on the S5 *validation* windows (issue 20, session 18).
+"""Choosing an intention checkpoint and its noise scale on the S5 *validation* windows (issue 20).
 
 The rule, fixed before any test window is scored:
 1. among the given checkpoints (their weight averages), the highest validation NDMS 2.0-4.0 s at noise scale 1;
@@ -7,7 +7,7 @@ The rule, fixed before any test window is scored:
    speed ratio (``motion-cli score --metric speed_ratio``, the measure of ``eval``: root-frame joint speed against
    the action's S5 mean, per window 0-2, 2-4, 4-8 and 8-12 s of 12 s forecasts of the validation windows, same
    draws as the NDMS) is at least ``MIN_SPEED_RATIO`` in every window on every action that has test windows
-   (``EVALUABLE``): the issue's "keeps moving" target. (The first use of this rule, session 18, checked the training
+   (``EVALUABLE``): the issue's "keeps moving" target. (The first use of this rule, 2026-12-03, checked the training
    module's joint-angle ratio at 8-12 s instead; it let through a scale whose walking slowed to 0.46 at 2-4 s.)
 
 Validation NDMS: for each action, the 4 windows of ``data.validation_windows`` (disjoint from the test windows), each

@@ -4,7 +4,7 @@ NDMS (Tanke et al. 2021, section 4; ``../shared/reference/metrics.md``; ``motion
 words of ``KAPPA`` = 8 frames of 12 joint positions, finds each word's nearest real word (Euclidean distance of the
 normalized words) in a database of real motion of the same action, and scores the pair's frame-to-frame velocities:
 ``½(1 + cos) · min(|v|, |v'|) / max(|v|, |v'|)`` per joint and step. It measures whether short stretches of the
-forecast move as real motion does *there*, not whether they follow the truth. Measured in session 18 (S5 validation
+forecast move as real motion does *there*, not whether they follow the truth. Measured 2026-12-03 (S5 validation
 windows, D = S5's sequences of the action, 2.0-4.0 s): real motion of the training subjects S1 and S6 scores 0.348,
 the generator 0.27; the joint-angle speed, smoothness and root terms left that gap (weights/README.md).
 
