@@ -2,26 +2,31 @@
 //! transform that makes it the plane `y = 0` ("the floor frame").
 //!
 //! ## The rule (stated once; grounding and the plausibility measures use it)
-//! 1. Per seed frame, the lowest of both feet's foot points ([`super::legs`]), metres.
-//! 2. A plane `y = a·x + b·z + c` fitted by least squares to those points with a ridge penalty
-//!    [`SLOPE_RIDGE_M2`]` · n · (a² + b²)` (a seed standing on one spot gives a level floor, a
-//!    seed walking straight no sideways slope; a slow 2 s walk of 0.8 m keeps ~90 % of its
-//!    measured slope), refitted once on the points no more
-//!    than [`AIRBORNE_M`] above the first fit (steps and swings are not floor); repeated in the
-//!    frame each round levels (4 rounds), so the ridge keeps a still seed level without
-//!    shrinking a walking seed's slope; the tilt then limited to [`MAX_TILT_DEG`].
+//! 1. Per seed frame, the lowest of both feet's foot points ([`super::legs`]), metres: lowest
+//!    in the frame each round of step 2 levels (so the choice does not depend on the tilt the
+//!    seed was recorded with).
+//! 2. A plane `y = a·x + b·z + c` fitted by least squares to those points, its slope measured
+//!    only along the horizontal directions in which the points spread (the principal axes of
+//!    their horizontal positions with a standard deviation of at least [`MIN_SPREAD_M`]; level
+//!    along the others: a seed standing on one spot gives a level floor), refitted once on the points no more than [`AIRBORNE_M`]
+//!    above the first fit (steps and swings are not floor); repeated in the frame each round
+//!    levels until the slope left is under 1e-12 (at most 16 rounds), so the fit is its own
+//!    fixed point: the points moved into the floor frame fit the level plane `y = 0` again (a
+//!    levelled seed written to a file and measured again keeps its floor); the tilt then
+//!    limited to [`MAX_TILT_DEG`].
 //! 3. The floor frame: the rotation taking the plane's normal to +y, about the point of the plane
 //!    under the last seed point, then that point moved to height 0. Integrated H3.6M roots start
 //!    from an unknown orientation (a few degrees of tilt are common in real data), which this
 //!    removes.
 use glam::{DQuat, DVec3, Quat, Vec3};
 
-/// Ridge weight on the floor's slope, m²: see the module docs.
-pub const SLOPE_RIDGE_M2: f64 = 0.005;
+/// The floor's slope is measured along a horizontal direction only where the points' standard
+/// deviation along it is at least this (metres): see the module docs.
+pub const MIN_SPREAD_M: f64 = 0.05;
 /// Points higher than this above the first fit are left out of the second (metres).
 pub const AIRBORNE_M: f64 = 0.03;
 /// Rounds of the fit (see [`Floor::fit`]).
-const FIT_ROUNDS: usize = 4;
+const FIT_ROUNDS: usize = 16;
 /// The largest floor tilt the fit may report (degrees).
 pub const MAX_TILT_DEG: f64 = 30.0;
 
@@ -52,34 +57,55 @@ impl Floor {
         }
     }
 
-    /// Fits the floor to `points` (world, metres; the lowest foot point of each seed frame);
-    /// the pivot lies under the last point. `None` without points or with non-finite ones.
+    /// Fits the floor to `points` (world, metres), one per seed frame (the lowest foot point of
+    /// each); the pivot lies under the last point. `None` without points or with non-finite
+    /// ones.
     pub fn fit(points: &[Vec3]) -> Option<Floor> {
-        let last = points.last()?.as_dvec3();
-        if points.iter().any(|p| !p.is_finite()) {
+        Floor::fit_frames(points, 1)
+    }
+
+    /// Fits the floor to the foot points of seed frames (world, metres): `points` holds
+    /// `per_frame` points of each frame in turn, and each round of the fit takes the lowest of
+    /// each frame in the frame it levels (module docs), so the points moved into the floor
+    /// frame fit the level floor again. `None` without a whole frame, with non-finite points or
+    /// a `per_frame` of 0.
+    pub fn fit_frames(points: &[Vec3], per_frame: usize) -> Option<Floor> {
+        if per_frame == 0 || points.len() < per_frame || points.iter().any(|p| !p.is_finite()) {
             return None;
         }
-        // Fitted again in the frame the last fit levelled, so that the ridge's pull towards
-        // level leaves no slope behind (each round keeps the ridge's share of the last one's).
+        let frames = || points.chunks_exact(per_frame);
+        // Each frame's lowest point in the frame `level` makes, moved into it.
+        let lowest = move |level: DQuat| {
+            frames().map(move |frame| {
+                frame
+                    .iter()
+                    .map(|p| level * p.as_dvec3())
+                    .min_by(|a, b| a.y.total_cmp(&b.y))
+                    .expect("per_frame > 0")
+            })
+        };
+        // Fitted again in the frame the last fit levelled until nothing is left to level (least
+        // squares in y is not rotation-invariant: each round leaves a much smaller slope).
         let mut level = DQuat::IDENTITY;
         let mut height = 0.0;
         for _ in 0..FIT_ROUNDS {
-            let moved = points.iter().map(|p| level * p.as_dvec3());
+            let moved = lowest(level);
             let (mut a, mut b, mut c) = fit_plane(moved.clone(), None)?;
-            if let Some(refit) = fit_plane(moved, Some((a, b, c, AIRBORNE_M))) {
+            if let Some(refit) = fit_plane(moved.clone(), Some((a, b, c, AIRBORNE_M))) {
                 (a, b, c) = refit;
             }
             let normal = DVec3::new(-a, 1.0, -b).normalize();
-            let here = level * last;
+            let here = moved.clone().next_back().expect("a frame");
             // The plane's height under the last point, in this round's frame.
             height = a * here.x + b * here.z + c;
             if a.abs() + b.abs() < 1e-12 {
                 break;
             }
-            level = DQuat::from_rotation_arc(normal, DVec3::Y) * level;
+            let turn = DQuat::from_rotation_arc(normal, DVec3::Y);
+            level = turn * level;
             // The new frame's height: the plane point under the last point, rotated.
             let on_plane = DVec3::new(here.x, a * here.x + b * here.z + c, here.z);
-            height = (DQuat::from_rotation_arc(normal, DVec3::Y) * on_plane).y;
+            height = (turn * on_plane).y;
         }
         let mut up = level.inverse() * DVec3::Y;
         let max = MAX_TILT_DEG.to_radians();
@@ -88,12 +114,11 @@ impl Floor {
             let axis = up.cross(DVec3::Y).normalize();
             up = DQuat::from_axis_angle(axis, tilt - max) * up;
             level = DQuat::from_rotation_arc(up, DVec3::Y);
-            let here = level * last;
-            let moved: Vec<DVec3> = points.iter().map(|p| level * p.as_dvec3()).collect();
+            let moved: Vec<DVec3> = lowest(level).collect();
             let mean = moved.iter().map(|p| p.y).sum::<f64>() / moved.len() as f64;
-            height = mean.min(here.y);
+            height = mean.min(moved.last().expect("a frame").y);
         }
-        let here = level * last;
+        let here = lowest(level).next_back().expect("a frame");
         let pivot = level.inverse() * DVec3::new(here.x, height, here.z);
         let a = -up.x / up.y;
         let b = -up.z / up.y;
@@ -139,8 +164,9 @@ impl Floor {
     }
 }
 
-/// Ridge least squares of `y = a x + b z + c`; with `keep = (a, b, c, h)` only points at most
-/// `h` above that plane take part.
+/// Least squares of `y = a x + b z + c` with the slope along the well-spread horizontal axes
+/// only (module docs); with `keep = (a, b, c, h)` only points at most `h` above that plane take
+/// part.
 fn fit_plane(
     points: impl Iterator<Item = DVec3> + Clone,
     keep: Option<(f64, f64, f64, f64)>,
@@ -156,20 +182,38 @@ fn fit_plane(
         return None;
     }
     let mean = sum / n;
-    let (mut sxx, mut sxz, mut szz, mut sxy, mut szy) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    let (mut cxx, mut cxz, mut czz, mut cxy, mut czy) = (0.0, 0.0, 0.0, 0.0, 0.0);
     for p in kept {
         let d = p - mean;
-        sxx += d.x * d.x;
-        sxz += d.x * d.z;
-        szz += d.z * d.z;
-        sxy += d.x * d.y;
-        szy += d.z * d.y;
+        cxx += d.x * d.x / n;
+        cxz += d.x * d.z / n;
+        czz += d.z * d.z / n;
+        cxy += d.x * d.y / n;
+        czy += d.z * d.y / n;
     }
-    let ridge = SLOPE_RIDGE_M2 * n;
-    let (m11, m12, m22) = (sxx + ridge, sxz, szz + ridge);
-    let det = m11 * m22 - m12 * m12;
-    let a = (sxy * m22 - szy * m12) / det;
-    let b = (szy * m11 - sxy * m12) / det;
+    // Principal axes of the horizontal spread: along each, centred coordinates are uncorrelated,
+    // so the slope along an axis is its own regression.
+    let half_gap = (((cxx - czz) / 2.0).powi(2) + cxz * cxz).sqrt();
+    let major_var = (cxx + czz) / 2.0 + half_gap;
+    let minor_var = (cxx + czz) / 2.0 - half_gap;
+    let major = if cxz.abs() > 1e-300 {
+        let (x, z) = (major_var - czz, cxz);
+        let len = (x * x + z * z).sqrt();
+        (x / len, z / len)
+    } else if cxx >= czz {
+        (1.0, 0.0)
+    } else {
+        (0.0, 1.0)
+    };
+    let minor = (-major.1, major.0);
+    let (mut a, mut b) = (0.0, 0.0);
+    for (var, (ux, uz)) in [(major_var, major), (minor_var, minor)] {
+        if var >= MIN_SPREAD_M * MIN_SPREAD_M {
+            let slope = (ux * cxy + uz * czy) / var;
+            a += ux * slope;
+            b += uz * slope;
+        }
+    }
     let c = mean.y - a * mean.x - b * mean.z;
     (a.is_finite() && b.is_finite() && c.is_finite()).then_some((a, b, c))
 }
@@ -199,7 +243,52 @@ mod tests {
         assert_eq!(floor.tilt_deg(), 0.0);
         assert!((floor.height + 0.9).abs() < 1e-6);
         assert!(Floor::fit(&[]).is_none());
+        // Jitter on one spot: level too.
+        let jitter: Vec<Vec3> = (0..50)
+            .map(|i| {
+                let t = i as f32;
+                Vec3::new(
+                    0.03 * t.sin(),
+                    0.01 * (1.7 * t).cos(),
+                    0.05 * (0.3 * t).cos(),
+                )
+            })
+            .collect();
+        assert_eq!(Floor::fit(&jitter).unwrap().tilt_deg(), 0.0);
         assert!(Floor::fit(&[Vec3::NAN]).is_none());
+    }
+
+    #[test]
+    fn points_moved_into_the_floor_frame_fit_the_level_floor_again() {
+        // A walk on a tilted plane with swing points and sideways sway, a slow walk, a diagonal.
+        let seeds: [Vec<Vec3>; 3] = [
+            (0..50)
+                .map(|i| {
+                    let t = i as f32;
+                    let lift = if i % 4 == 0 { 0.08 } else { 0.0 };
+                    Vec3::new(0.05 * t, 0.01 * t + lift - 0.9, 0.1 * (0.8 * t).sin())
+                })
+                .collect(),
+            (0..50)
+                .map(|i| {
+                    let t = i as f32;
+                    Vec3::new(0.016 * t, 0.02 * (0.5 * t).sin(), -0.01 * t)
+                })
+                .collect(),
+            (0..50)
+                .map(|i| {
+                    let t = i as f32;
+                    Vec3::new(0.04 * t, 0.3 + 0.01 * t + 0.015 * (1.3 * t).cos(), 0.04 * t)
+                })
+                .collect(),
+        ];
+        for (k, points) in seeds.iter().enumerate() {
+            let floor = Floor::fit(points).unwrap();
+            let moved: Vec<Vec3> = points.iter().map(|&p| floor.to_floor_frame(p)).collect();
+            let again = Floor::fit(&moved).unwrap();
+            assert!(again.tilt_deg() < 1e-3, "seed {k}: {}", again.tilt_deg());
+            assert!(again.height.abs() < 1e-4, "seed {k}: {}", again.height);
+        }
     }
 
     #[test]

@@ -61,6 +61,9 @@ pub struct BodyParts {
     pub torso_top: Option<usize>,
     /// Rest-pose hip-to-ankle length of the longer leg, in the skeleton's units.
     pub leg_length: f64,
+    /// Rest-pose height of the root above the lowest foot point (the standing root height; the
+    /// rest pose stands, see the module docs), in the skeleton's units.
+    pub standing_height: f64,
 }
 
 /// Rest-pose positions (offsets summed from the root), skeleton units.
@@ -222,11 +225,17 @@ pub fn find_body_parts(skeleton: &Skeleton) -> Result<BodyParts, LegsError> {
                     && length(rest[j]) > 0.0
             })
         });
+    let standing_height = -legs
+        .iter()
+        .flat_map(|l| &l.foot_points)
+        .map(|&j| rest[j][1])
+        .fold(f64::INFINITY, f64::min);
     let [a, b]: [Leg; 2] = legs.try_into().expect("two legs");
     Ok(BodyParts {
         legs: [a, b],
         torso_top,
         leg_length,
+        standing_height,
     })
 }
 
@@ -251,6 +260,12 @@ mod tests {
             (parts.leg_length - 897.1).abs() < 0.5,
             "{}",
             parts.leg_length
+        );
+        assert!(
+            (parts.standing_height - f64::from(crate::grounding::H36M_STANDING_HEIGHT_MM)).abs()
+                < 0.05,
+            "{}",
+            parts.standing_height
         );
     }
 

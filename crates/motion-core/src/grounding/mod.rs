@@ -12,7 +12,12 @@
 //! 3. **Height**: the root moves vertically so that the supporting foot's lowest point is on the
 //!    floor (the character is always supported; there are no jumps in the training data). The
 //!    supporting foot is the one moving slower horizontally, or the lower one when both are
-//!    slower than [`GroundingConfig::contact_speed_m_s`].
+//!    slower than [`GroundingConfig::contact_speed_m_s`]. Then the **hip-height hold**: a root
+//!    lower than the action's limit ([`hip_floor_fraction`] of the rig's standing root height:
+//!    the 5th percentile of real H3.6M motion) is raised to it, softly ([`HIP_SOFTNESS`] of the
+//!    standing height above the limit it starts to give), and step 4's IK straightens the legs
+//!    to keep the feet on the floor (a straight leg that cannot reach brings the body down
+//!    again in step 5): a model that sinks into a crouch stands as tall as real people do.
 //! 4. **Foot locking** (then the lowest foot point is put on the floor once more): a foot is in contact while its lowest point is below
 //!    [`GroundingConfig::contact_height_m`] and its ankle moves slower than
 //!    [`GroundingConfig::contact_speed_m_s`] horizontally; from the first frame of a contact its
@@ -63,20 +68,64 @@ pub const LEAN_SOFTNESS_DEG: f32 = 6.0;
 /// windows every 1 s (`motion_metrics::plausibility::RealRanges`; its data test recomputes it).
 /// `discussion` and `waiting` have no S5 file and no reference: they get the widest limit.
 pub const LEAN_P95_DEG: [(&str, f32); 13] = [
-    ("directions", 19.8),
-    ("eating", 31.9),
-    ("greeting", 36.9),
-    ("phoning", 46.5),
-    ("posing", 46.7),
-    ("purchases", 102.8),
-    ("sitting", 82.1),
-    ("sittingdown", 97.4),
-    ("smoking", 46.0),
-    ("takingphoto", 65.3),
-    ("walking", 30.9),
-    ("walkingdog", 81.0),
-    ("walkingtogether", 13.6),
+    ("directions", 19.9),
+    ("eating", 32.0),
+    ("greeting", 37.7),
+    ("phoning", 45.0),
+    ("posing", 47.3),
+    ("purchases", 101.8),
+    ("sitting", 81.3),
+    ("sittingdown", 95.7),
+    ("smoking", 45.3),
+    ("takingphoto", 66.2),
+    ("walking", 31.4),
+    ("walkingdog", 80.6),
+    ("walkingtogether", 13.5),
 ];
+
+/// Rest-pose root height above the lowest foot point of [`Skeleton::h36m`] (mm): the standing
+/// height [`HIP_P5_MM`] is measured against.
+pub const H36M_STANDING_HEIGHT_MM: f32 = 897.1;
+
+/// The 5th percentile of the root's height above the floor (mm, on the H3.6M skeleton, whose
+/// standing root height is [`H36M_STANDING_HEIGHT_MM`]) of real H3.6M motion per action, from
+/// the same frames as [`LEAN_P95_DEG`] (`motion_metrics::plausibility::RealRanges`; its data
+/// test recomputes it). Actions without a reference get the lowest.
+pub const HIP_P5_MM: [(&str, f32); 13] = [
+    ("directions", 874.0),
+    ("eating", 528.0),
+    ("greeting", 815.0),
+    ("phoning", 636.0),
+    ("posing", 767.0),
+    ("purchases", 421.0),
+    ("sitting", 432.0),
+    ("sittingdown", 113.0),
+    ("smoking", 648.0),
+    ("takingphoto", 415.0),
+    ("walking", 849.0),
+    ("walkingdog", 476.0),
+    ("walkingtogether", 860.0),
+];
+
+/// The hip-height hold starts to give this far above its limit (a fraction of the standing
+/// root height).
+pub const HIP_SOFTNESS: f32 = 0.04;
+
+/// The lowest root height of `action` as a fraction of the standing root height: its
+/// [`HIP_P5_MM`] over [`H36M_STANDING_HEIGHT_MM`], or the lowest of them for an unknown action
+/// or none.
+pub fn hip_floor_fraction(action: Option<&str>) -> f32 {
+    action
+        .and_then(|a| HIP_P5_MM.iter().find(|(name, _)| *name == a))
+        .map(|&(_, v)| v)
+        .unwrap_or_else(|| {
+            HIP_P5_MM
+                .iter()
+                .map(|&(_, v)| v)
+                .fold(f32::INFINITY, f32::min)
+        })
+        / H36M_STANDING_HEIGHT_MM
+}
 
 /// The lean limit of `action` (degrees): its [`LEAN_P95_DEG`], or the largest of them for an
 /// unknown action or none.
@@ -106,6 +155,9 @@ pub struct GroundingConfig {
     pub enabled: bool,
     /// Lean limit in degrees; `None`: the current action's [`lean_limit_deg`].
     pub max_lean_deg: Option<f32>,
+    /// Lowest root height as a fraction of the rig's standing root height (0: no hold);
+    /// `None`: the current action's [`hip_floor_fraction`].
+    pub min_hip_fraction: Option<f32>,
     /// A foot below this above the floor can be in contact (metres).
     pub contact_height_m: f32,
     /// A foot whose ankle moves slower than this horizontally can be in contact (m/s).
@@ -124,6 +176,7 @@ impl Default for GroundingConfig {
         GroundingConfig {
             enabled: true,
             max_lean_deg: None,
+            min_hip_fraction: None,
             contact_height_m: 0.05,
             contact_speed_m_s: 1.0,
             foot_locking: true,
@@ -167,6 +220,10 @@ pub struct Grounder {
     parents: Vec<Option<usize>>,
     offsets: Vec<Vec3>,
     lean_limit: f32,
+    /// The rig's standing root height (metres).
+    standing_height: f32,
+    /// The hip-height hold in force (fraction of `standing_height`).
+    hip_fraction: f32,
     seed_points: Vec<Vec3>,
     floor: Option<Floor>,
     positions: Vec<Vec3>,
@@ -177,7 +234,7 @@ pub struct Grounder {
 }
 
 /// Seed frames kept for the floor fit (the last ones).
-const MAX_SEED_POINTS: usize = 4096;
+const MAX_SEED_FRAMES: usize = 4096;
 /// A held foot farther than this times its leg's reach from the hip is let go.
 const RELEASE_REACH: f32 = 1.3;
 /// The body is held back so that a held foot is at most this times its leg's reach away.
@@ -201,6 +258,10 @@ impl Grounder {
         let n = skeleton.len();
         Ok(Grounder {
             lean_limit: config.max_lean_deg.unwrap_or_else(|| lean_limit_deg(None)),
+            standing_height: (parts.standing_height as f32 * metres_per_unit).max(0.0),
+            hip_fraction: config
+                .min_hip_fraction
+                .unwrap_or_else(|| hip_floor_fraction(None)),
             config,
             parts,
             parents: skeleton.joints().iter().map(|j| j.parent).collect(),
@@ -236,12 +297,17 @@ impl Grounder {
         self.held_offset = Vec3::ZERO;
     }
 
-    /// Sets the lean limit for `action` ([`lean_limit_deg`]) unless the configuration fixes one.
+    /// Sets the lean limit ([`lean_limit_deg`]) and the hip-height hold
+    /// ([`hip_floor_fraction`]) for `action` unless the configuration fixes them.
     pub fn set_action(&mut self, action: Option<&str>) {
         self.lean_limit = self
             .config
             .max_lean_deg
             .unwrap_or_else(|| lean_limit_deg(action));
+        self.hip_fraction = self
+            .config
+            .min_hip_fraction
+            .unwrap_or_else(|| hip_floor_fraction(action));
     }
 
     /// The lean limit in force (degrees).
@@ -249,18 +315,31 @@ impl Grounder {
         self.lean_limit
     }
 
+    /// The lowest root height the hip-height hold keeps (metres above the floor).
+    pub fn min_hip_height(&self) -> f32 {
+        self.hip_fraction * self.standing_height
+    }
+
+    /// The foot points of both legs: the floor fit's points per seed frame.
+    fn foot_points_per_frame(&self) -> usize {
+        self.parts.legs.iter().map(|l| l.foot_points.len()).sum()
+    }
+
     /// Feeds one seed frame (root world position in metres, local rotations; joint 0's is the
-    /// root's world rotation): its lowest foot point joins the floor fit.
+    /// root's world rotation): its foot points join the floor fit ([`Floor::fit_frames`]).
     ///
     /// # Panics
     /// If `rotations` does not have one entry per joint.
     pub fn observe_seed(&mut self, root: Vec3, rotations: &[Quat]) {
         self.forward_kinematics(root, rotations);
-        let lowest = self.lowest_foot_point();
-        if self.seed_points.len() == MAX_SEED_POINTS {
-            self.seed_points.remove(0);
+        let per_frame = self.foot_points_per_frame();
+        if self.seed_points.len() >= MAX_SEED_FRAMES * per_frame {
+            self.seed_points.drain(..per_frame);
         }
-        self.seed_points.push(lowest);
+        for leg in &self.parts.legs {
+            self.seed_points
+                .extend(leg.foot_points.iter().map(|&j| self.positions[j]));
+        }
         self.floor = None;
     }
 
@@ -270,7 +349,8 @@ impl Grounder {
         if let Some(floor) = self.floor {
             return floor;
         }
-        let floor = Floor::fit(&self.seed_points).unwrap_or_else(|| Floor::level_at(0.0));
+        let floor = Floor::fit_frames(&self.seed_points, self.foot_points_per_frame())
+            .unwrap_or_else(|| Floor::level_at(0.0));
         self.floor = Some(floor);
         floor
     }
@@ -365,9 +445,10 @@ impl Grounder {
         for p in &mut self.positions {
             p.y += lift;
         }
-        // 4. Foot locking: locks taken or released, the body held back (horizontally, for
-        // good: the character travels as far as its held feet allow) where a held foot would be
-        // out of reach, then the legs' IK; swing feet kept over the floor.
+        // 4. Foot locking: locks taken or released (on the model's pose with its support foot
+        // on the floor), the hip-height hold, the body held back (horizontally, for good: the
+        // character travels as far as its held feet allow) where a held foot would be out of
+        // reach, then the legs' IK; swing feet kept over the floor.
         for side in 0..2 {
             self.update_lock(side, dt, heights[side] + lift, speeds[side]);
         }
@@ -379,8 +460,34 @@ impl Grounder {
                 *p += back;
             }
         }
+        // The hold lets go of a held foot too far away to stand up over (the foot steps in as
+        // the model has it) and raises the body no higher than the feet still held reach (it
+        // never pulls the body towards them).
+        let raise = if self.config.foot_locking {
+            let limit = self.min_hip_height();
+            let softness = HIP_SOFTNESS * self.standing_height;
+            let wanted = (-soft_limit(-root.y, -limit, softness) - root.y).max(0.0);
+            let mut room = f32::INFINITY;
+            for side in 0..2 {
+                let Some(r) = self.raise_room(side) else {
+                    continue;
+                };
+                if r < wanted {
+                    self.feet[side].weight = 1.0 - dt / self.config.release_s.max(1e-3);
+                } else {
+                    room = room.min(r);
+                }
+            }
+            wanted.min(room)
+        } else {
+            0.0
+        };
+        root.y += raise;
+        for p in &mut self.positions {
+            p.y += raise;
+        }
         for side in 0..2 {
-            let (height, speed) = (heights[side] + lift, speeds[side]);
+            let (height, speed) = (heights[side] + lift + raise, speeds[side]);
             self.place(side, rotations, height, speed, side == support);
         }
         // 5. The placed legs' lowest point on the floor (a held foot a straight leg could not
@@ -457,6 +564,20 @@ impl Grounder {
         }
     }
 
+    /// How far the body can rise with leg `side`'s foot, when fully held, still within the leg's
+    /// reach.
+    fn raise_room(&self, side: usize) -> Option<f32> {
+        let (leg, state) = (&self.parts.legs[side], &self.feet[side]);
+        let lock = state.lock.filter(|_| state.weight >= 1.0)?;
+        let hip = self.positions[leg.hip];
+        let knee = self.positions[leg.knee];
+        let ankle = self.positions[leg.ankle];
+        let reach = ((knee - hip).length() + (ankle - knee).length()) * REACH_USED;
+        let d = lock - hip;
+        let h2 = d.x * d.x + d.z * d.z;
+        Some(lock.y + (reach * reach - h2).max(0.0).sqrt() - hip.y)
+    }
+
     /// The IK of one leg after its lock is updated (`support`: the foot that holds the body,
     /// which never gets the swing clearance).
     fn place(
@@ -484,7 +605,8 @@ impl Grounder {
             } else {
                 self.config.swing_clearance_m * over
             };
-            if height < wanted {
+            // The support foot goes back to the floor when the hip-height hold raised it.
+            if height < wanted || (support && height > wanted) {
                 let target = ankle + Vec3::Y * (wanted - height);
                 let rotation = self.rotations[leg.ankle];
                 self.solve_leg(side, rotations, target, rotation);

@@ -202,3 +202,66 @@ fn the_lean_limit_follows_the_action() {
     assert!(soft_limit(27.0, 30.0, 6.0) < 27.0);
     assert_eq!(soft_limit(10.0, 30.0, 6.0), 10.0);
 }
+
+/// The lowest foot point and the root height of a grounded deep crouch held for 1 s, and how far
+/// the ankles moved.
+fn grounded_crouch(action: Option<&str>, config: GroundingConfig) -> (f32, f32, f32) {
+    let mut g = Grounder::new(&Skeleton::h36m(), 1e-3, config).unwrap();
+    g.set_action(action);
+    let pose = crouch(1.6);
+    for _ in 0..25 {
+        g.observe_seed(Vec3::new(0.0, 0.7, 0.0), &pose);
+    }
+    let (mut lowest, mut root_y, mut moved) = (f32::INFINITY, 0.0, 0.0f32);
+    let mut first: Option<[Vec3; 2]> = None;
+    for _ in 0..25 {
+        let (mut root, mut rotations) = (Vec3::new(0.0, 0.7, 0.0), pose.clone());
+        g.ground(&mut root, &mut rotations, DT);
+        let p = positions(root, &rotations);
+        let feet = [p[3], p[8]];
+        let start = *first.get_or_insert(feet);
+        moved = moved.max(
+            (feet[0] - start[0])
+                .length()
+                .max((feet[1] - start[1]).length()),
+        );
+        lowest = [3, 4, 5, 8, 9, 10]
+            .map(|j| p[j].y)
+            .into_iter()
+            .fold(f32::INFINITY, f32::min);
+        root_y = root.y;
+    }
+    (lowest, root_y, moved)
+}
+
+#[test]
+fn a_crouch_stands_up_to_the_actions_hip_height_with_the_feet_planted() {
+    // Knees bent by 1.6 rad: the root 0.62 m over the floor; real walking keeps it over 0.85 m
+    // (HIP_P5_MM), sitting down goes to 0.11 m.
+    let hold = hip_floor_fraction(Some("walking")) * H36M_STANDING_HEIGHT_MM * 1e-3;
+    assert!((hold - 0.849).abs() < 1e-3, "{hold}");
+    let (lowest, root_y, moved) = grounded_crouch(Some("walking"), GroundingConfig::default());
+    assert!(
+        root_y >= hold - 1e-3,
+        "walking: the root at {root_y} m, the hold {hold} m"
+    );
+    assert!(
+        lowest.abs() < 0.01,
+        "walking: lowest foot point at {lowest} m"
+    );
+    assert!(moved < 0.01, "walking: an ankle moved {moved} m");
+    let (_, sitting_y, _) = grounded_crouch(Some("sittingdown"), GroundingConfig::default());
+    assert!(
+        sitting_y < 0.66,
+        "sittingdown keeps the crouch: {sitting_y} m"
+    );
+    let off = GroundingConfig {
+        min_hip_fraction: Some(0.0),
+        ..GroundingConfig::default()
+    };
+    let (lowest, off_y, _) = grounded_crouch(Some("walking"), off);
+    assert!(
+        off_y < 0.66 && lowest.abs() < 0.01,
+        "no hold: {off_y} m, {lowest} m"
+    );
+}

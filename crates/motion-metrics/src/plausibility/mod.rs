@@ -25,7 +25,8 @@
 //!   offset, 0 for H3.6M): the root pose `(R_t, T_t)` integrated over seed + motion from the first
 //!   seed frame (identity before it), exactly as FK of the joined frames (`expmap_positions`).
 //! - **Floor frame**: the seed's floor (`motion_core::grounding::floor`: a plane fitted to the
-//!   lowest foot point of each seed frame, the foot points being [`FEET`]) made the plane `y = 0`
+//!   lowest of each seed frame's foot points [`FEET`], lowest in the frame the fit levels) made
+//!   the plane `y = 0`
 //!   by a rigid transform; every measure below is taken in it, so a walk whose integrated root is
 //!   tilted is not read as climbing.
 //! - **Hip height** `h_t`: the floor-frame y of `Hips` (joint 0), mm. **Torso lean** `λ_t`: the
@@ -293,19 +294,17 @@ impl Measurer {
             check_finite(what, a)?;
         }
         let mut root = RootIntegrator::new(ROOT_STEP_25HZ);
-        let mut lowest = Vec::with_capacity(seed.nrows());
+        let mut feet = Vec::with_capacity(seed.nrows() * 6);
         let mut pose = RootPose::IDENTITY;
         for row in seed.rows() {
             pose = self.push(&mut root, row);
-            let point = FEET
-                .iter()
-                .flatten()
-                .map(|&j| self.world(j, &pose))
-                .min_by(|a, b| a[1].total_cmp(&b[1]))
-                .expect("feet");
-            lowest.push((DVec3::from_array(point) * 1e-3).as_vec3());
+            feet.extend(
+                FEET.iter()
+                    .flatten()
+                    .map(|&j| (DVec3::from_array(self.world(j, &pose)) * 1e-3).as_vec3()),
+            );
         }
-        let floor = Floor::fit(&lowest).unwrap_or_else(|| Floor::level_at(0.0));
+        let floor = Floor::fit_frames(&feet, 6).unwrap_or_else(|| Floor::level_at(0.0));
         let on_floor =
             |p: [f64; 3]| (floor.to_floor_frame_f64(DVec3::from_array(p) * 1e-3) * 1e3).to_array();
         let lean_of = |m: &Self, pose: &RootPose| {

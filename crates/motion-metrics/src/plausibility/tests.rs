@@ -26,17 +26,15 @@ fn naive(seed: &Array2<f64>, motion: &Array2<f64>) -> SequenceMeasures {
     let local = expmap_positions(&skeleton, still_root.view(), RootEncoding::Deltas, 2).unwrap();
     let seed_frames = seed.nrows();
     let feet = [3, 4, 5, 8, 9, 10];
-    let lowest: Vec<glam::Vec3> = (0..seed_frames)
-        .map(|t| {
-            let j = *feet
-                .iter()
-                .min_by(|&&a, &&b| world[[t, a, 1]].total_cmp(&world[[t, b, 1]]))
-                .unwrap();
-            (glam::DVec3::new(world[[t, j, 0]], world[[t, j, 1]], world[[t, j, 2]]) * 1e-3)
-                .as_vec3()
+    let points: Vec<glam::Vec3> = (0..seed_frames)
+        .flat_map(|t| {
+            feet.map(|j| {
+                (glam::DVec3::new(world[[t, j, 0]], world[[t, j, 1]], world[[t, j, 2]]) * 1e-3)
+                    .as_vec3()
+            })
         })
         .collect();
-    let floor = motion_core::grounding::Floor::fit(&lowest).unwrap();
+    let floor = motion_core::grounding::Floor::fit_frames(&points, feet.len()).unwrap();
     let at = |t: usize, j: usize| {
         let p = glam::DVec3::new(world[[t, j, 0]], world[[t, j, 1]], world[[t, j, 2]]);
         floor.to_floor_frame_f64(p * 1e-3) * 1e3
@@ -326,4 +324,44 @@ fn bad_input_is_a_typed_error() {
             index: vec![3, 40]
         })
     );
+}
+
+#[test]
+fn a_grounded_clip_measures_on_the_floor_it_was_grounded_on() {
+    // A seed recorded 12° off level (its first root rotation), walking with swinging legs: the
+    // grounding levels it and the measure refits the floor on the levelled seed; the two floors
+    // agree, so every grounded frame's lowest foot point is on the measured floor.
+    use motion_core::formats::expmap_bvh::ExpMapTarget;
+    use motion_core::grounding::{ground_expmap_clip, ClipSpec, GroundingConfig};
+    let mut whole = wavy(300, 0.4);
+    whole[[0, 3]] = 0.17;
+    whole[[0, 5]] = 0.12;
+    let spec = ClipSpec::new(
+        ExpMapTarget::H36m,
+        25.0,
+        0..50,
+        Some("walking"),
+        GroundingConfig::default(),
+    );
+    let clip = ground_expmap_clip(whole.view(), &spec).unwrap();
+    let m = Measurer::new()
+        .measure(
+            clip.frames.slice(s![..50, ..]),
+            clip.frames.slice(s![50.., ..]),
+        )
+        .unwrap();
+    let worst = m.lowest_foot_mm.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    assert!(
+        worst < 2.0,
+        "a grounded frame's lowest foot point {worst} mm off the floor"
+    );
+    // Raw, the same motion leaves the floor.
+    let raw = Measurer::new()
+        .measure(whole.slice(s![..50, ..]), whole.slice(s![50.., ..]))
+        .unwrap();
+    let raw_worst = raw
+        .lowest_foot_mm
+        .iter()
+        .fold(0.0f64, |a, v| a.max(v.abs()));
+    assert!(raw_worst > 50.0, "{raw_worst}");
 }
