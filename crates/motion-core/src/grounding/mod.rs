@@ -65,22 +65,23 @@ pub const LEAN_SOFTNESS_DEG: f32 = 6.0;
 
 /// The 95th percentile of the torso lean (degrees from +y, in the floor frame of each window's
 /// seed) of real H3.6M motion per action: every subject, the first 2 s after the seed of real
-/// windows every 1 s (`motion_metrics::plausibility::RealRanges`; its data test recomputes it).
-/// `discussion` and `waiting` have no S5 file and no reference: they get the widest limit.
+/// windows every 1 s (`motion_metrics::plausibility::RealRanges`; its data test recomputes it),
+/// rounded down to 0.01°. `discussion` and `waiting` have no S5 file and no reference: they
+/// get the widest limit.
 pub const LEAN_P95_DEG: [(&str, f32); 13] = [
-    ("directions", 19.9),
-    ("eating", 32.0),
-    ("greeting", 37.7),
-    ("phoning", 45.0),
-    ("posing", 47.3),
-    ("purchases", 101.8),
-    ("sitting", 81.3),
-    ("sittingdown", 95.7),
-    ("smoking", 45.3),
-    ("takingphoto", 66.2),
-    ("walking", 31.4),
-    ("walkingdog", 80.6),
-    ("walkingtogether", 13.5),
+    ("directions", 19.85),
+    ("eating", 31.99),
+    ("greeting", 37.71),
+    ("phoning", 45.01),
+    ("posing", 47.25),
+    ("purchases", 101.79),
+    ("sitting", 81.29),
+    ("sittingdown", 95.70),
+    ("smoking", 45.34),
+    ("takingphoto", 66.15),
+    ("walking", 31.36),
+    ("walkingdog", 80.60),
+    ("walkingtogether", 13.53),
 ];
 
 /// Rest-pose root height above the lowest foot point of [`Skeleton::h36m`] (mm): the standing
@@ -90,21 +91,21 @@ pub const H36M_STANDING_HEIGHT_MM: f32 = 897.1;
 /// The 5th percentile of the root's height above the floor (mm, on the H3.6M skeleton, whose
 /// standing root height is [`H36M_STANDING_HEIGHT_MM`]) of real H3.6M motion per action, from
 /// the same frames as [`LEAN_P95_DEG`] (`motion_metrics::plausibility::RealRanges`; its data
-/// test recomputes it). Actions without a reference get the lowest.
+/// test recomputes it), rounded up to 0.1 mm. Actions without a reference get the lowest.
 pub const HIP_P5_MM: [(&str, f32); 13] = [
-    ("directions", 874.0),
+    ("directions", 873.7),
     ("eating", 528.0),
-    ("greeting", 815.0),
-    ("phoning", 636.0),
-    ("posing", 767.0),
-    ("purchases", 421.0),
+    ("greeting", 814.8),
+    ("phoning", 636.1),
+    ("posing", 767.6),
+    ("purchases", 421.1),
     ("sitting", 432.0),
-    ("sittingdown", 113.0),
-    ("smoking", 648.0),
-    ("takingphoto", 415.0),
-    ("walking", 849.0),
-    ("walkingdog", 476.0),
-    ("walkingtogether", 860.0),
+    ("sittingdown", 113.2),
+    ("smoking", 647.7),
+    ("takingphoto", 415.3),
+    ("walking", 848.8),
+    ("walkingdog", 476.6),
+    ("walkingtogether", 860.3),
 ];
 
 /// The hip-height hold starts to give this far above its limit (a fraction of the standing
@@ -209,6 +210,8 @@ struct FootState {
     previous: Option<Vec3>,
     /// Whether the model's foot is in contact on the last frame.
     contact: bool,
+    /// Whether the lock is being let go for the hip-height hold (the foot steps).
+    stepping: bool,
 }
 
 /// Streaming grounding of one character (see the module docs): observe the seed's frames, then
@@ -235,6 +238,8 @@ pub struct Grounder {
 
 /// Seed frames kept for the floor fit (the last ones).
 const MAX_SEED_FRAMES: usize = 4096;
+/// How high a foot let go for the hip-height hold is lifted mid-step (metres).
+const STEP_HEIGHT_M: f32 = 0.08;
 /// A held foot farther than this times its leg's reach from the hip is let go.
 const RELEASE_REACH: f32 = 1.3;
 /// The body is held back so that a held foot is at most this times its leg's reach away.
@@ -460,25 +465,38 @@ impl Grounder {
                 *p += back;
             }
         }
-        // The hold lets go of a held foot too far away to stand up over (the foot steps in as
-        // the model has it) and raises the body no higher than the feet still held reach (it
+        // The hold lets go of a held foot too far away to stand up over when the model's own
+        // foot is near enough and the other foot is not stepping (the foot steps in, lifted [`STEP_HEIGHT_M`], to where the model
+        // has it) and raises the body no higher than the feet still held reach (it
         // never pulls the body towards them).
         let raise = if self.config.foot_locking {
             let limit = self.min_hip_height();
             let softness = HIP_SOFTNESS * self.standing_height;
             let wanted = (-soft_limit(-root.y, -limit, softness) - root.y).max(0.0);
+            // One foot steps at a time (the other holds the body): the one held lowest.
+            let rooms = [self.raise_room(0), self.raise_room(1)];
+            let step = if self.feet.iter().any(|f| f.stepping) {
+                None
+            } else {
+                (0..2)
+                    .filter_map(|side| rooms[side].map(|r| (side, r)))
+                    .filter(|&(_, (held, stepped))| held < wanted && stepped >= wanted)
+                    .min_by(|a, b| a.1 .0.total_cmp(&b.1 .0))
+                    .map(|(side, _)| side)
+            };
             let mut room = f32::INFINITY;
-            for side in 0..2 {
-                let Some(r) = self.raise_room(side) else {
-                    continue;
-                };
-                if r < wanted {
-                    self.feet[side].weight = 1.0 - dt / self.config.release_s.max(1e-3);
-                } else {
-                    room = room.min(r);
+            for (side, r) in rooms.iter().enumerate() {
+                match r {
+                    Some(_) if step == Some(side) => {
+                        let state = &mut self.feet[side];
+                        state.weight = 1.0 - dt / self.config.release_s.max(1e-3);
+                        state.stepping = true;
+                    }
+                    Some((held, _)) => room = room.min(*held),
+                    None => {}
                 }
             }
-            wanted.min(room)
+            wanted.min(room).max(0.0)
         } else {
             0.0
         };
@@ -528,6 +546,7 @@ impl Grounder {
         }
         if state.lock.is_some() && state.weight <= 0.0 {
             state.lock = None;
+            state.stepping = false;
         }
         if state.lock.is_none() && state.contact {
             state.lock = Some(ankle);
@@ -565,17 +584,19 @@ impl Grounder {
     }
 
     /// How far the body can rise with leg `side`'s foot, when fully held, still within the leg's
-    /// reach.
-    fn raise_room(&self, side: usize) -> Option<f32> {
+    /// reach: held where it is, and stepped to under the model's ankle.
+    fn raise_room(&self, side: usize) -> Option<(f32, f32)> {
         let (leg, state) = (&self.parts.legs[side], &self.feet[side]);
         let lock = state.lock.filter(|_| state.weight >= 1.0)?;
         let hip = self.positions[leg.hip];
         let knee = self.positions[leg.knee];
         let ankle = self.positions[leg.ankle];
         let reach = ((knee - hip).length() + (ankle - knee).length()) * REACH_USED;
-        let d = lock - hip;
-        let h2 = d.x * d.x + d.z * d.z;
-        Some(lock.y + (reach * reach - h2).max(0.0).sqrt() - hip.y)
+        let room = |x: f32, z: f32| {
+            let h2 = (x - hip.x).powi(2) + (z - hip.z).powi(2);
+            lock.y + (reach * reach - h2).max(0.0).sqrt() - hip.y
+        };
+        Some((room(lock.x, lock.z), room(ankle.x, ankle.z)))
     }
 
     /// The IK of one leg after its lock is updated (`support`: the foot that holds the body,
@@ -625,12 +646,22 @@ impl Grounder {
             .iter()
             .map(|&j| (turn * (self.positions[j] - ankle)).y)
             .fold(0.0f32, f32::min);
+        // A stepping foot is lifted off the floor, over the model's by half-way through its
+        // release, and lands there.
+        let wh = if state.stepping {
+            (2.0 * w - 1.0).max(0.0)
+        } else {
+            w
+        };
         let target = Vec3::new(
-            ankle.x + (lock.x - ankle.x) * w,
+            ankle.x + (lock.x - ankle.x) * wh,
             ankle.y + (-below_ankle - ankle.y) * w,
-            ankle.z + (lock.z - ankle.z) * w,
+            ankle.z + (lock.z - ankle.z) * wh,
         );
-        let target = Vec3::new(target.x, target.y.max(-below_ankle), target.z);
+        let mut target = Vec3::new(target.x, target.y.max(-below_ankle), target.z);
+        if state.stepping {
+            target.y = -below_ankle + STEP_HEIGHT_M * (1.0 - (2.0 * w - 1.0).powi(2));
+        }
         self.solve_leg(side, rotations, target, foot_rotation);
     }
 

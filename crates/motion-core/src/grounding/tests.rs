@@ -265,3 +265,63 @@ fn a_crouch_stands_up_to_the_actions_hip_height_with_the_feet_planted() {
         "no hold: {off_y} m, {lowest} m"
     );
 }
+
+#[test]
+fn feet_held_too_wide_to_stand_up_step_in_over_the_floor() {
+    // A deep crouch with the legs spread, then the model slides its feet in under the hips over
+    // 0.8 s (still crouched, slow enough to stay in contact): the held feet step in (lifted,
+    // not slid) and the body stands to the hold.
+    let spread = |angle: f32| {
+        let mut q = crouch(1.6);
+        q[1] = Quat::from_rotation_z(angle) * q[1];
+        q[6] = Quat::from_rotation_z(-angle) * q[6];
+        q
+    };
+    let width = |q: &[Quat]| {
+        let p = positions(Vec3::ZERO, q);
+        (p[3].x - p[8].x).abs()
+    };
+    let sign = if width(&spread(0.5)) > width(&spread(-0.5)) {
+        1.0
+    } else {
+        -1.0
+    };
+    let wide = spread(0.5 * sign);
+    assert!(width(&wide) > width(&crouch(1.6)) + 0.3);
+    let mut g = grounder();
+    g.set_action(Some("walking"));
+    for _ in 0..25 {
+        g.observe_seed(Vec3::new(0.0, 0.7, 0.0), &wide);
+    }
+    let hold = g.min_hip_height();
+    let mut previous: Option<Vec<Vec3>> = None;
+    let (mut skating, mut root_y, mut stepped) = (0, 0.0, 0.0f32);
+    for t in 0..60 {
+        let s = ((t as f32 - 10.0) / 20.0).clamp(0.0, 1.0);
+        let pose = spread(0.5 * sign * (1.0 - s));
+        let (mut root, mut rotations) = (Vec3::new(0.0, 0.7, 0.0), pose);
+        g.ground(&mut root, &mut rotations, DT);
+        let p = positions(root, &rotations);
+        stepped = stepped.max(p[3].y).max(p[8].y);
+        if let Some(before) = &previous {
+            for j in [3, 4, 5, 8, 9, 10] {
+                let d = p[j] - before[j];
+                let speed = (d.x * d.x + d.z * d.z).sqrt() / DT;
+                if p[j].y < 0.05 && speed > 0.5 {
+                    skating += 1;
+                }
+            }
+        }
+        previous = Some(p);
+        root_y = root.y;
+    }
+    assert!(
+        stepped > 0.05,
+        "no foot stepped: ankles {stepped} m up at most"
+    );
+    assert_eq!(skating, 0, "foot points slid over the floor");
+    assert!(
+        root_y >= hold - 1e-3,
+        "the root at {root_y} m, the hold {hold} m"
+    );
+}
