@@ -13,7 +13,7 @@
 //!    levels until the slope left is under 1e-12 (at most 16 rounds), so the fit is its own
 //!    fixed point: the points moved into the floor frame fit the level plane `y = 0` again (a
 //!    levelled seed written to a file and measured again keeps its floor); the tilt then
-//!    limited to [`MAX_TILT_DEG`].
+//!    steeper than [`MAX_TILT_DEG`] taken for noise: level then.
 //! 3. The floor frame: the rotation taking the plane's normal to +y, about the point of the plane
 //!    under the last seed point, then that point moved to height 0. Integrated H3.6M roots start
 //!    from an unknown orientation (a few degrees of tilt are common in real data), which this
@@ -27,7 +27,7 @@ pub const MIN_SPREAD_M: f64 = 0.05;
 pub const AIRBORNE_M: f64 = 0.03;
 /// Rounds of the fit (see [`Floor::fit`]).
 const FIT_ROUNDS: usize = 16;
-/// The largest floor tilt the fit may report (degrees).
+/// The steepest floor the fit reports (degrees); a steeper fit gives a level floor.
 pub const MAX_TILT_DEG: f64 = 30.0;
 
 /// A fitted floor and its floor frame (see the module docs).
@@ -111,9 +111,10 @@ impl Floor {
         let max = MAX_TILT_DEG.to_radians();
         let tilt = up.angle_between(DVec3::Y);
         if tilt > max {
-            let axis = up.cross(DVec3::Y).normalize();
-            up = DQuat::from_axis_angle(axis, tilt - max) * up;
-            level = DQuat::from_rotation_arc(up, DVec3::Y);
+            // A steeper fit is the seed's noise (a few centimetres of foot spread), not a floor:
+            // level (and a fit of the levelled points is level again).
+            up = DVec3::Y;
+            level = DQuat::IDENTITY;
             let moved: Vec<DVec3> = lowest(level).collect();
             let mean = moved.iter().map(|p| p.y).sum::<f64>() / moved.len() as f64;
             height = mean.min(moved.last().expect("a frame").y);
@@ -292,11 +293,21 @@ mod tests {
     }
 
     #[test]
-    fn tilt_is_limited() {
+    fn a_fit_steeper_than_the_limit_is_level_and_stays_level() {
         let steep: Vec<Vec3> = (0..50)
             .map(|i| Vec3::new(i as f32 * 0.1, i as f32 * 0.1, 0.0))
             .collect();
         let floor = Floor::fit(&steep).unwrap();
-        assert!((floor.tilt_deg() - MAX_TILT_DEG).abs() < 1e-6);
+        assert_eq!(floor.tilt_deg(), 0.0);
+        let moved: Vec<Vec3> = steep.iter().map(|&p| floor.to_floor_frame(p)).collect();
+        let again = Floor::fit(&moved).unwrap();
+        assert_eq!(again.tilt_deg(), 0.0);
+        assert!(again.height.abs() < 1e-5, "{}", again.height);
+        // Under the limit, the slope is kept.
+        let gentle: Vec<Vec3> = (0..50)
+            .map(|i| Vec3::new(i as f32 * 0.1, i as f32 * 0.02, 0.0))
+            .collect();
+        let tilt = Floor::fit(&gentle).unwrap().tilt_deg();
+        assert!((tilt - 0.2f64.atan().to_degrees()).abs() < 1e-3, "{tilt}");
     }
 }
