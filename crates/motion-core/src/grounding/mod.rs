@@ -16,14 +16,17 @@
 //!    lower than the action's limit ([`hip_floor_fraction`] of the rig's standing root height:
 //!    the 5th percentile of real H3.6M motion) is raised to it, softly ([`HIP_SOFTNESS`] of the
 //!    standing height above the limit it starts to give), and step 4's IK straightens the legs
-//!    to keep the feet on the floor (a straight leg that cannot reach brings the body down
-//!    again in step 5): a model that sinks into a crouch stands as tall as real people do.
+//!    to keep the feet on the floor (a held foot too far away to stand over steps in to where
+//!    the model has it, one foot at a time; a straight leg that cannot reach brings the body
+//!    down again in step 5): a model that sinks into a crouch stands as tall as real people do.
 //! 4. **Foot locking** (then the lowest foot point is put on the floor once more): a foot is in contact while its lowest point is below
 //!    [`GroundingConfig::contact_height_m`] and its ankle moves slower than
 //!    [`GroundingConfig::contact_speed_m_s`] horizontally; from the first frame of a contact its
 //!    ankle is held over where it was, the foot's lowest point on the floor, by two-bone IK of
 //!    hip and knee, and the foot keeps the world rotation it had then, released when the model lifts or speeds up the foot or the leg cannot reach,
-//!    blending back to the model's foot over [`GroundingConfig::release_s`]. A foot that is not
+//!    blending back to the model's foot over [`GroundingConfig::release_s`] (a foot held more
+//!    than `STEP_MIN_M` (5 cm) from where the model has it steps there, lifted up to
+//!    `STEP_HEIGHT_M` (8 cm), instead of sliding over the floor). A foot that is not
 //!    held is lifted by the same IK when it dips under the floor, and when it swings faster
 //!    than the contact speed, to [`GroundingConfig::swing_clearance_m`].
 //!
@@ -238,8 +241,10 @@ pub struct Grounder {
 
 /// Seed frames kept for the floor fit (the last ones).
 const MAX_SEED_FRAMES: usize = 4096;
-/// How high a foot let go for the hip-height hold is lifted mid-step (metres).
+/// How high a foot let go while away from the model's foot is lifted mid-step (metres).
 const STEP_HEIGHT_M: f32 = 0.08;
+/// A foot let go farther than this (horizontally) from the model's foot steps (metres).
+const STEP_MIN_M: f32 = 0.05;
 /// A held foot farther than this times its leg's reach from the hip is let go.
 const RELEASE_REACH: f32 = 1.3;
 /// The body is held back so that a held foot is at most this times its leg's reach away.
@@ -537,6 +542,9 @@ impl Grounder {
                     && (!state.contact || (lock - hip).length() > reach * RELEASE_REACH) =>
             {
                 state.weight = 1.0 - dt / self.config.release_s.max(1e-3);
+                // A foot held away from where the model has it steps there rather than slides.
+                let (dx, dz) = (ankle.x - lock.x, ankle.z - lock.z);
+                state.stepping = dx * dx + dz * dz > STEP_MIN_M * STEP_MIN_M;
             }
             Some(_) if state.weight >= 1.0 => {}
             Some(_) => {
@@ -660,7 +668,8 @@ impl Grounder {
         );
         let mut target = Vec3::new(target.x, target.y.max(-below_ankle), target.z);
         if state.stepping {
-            target.y = -below_ankle + STEP_HEIGHT_M * (1.0 - (2.0 * w - 1.0).powi(2));
+            let lifted = -below_ankle + STEP_HEIGHT_M * (1.0 - (2.0 * w - 1.0).powi(2));
+            target.y = target.y.max(lifted);
         }
         self.solve_leg(side, rotations, target, foot_rotation);
     }
