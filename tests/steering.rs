@@ -104,8 +104,10 @@ fn the_pelvis_faces_the_walk() {
     let (mut character, first) = walker();
     let mut last = floor_xz(first.root_translation);
     let mut facing_errors = Vec::new();
+    let mut skating = Skating::new(&character);
     for k in 0..(8.0 / TICK) as usize {
         let pose = character.advance(TICK).unwrap().clone();
+        skating.observe(&character, &pose);
         let here = floor_xz(pose.root_translation);
         // Every 0.5 s in which it walked (its walk slows to a shuffle at times).
         if k % 30 == 29 {
@@ -117,6 +119,7 @@ fn the_pelvis_faces_the_walk() {
             last = here;
         }
     }
+    eprintln!("unsteered walk over 8 s: skating {:.3}", skating.fraction());
     facing_errors.sort_by(f32::total_cmp);
     assert!(facing_errors.len() >= 5, "{facing_errors:?}");
     let median = facing_errors[facing_errors.len() / 2];
