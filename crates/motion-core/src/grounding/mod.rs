@@ -119,24 +119,27 @@ pub const HIP_SOFTNESS: f32 = 0.04;
 /// [`HIP_P5_MM`] over [`H36M_STANDING_HEIGHT_MM`], or the lowest of them for an unknown action
 /// or none.
 pub fn hip_floor_fraction(action: Option<&str>) -> f32 {
-    action
-        .and_then(|a| HIP_P5_MM.iter().find(|(name, _)| *name == a))
+    per_action(&HIP_P5_MM, action).unwrap_or_else(|| {
+        HIP_P5_MM
+            .iter()
+            .map(|&(_, v)| v)
+            .fold(f32::INFINITY, f32::min)
+    }) / H36M_STANDING_HEIGHT_MM
+}
+
+/// `action`'s value in a per-action table.
+fn per_action(table: &[(&str, f32)], action: Option<&str>) -> Option<f32> {
+    let action = action?;
+    table
+        .iter()
+        .find(|(name, _)| *name == action)
         .map(|&(_, v)| v)
-        .unwrap_or_else(|| {
-            HIP_P5_MM
-                .iter()
-                .map(|&(_, v)| v)
-                .fold(f32::INFINITY, f32::min)
-        })
-        / H36M_STANDING_HEIGHT_MM
 }
 
 /// The lean limit of `action` (degrees): its [`LEAN_P95_DEG`], or the largest of them for an
 /// unknown action or none.
 pub fn lean_limit_deg(action: Option<&str>) -> f32 {
-    action
-        .and_then(|a| LEAN_P95_DEG.iter().find(|(name, _)| *name == a))
-        .map(|&(_, v)| v)
+    per_action(&LEAN_P95_DEG, action)
         .unwrap_or_else(|| LEAN_P95_DEG.iter().map(|&(_, v)| v).fold(0.0, f32::max))
 }
 
@@ -213,8 +216,16 @@ struct FootState {
     previous: Option<Vec3>,
     /// Whether the model's foot is in contact on the last frame.
     contact: bool,
-    /// Whether the lock is being let go for the hip-height hold (the foot steps).
+    /// Whether the foot being let go steps (lifted) to the model's foot instead of sliding.
     stepping: bool,
+}
+
+impl FootState {
+    /// Starts letting the lock go: the first `fraction` of the release done.
+    fn let_go(&mut self, fraction: f32, stepping: bool) {
+        self.weight = 1.0 - fraction;
+        self.stepping = stepping;
+    }
 }
 
 /// Streaming grounding of one character (see the module docs): observe the seed's frames, then
@@ -470,38 +481,8 @@ impl Grounder {
                 *p += back;
             }
         }
-        // The hold lets go of a held foot too far away to stand up over when the model's own
-        // foot is near enough and the other foot is not stepping (the foot steps in, lifted [`STEP_HEIGHT_M`], to where the model
-        // has it) and raises the body no higher than the feet still held reach (it
-        // never pulls the body towards them).
         let raise = if self.config.foot_locking {
-            let limit = self.min_hip_height();
-            let softness = HIP_SOFTNESS * self.standing_height;
-            let wanted = (-soft_limit(-root.y, -limit, softness) - root.y).max(0.0);
-            // One foot steps at a time (the other holds the body): the one held lowest.
-            let rooms = [self.raise_room(0), self.raise_room(1)];
-            let step = if self.feet.iter().any(|f| f.stepping) {
-                None
-            } else {
-                (0..2)
-                    .filter_map(|side| rooms[side].map(|r| (side, r)))
-                    .filter(|&(_, (held, stepped))| held < wanted && stepped >= wanted)
-                    .min_by(|a, b| a.1 .0.total_cmp(&b.1 .0))
-                    .map(|(side, _)| side)
-            };
-            let mut room = f32::INFINITY;
-            for (side, r) in rooms.iter().enumerate() {
-                match r {
-                    Some(_) if step == Some(side) => {
-                        let state = &mut self.feet[side];
-                        state.weight = 1.0 - dt / self.config.release_s.max(1e-3);
-                        state.stepping = true;
-                    }
-                    Some((held, _)) => room = room.min(*held),
-                    None => {}
-                }
-            }
-            wanted.min(room).max(0.0)
+            self.hip_raise(root.y, dt)
         } else {
             0.0
         };
@@ -524,6 +505,7 @@ impl Grounder {
     /// Contact detection and the lock of one leg (positions are this frame's, before any IK;
     /// `height` of its lowest point over the floor, `speed` of its ankle horizontally).
     fn update_lock(&mut self, side: usize, dt: f32, height: f32, speed: f32) {
+        let fraction = self.release_fraction(dt);
         let leg = &self.parts.legs[side];
         let ankle = self.positions[leg.ankle];
         let state = &mut self.feet[side];
@@ -541,14 +523,13 @@ impl Grounder {
                 if state.weight >= 1.0
                     && (!state.contact || (lock - hip).length() > reach * RELEASE_REACH) =>
             {
-                state.weight = 1.0 - dt / self.config.release_s.max(1e-3);
                 // A foot held away from where the model has it steps there rather than slides.
                 let (dx, dz) = (ankle.x - lock.x, ankle.z - lock.z);
-                state.stepping = dx * dx + dz * dz > STEP_MIN_M * STEP_MIN_M;
+                state.let_go(fraction, dx * dx + dz * dz > STEP_MIN_M * STEP_MIN_M);
             }
             Some(_) if state.weight >= 1.0 => {}
             Some(_) => {
-                state.weight -= dt / self.config.release_s.max(1e-3);
+                state.weight -= fraction;
             }
             None => {}
         }
@@ -563,18 +544,60 @@ impl Grounder {
         }
     }
 
+    /// How far the hip-height hold raises a root `root_y` over the floor. It lets go of a held
+    /// foot too far away to stand up over when the model's own foot is near enough and no foot
+    /// is stepping (that foot steps in to where the model has it, the one held lowest first),
+    /// and raises the body no higher than the feet still held reach (it never pulls the body
+    /// towards them).
+    fn hip_raise(&mut self, root_y: f32, dt: f32) -> f32 {
+        let limit = self.min_hip_height();
+        let softness = HIP_SOFTNESS * self.standing_height;
+        let wanted = (-soft_limit(-root_y, -limit, softness) - root_y).max(0.0);
+        let rooms = [self.raise_room(0), self.raise_room(1)];
+        let step = if self.feet.iter().any(|f| f.stepping) {
+            None
+        } else {
+            (0..2)
+                .filter_map(|side| rooms[side].map(|r| (side, r)))
+                .filter(|&(_, (held, stepped))| held < wanted && stepped >= wanted)
+                .min_by(|a, b| a.1 .0.total_cmp(&b.1 .0))
+                .map(|(side, _)| side)
+        };
+        let mut room = f32::INFINITY;
+        for (side, r) in rooms.iter().enumerate() {
+            match r {
+                Some(_) if step == Some(side) => {
+                    let fraction = self.release_fraction(dt);
+                    self.feet[side].let_go(fraction, true);
+                }
+                Some((held, _)) => room = room.min(*held),
+                None => {}
+            }
+        }
+        wanted.min(room).max(0.0)
+    }
+
+    /// The share of a release one frame of `dt` seconds does.
+    fn release_fraction(&self, dt: f32) -> f32 {
+        dt / self.config.release_s.max(1e-3)
+    }
+
+    /// Leg `side`'s fully held foot: its lock, the hip and the leg's usable reach.
+    fn held(&self, side: usize) -> Option<(Vec3, Vec3, f32)> {
+        let (leg, state) = (&self.parts.legs[side], &self.feet[side]);
+        let lock = state.lock.filter(|_| state.weight >= 1.0)?;
+        let hip = self.positions[leg.hip];
+        let knee = self.positions[leg.knee];
+        let ankle = self.positions[leg.ankle];
+        let reach = ((knee - hip).length() + (ankle - knee).length()) * REACH_USED;
+        Some((lock, hip, reach))
+    }
+
     /// How far the root must move horizontally so that every fully held foot is within its
     /// leg's reach (the mean over the held feet that need it).
     fn held_back(&self) -> Vec3 {
         let (mut sum, mut n) = (Vec3::ZERO, 0.0);
-        for (leg, state) in self.parts.legs.iter().zip(&self.feet) {
-            let Some(lock) = state.lock.filter(|_| state.weight >= 1.0) else {
-                continue;
-            };
-            let hip = self.positions[leg.hip];
-            let knee = self.positions[leg.knee];
-            let ankle = self.positions[leg.ankle];
-            let reach = ((knee - hip).length() + (ankle - knee).length()) * REACH_USED;
+        for (lock, hip, reach) in (0..2).filter_map(|side| self.held(side)) {
             let d = lock - hip;
             let horizontal = Vec3::new(d.x, 0.0, d.z);
             let (h, v) = (horizontal.length(), d.y.abs());
@@ -594,12 +617,8 @@ impl Grounder {
     /// How far the body can rise with leg `side`'s foot, when fully held, still within the leg's
     /// reach: held where it is, and stepped to under the model's ankle.
     fn raise_room(&self, side: usize) -> Option<(f32, f32)> {
-        let (leg, state) = (&self.parts.legs[side], &self.feet[side]);
-        let lock = state.lock.filter(|_| state.weight >= 1.0)?;
-        let hip = self.positions[leg.hip];
-        let knee = self.positions[leg.knee];
-        let ankle = self.positions[leg.ankle];
-        let reach = ((knee - hip).length() + (ankle - knee).length()) * REACH_USED;
+        let (lock, hip, reach) = self.held(side)?;
+        let ankle = self.positions[self.parts.legs[side].ankle];
         let room = |x: f32, z: f32| {
             let h2 = (x - hip.x).powi(2) + (z - hip.z).powi(2);
             lock.y + (reach * reach - h2).max(0.0).sqrt() - hip.y
