@@ -16,9 +16,12 @@
 //!    lower than the action's limit ([`hip_floor_fraction`] of the rig's standing root height:
 //!    the 5th percentile of real H3.6M motion) is raised to it, softly ([`HIP_SOFTNESS`] of the
 //!    standing height above the limit it starts to give), and step 4's IK straightens the legs
-//!    to keep the feet on the floor (a held foot too far away to stand over steps in to where
-//!    the model has it, one foot at a time; a straight leg that cannot reach brings the body
-//!    down again in step 5): a model that sinks into a crouch stands as tall as real people do.
+//!    to keep the feet on the floor (a held foot too far away to stand over steps, one foot at a
+//!    time and only while the body stands on the other: to where the model has it when that is
+//!    near enough, else in towards under its hip; a body on one held foot it cannot rise over
+//!    moves over it, at most 1 m/s, the offset returning over about a second when not needed;
+//!    a straight leg that cannot reach brings the body down again in step 5): a model that
+//!    sinks into a crouch stands as tall as real people do.
 //! 4. **Foot locking** (then the lowest foot point is put on the floor once more): a foot is in contact while its lowest point is below
 //!    [`GroundingConfig::contact_height_m`] and its ankle moves slower than
 //!    [`GroundingConfig::contact_speed_m_s`] horizontally; from the first frame of a contact its
@@ -26,9 +29,13 @@
 //!    hip and knee, and the foot keeps the world rotation it had then, released when the model lifts or speeds up the foot or the leg cannot reach,
 //!    blending back to the model's foot over [`GroundingConfig::release_s`] (a foot held more
 //!    than `STEP_MIN_M` (5 cm) from where the model has it steps there, lifted up to
-//!    `STEP_HEIGHT_M` (8 cm), instead of sliding over the floor). A foot that is not
-//!    held is lifted by the same IK when it dips under the floor, and when it swings faster
-//!    than the contact speed, to [`GroundingConfig::swing_clearance_m`].
+//!    `STEP_HEIGHT_M` (8 cm), instead of sliding over the floor). A foot that lands within
+//!    5 cm of where it was drawn on the frame before is held there, with the rotation it was
+//!    drawn with (it does not slide the end of the model's swing along the floor). A foot
+//!    that is not held is lifted by the same IK when it dips under the floor, and, when it
+//!    swings faster than half the contact speed, towards
+//!    [`GroundingConfig::swing_clearance_m`] (all of it from the contact speed on, risen to
+//!    over 0.06 s).
 //!
 //! Lengths are metres in the floor frame, +y up; thresholds hold for any rig because the
 //! skeleton's units are given ([`Grounder::new`]'s `metres_per_unit`).
@@ -50,6 +57,7 @@
 //! # Ok::<(), motion_core::grounding::GroundingError>(())
 //! ```
 pub mod clip;
+mod feet;
 pub mod floor;
 mod ik;
 pub mod legs;
@@ -59,6 +67,7 @@ use glam::{Quat, Vec3};
 
 use crate::skeleton::Skeleton;
 pub use clip::{ground_expmap_clip, ClipSpec, GroundedClip};
+use feet::FootState;
 pub use floor::Floor;
 pub use legs::{find_body_parts, BodyParts, Leg, LegsError};
 pub use pose::PoseGrounder;
@@ -173,8 +182,8 @@ pub struct GroundingConfig {
     pub foot_locking: bool,
     /// Seconds over which a released foot blends back to the model's.
     pub release_s: f32,
-    /// A foot moving faster than 1.25 x `contact_speed_m_s` keeps its lowest point at least
-    /// this high (metres): a swinging foot clears the floor.
+    /// A free foot moving faster than `contact_speed_m_s` keeps its lowest point at least this
+    /// high (metres; from half that speed, a share of it): a swinging foot clears the floor.
     pub swing_clearance_m: f32,
 }
 
@@ -203,31 +212,6 @@ impl GroundingConfig {
     }
 }
 
-/// One foot's lock.
-#[derive(Debug, Clone, Copy, Default)]
-struct FootState {
-    /// Where the ankle is held.
-    lock: Option<Vec3>,
-    /// The foot's world rotation held with it.
-    lock_rotation: Quat,
-    /// 1 while held, falling to 0 while released.
-    weight: f32,
-    /// The model's ankle on the previous frame (floor frame, after the height correction).
-    previous: Option<Vec3>,
-    /// Whether the model's foot is in contact on the last frame.
-    contact: bool,
-    /// Whether the foot being let go steps (lifted) to the model's foot instead of sliding.
-    stepping: bool,
-}
-
-impl FootState {
-    /// Starts letting the lock go: the first `fraction` of the release done.
-    fn let_go(&mut self, fraction: f32, stepping: bool) {
-        self.weight = 1.0 - fraction;
-        self.stepping = stepping;
-    }
-}
-
 /// Streaming grounding of one character (see the module docs): observe the seed's frames, then
 /// ground each later frame in place. No allocation per grounded frame.
 #[derive(Debug, Clone)]
@@ -248,19 +232,13 @@ pub struct Grounder {
     feet: [FootState; 2],
     /// The horizontal offset held feet have added to the root so far.
     held_offset: Vec3,
+    /// The horizontal offset the hip-height hold has added to put the body over a lone held
+    /// foot (it returns to zero over [`BALANCE_RETURN_S`] when not needed).
+    balance: Vec3,
 }
 
 /// Seed frames kept for the floor fit (the last ones).
 const MAX_SEED_FRAMES: usize = 4096;
-/// How high a foot let go while away from the model's foot is lifted mid-step (metres).
-const STEP_HEIGHT_M: f32 = 0.08;
-/// A foot let go farther than this (horizontally) from the model's foot steps (metres).
-const STEP_MIN_M: f32 = 0.05;
-/// A held foot farther than this times its leg's reach from the hip is let go.
-const RELEASE_REACH: f32 = 1.3;
-/// The body is held back so that a held foot is at most this times its leg's reach away.
-const REACH_USED: f32 = 0.995;
-
 impl Grounder {
     /// A grounder for `skeleton`, whose offsets are in units of `metres_per_unit` metres (1e-3
     /// for the millimetre skeletons of this crate).
@@ -297,6 +275,7 @@ impl Grounder {
             rotations: vec![Quat::IDENTITY; n],
             feet: [FootState::default(); 2],
             held_offset: Vec3::ZERO,
+            balance: Vec3::ZERO,
         })
     }
 
@@ -316,6 +295,7 @@ impl Grounder {
         self.floor = None;
         self.feet = [FootState::default(); 2];
         self.held_offset = Vec3::ZERO;
+        self.balance = Vec3::ZERO;
     }
 
     /// Sets the lean limit ([`lean_limit_deg`]) and the hip-height hold
@@ -411,7 +391,13 @@ impl Grounder {
         }
         // 1. Floor frame, and where held feet have held the body back so far.
         self.level(root, &mut rotations[0]);
-        *root += self.held_offset;
+        let dt = if dt.is_finite() && dt > 0.0 {
+            dt
+        } else {
+            1.0 / 25.0
+        };
+        let carried = self.carried(dt);
+        *root += carried;
         // 2. Lean.
         if let Some(top) = self.parts.torso_top {
             self.forward_kinematics(*root, rotations);
@@ -435,11 +421,6 @@ impl Grounder {
         // (horizontally), or the lower one when both are slow enough for contact: a swinging
         // foot that dips is lifted over the floor in step 4 instead of holding the body.
         self.forward_kinematics(*root, rotations);
-        let dt = if dt.is_finite() && dt > 0.0 {
-            dt
-        } else {
-            1.0 / 25.0
-        };
         let mut heights = [0.0f32; 2];
         let mut speeds = [0.0f32; 2];
         for side in 0..2 {
@@ -451,7 +432,7 @@ impl Grounder {
                 .fold(f32::INFINITY, f32::min);
             let ankle = self.positions[leg.ankle];
             speeds[side] = self.feet[side].previous.map_or(0.0, |p| {
-                let d = ankle - p;
+                let d = ankle - carried - p;
                 (d.x * d.x + d.z * d.z).sqrt() / dt
             });
         }
@@ -471,7 +452,7 @@ impl Grounder {
         // character travels as far as its held feet allow) where a held foot would be out of
         // reach, then the legs' IK; swing feet kept over the floor.
         for side in 0..2 {
-            self.update_lock(side, dt, heights[side] + lift, speeds[side]);
+            self.update_lock(side, dt, heights[side] + lift, speeds[side], carried);
         }
         if self.config.foot_locking {
             let back = self.held_back();
@@ -484,245 +465,28 @@ impl Grounder {
         let raise = if self.config.foot_locking {
             self.hip_raise(root.y, dt)
         } else {
-            0.0
+            Vec3::ZERO
         };
-        root.y += raise;
+        self.balance += Vec3::new(raise.x, 0.0, raise.z);
+        *root += raise;
         for p in &mut self.positions {
-            p.y += raise;
+            *p += raise;
         }
         for side in 0..2 {
-            let (height, speed) = (heights[side] + lift + raise, speeds[side]);
-            self.place(side, rotations, height, speed, side == support);
+            let (height, speed) = (heights[side] + lift + raise.y, speeds[side]);
+            self.place(side, rotations, height, speed, side == support, dt);
         }
         // 5. The placed legs' lowest point on the floor (a held foot a straight leg could not
         // bring down, or one pushed under the floor, moves the body instead).
         if self.config.foot_locking {
             self.forward_kinematics(*root, rotations);
-            root.y -= self.lowest_foot_point().y;
-        }
-    }
-
-    /// Contact detection and the lock of one leg (positions are this frame's, before any IK;
-    /// `height` of its lowest point over the floor, `speed` of its ankle horizontally).
-    fn update_lock(&mut self, side: usize, dt: f32, height: f32, speed: f32) {
-        let fraction = self.release_fraction(dt);
-        let leg = &self.parts.legs[side];
-        let ankle = self.positions[leg.ankle];
-        let state = &mut self.feet[side];
-        state.previous = Some(ankle);
-        state.contact =
-            height < self.config.contact_height_m && speed < self.config.contact_speed_m_s;
-        if !self.config.foot_locking {
-            return;
-        }
-        let hip = self.positions[leg.hip];
-        let reach =
-            (self.positions[leg.knee] - hip).length() + (ankle - self.positions[leg.knee]).length();
-        match state.lock {
-            Some(lock)
-                if state.weight >= 1.0
-                    && (!state.contact || (lock - hip).length() > reach * RELEASE_REACH) =>
-            {
-                // A foot held away from where the model has it steps there rather than slides.
-                let (dx, dz) = (ankle.x - lock.x, ankle.z - lock.z);
-                state.let_go(fraction, dx * dx + dz * dz > STEP_MIN_M * STEP_MIN_M);
-            }
-            Some(_) if state.weight >= 1.0 => {}
-            Some(_) => {
-                state.weight -= fraction;
-            }
-            None => {}
-        }
-        if state.lock.is_some() && state.weight <= 0.0 {
-            state.lock = None;
-            state.stepping = false;
-        }
-        if state.lock.is_none() && state.contact {
-            state.lock = Some(ankle);
-            state.lock_rotation = self.rotations[leg.ankle];
-            state.weight = 1.0;
-        }
-    }
-
-    /// How far the hip-height hold raises a root `root_y` over the floor. It lets go of a held
-    /// foot too far away to stand up over when the model's own foot is near enough and no foot
-    /// is stepping (that foot steps in to where the model has it, the one held lowest first),
-    /// and raises the body no higher than the feet still held reach (it never pulls the body
-    /// towards them).
-    fn hip_raise(&mut self, root_y: f32, dt: f32) -> f32 {
-        let limit = self.min_hip_height();
-        let softness = HIP_SOFTNESS * self.standing_height;
-        let wanted = (-soft_limit(-root_y, -limit, softness) - root_y).max(0.0);
-        let rooms = [self.raise_room(0), self.raise_room(1)];
-        let step = if self.feet.iter().any(|f| f.stepping) {
-            None
-        } else {
-            (0..2)
-                .filter_map(|side| rooms[side].map(|r| (side, r)))
-                .filter(|&(_, (held, stepped))| held < wanted && stepped >= wanted)
-                .min_by(|a, b| a.1 .0.total_cmp(&b.1 .0))
-                .map(|(side, _)| side)
-        };
-        let mut room = f32::INFINITY;
-        for (side, r) in rooms.iter().enumerate() {
-            match r {
-                Some(_) if step == Some(side) => {
-                    let fraction = self.release_fraction(dt);
-                    self.feet[side].let_go(fraction, true);
-                }
-                Some((held, _)) => room = room.min(*held),
-                None => {}
+            let lowest = self.lowest_foot_point().y;
+            root.y -= lowest;
+            for (leg, state) in self.parts.legs.iter().zip(&mut self.feet) {
+                let ankle = self.positions[leg.ankle] - Vec3::Y * lowest;
+                state.drawn = Some((ankle, self.rotations[leg.ankle]));
             }
         }
-        wanted.min(room).max(0.0)
-    }
-
-    /// The share of a release one frame of `dt` seconds does.
-    fn release_fraction(&self, dt: f32) -> f32 {
-        dt / self.config.release_s.max(1e-3)
-    }
-
-    /// Leg `side`'s fully held foot: its lock, the hip and the leg's usable reach.
-    fn held(&self, side: usize) -> Option<(Vec3, Vec3, f32)> {
-        let (leg, state) = (&self.parts.legs[side], &self.feet[side]);
-        let lock = state.lock.filter(|_| state.weight >= 1.0)?;
-        let hip = self.positions[leg.hip];
-        let knee = self.positions[leg.knee];
-        let ankle = self.positions[leg.ankle];
-        let reach = ((knee - hip).length() + (ankle - knee).length()) * REACH_USED;
-        Some((lock, hip, reach))
-    }
-
-    /// How far the root must move horizontally so that every fully held foot is within its
-    /// leg's reach (the mean over the held feet that need it).
-    fn held_back(&self) -> Vec3 {
-        let (mut sum, mut n) = (Vec3::ZERO, 0.0);
-        for (lock, hip, reach) in (0..2).filter_map(|side| self.held(side)) {
-            let d = lock - hip;
-            let horizontal = Vec3::new(d.x, 0.0, d.z);
-            let (h, v) = (horizontal.length(), d.y.abs());
-            if d.length() > reach && v < reach && h > 1e-6 {
-                let allowed = (reach * reach - v * v).sqrt();
-                sum += horizontal / h * (h - allowed);
-                n += 1.0;
-            }
-        }
-        if n > 0.0 {
-            sum / n
-        } else {
-            Vec3::ZERO
-        }
-    }
-
-    /// How far the body can rise with leg `side`'s foot, when fully held, still within the leg's
-    /// reach: held where it is, and stepped to under the model's ankle.
-    fn raise_room(&self, side: usize) -> Option<(f32, f32)> {
-        let (lock, hip, reach) = self.held(side)?;
-        let ankle = self.positions[self.parts.legs[side].ankle];
-        let room = |x: f32, z: f32| {
-            let h2 = (x - hip.x).powi(2) + (z - hip.z).powi(2);
-            lock.y + (reach * reach - h2).max(0.0).sqrt() - hip.y
-        };
-        Some((room(lock.x, lock.z), room(ankle.x, ankle.z)))
-    }
-
-    /// The IK of one leg after its lock is updated (`support`: the foot that holds the body,
-    /// which never gets the swing clearance).
-    fn place(
-        &mut self,
-        side: usize,
-        rotations: &mut [Quat],
-        height: f32,
-        speed: f32,
-        support: bool,
-    ) {
-        if !self.config.foot_locking {
-            return;
-        }
-        let leg = &self.parts.legs[side];
-        let ankle = self.positions[leg.ankle];
-        let state = &self.feet[side];
-        let Some(lock) = state.lock else {
-            // A swinging foot: its lowest point at least at the swing clearance (from nothing at
-            // the contact speed to all of it at 1.25 times that), never under the floor.
-            let over = ((speed - self.config.contact_speed_m_s)
-                / (0.25 * self.config.contact_speed_m_s).max(1e-6))
-            .clamp(0.0, 1.0);
-            let wanted = if support {
-                0.0
-            } else {
-                self.config.swing_clearance_m * over
-            };
-            // The support foot goes back to the floor when the hip-height hold raised it.
-            if height < wanted || (support && height > wanted) {
-                let target = ankle + Vec3::Y * (wanted - height);
-                let rotation = self.rotations[leg.ankle];
-                self.solve_leg(side, rotations, target, rotation);
-            }
-            return;
-        };
-        // Held: the ankle over its lock with the foot's world rotation of that moment (toes do
-        // not slide round the ankle) and its lowest point on the floor; blended back to the
-        // model's foot while released.
-        let w = state.weight.clamp(0.0, 1.0);
-        let model_rotation = self.rotations[leg.ankle];
-        let foot_rotation = model_rotation.slerp(state.lock_rotation, w).normalize();
-        let turn = foot_rotation * model_rotation.inverse();
-        let below_ankle = leg
-            .foot_points
-            .iter()
-            .map(|&j| (turn * (self.positions[j] - ankle)).y)
-            .fold(0.0f32, f32::min);
-        // A stepping foot is lifted off the floor, over the model's by half-way through its
-        // release, and lands there.
-        let wh = if state.stepping {
-            (2.0 * w - 1.0).max(0.0)
-        } else {
-            w
-        };
-        let target = Vec3::new(
-            ankle.x + (lock.x - ankle.x) * wh,
-            ankle.y + (-below_ankle - ankle.y) * w,
-            ankle.z + (lock.z - ankle.z) * wh,
-        );
-        let mut target = Vec3::new(target.x, target.y.max(-below_ankle), target.z);
-        if state.stepping {
-            let lifted = -below_ankle + STEP_HEIGHT_M * (1.0 - (2.0 * w - 1.0).powi(2));
-            target.y = target.y.max(lifted);
-        }
-        self.solve_leg(side, rotations, target, foot_rotation);
-    }
-
-    /// Two-bone IK of leg `side` bringing its ankle to `target` with the foot's world rotation
-    /// `foot_rotation` (scratch positions are this frame's, before any IK of this leg).
-    fn solve_leg(&self, side: usize, rotations: &mut [Quat], target: Vec3, foot_rotation: Quat) {
-        let leg = &self.parts.legs[side];
-        let (hip_j, knee_j, ankle_j) = (leg.hip, leg.knee, leg.ankle);
-        let ankle = self.positions[ankle_j];
-        let toe = *leg.foot_points.last().expect("the ankle at least");
-        let parent = self.parents[hip_j].map_or(Quat::IDENTITY, |p| self.rotations[p]);
-        let forward = {
-            let f = self.positions[toe] - ankle;
-            if f.length_squared() > 1e-8 {
-                f
-            } else {
-                self.rotations[0] * Vec3::Z
-            }
-        };
-        let chain = ik::Chain {
-            a: self.positions[hip_j],
-            b: self.positions[knee_j],
-            c: ankle,
-            parent_rotation: parent,
-            hip_rotation: self.rotations[hip_j],
-            knee_rotation: self.rotations[knee_j],
-            forward,
-        };
-        let (hip_local, knee_local) = ik::solve(&chain, rotations[knee_j], target);
-        rotations[hip_j] = hip_local;
-        rotations[knee_j] = knee_local;
-        let knee_world = parent * hip_local * knee_local;
-        rotations[ankle_j] = (knee_world.inverse() * foot_rotation).normalize();
     }
 
     /// World positions and rotations of every joint into the scratch.

@@ -325,3 +325,101 @@ fn feet_held_too_wide_to_stand_up_step_in_over_the_floor() {
         "the root at {root_y} m, the hold {hold} m"
     );
 }
+
+/// Frames on which a foot point under 5 cm moves faster than 0.5 m/s horizontally (the
+/// skating measure), over consecutive grounded position sets.
+fn skating_frames(frames: &[Vec<Vec3>]) -> usize {
+    frames
+        .windows(2)
+        .filter(|w| {
+            [3, 4, 5, 8, 9, 10].iter().any(|&j| {
+                let d = w[1][j] - w[0][j];
+                w[1][j].y < 0.05 && (d.x * d.x + d.z * d.z).sqrt() / DT > 0.5
+            })
+        })
+        .count()
+}
+
+#[test]
+fn a_foot_landing_mid_swing_is_held_where_it_came_down() {
+    // The right leg stands; the left, straight, swings in from 0.6 rad off the vertical at
+    // about 0.8 m/s (under the contact speed), touching the floor before it stops at 0.25 rad:
+    // it is held where it was drawn and does not slide the end of the model's swing along the
+    // floor.
+    let swing = |angle: f32| {
+        let mut q = vec![Quat::IDENTITY; Skeleton::h36m().len()];
+        q[6] = Quat::from_rotation_x(angle);
+        q
+    };
+    let mut g = grounder();
+    for _ in 0..10 {
+        g.observe_seed(Vec3::new(0.0, 0.9, 0.0), &swing(0.0));
+    }
+    let (mut frames, mut landed) = (Vec::new(), None);
+    for t in 0..25 {
+        let model = swing((-0.6 + 0.036 * t as f32).min(-0.25));
+        let (mut root, mut rotations) = (Vec3::new(0.0, 0.9, 0.0), model);
+        g.ground(&mut root, &mut rotations, DT);
+        if g.contacts()[1] {
+            landed.get_or_insert(t);
+        }
+        frames.push(positions(root, &rotations));
+    }
+    assert!(
+        landed.is_some_and(|t| t > 0),
+        "the left foot landed at {landed:?}"
+    );
+    assert_eq!(
+        skating_frames(&frames),
+        0,
+        "a landing foot slid over the floor"
+    );
+}
+
+#[test]
+fn a_lunge_too_long_to_stand_up_in_steps_the_feet_in_under_the_hips() {
+    // The model holds a long lunge (both feet about 0.5 m from under the hips, the root well
+    // under the walking hold): its own feet are no nearer, so the held feet step in towards
+    // under the hips, one at a time and lifted, and the body stands to the hold.
+    // Straight legs 0.6 rad either way from the vertical, feet flat.
+    let mut lunge = vec![Quat::IDENTITY; Skeleton::h36m().len()];
+    for (hip, ankle, angle) in [(1, 3, 0.6f32), (6, 8, -0.6)] {
+        lunge[hip] = Quat::from_rotation_x(angle);
+        lunge[ankle] = Quat::from_rotation_x(-angle);
+    }
+    let mut g = grounder();
+    g.set_action(Some("walking"));
+    for _ in 0..25 {
+        g.observe_seed(Vec3::new(0.0, 0.8, 0.0), &lunge);
+    }
+    let hold = g.min_hip_height();
+    let (mut frames, mut root_y, mut stepped) = (Vec::new(), 0.0, 0.0f32);
+    for _ in 0..40 {
+        let (mut root, mut rotations) = (Vec3::new(0.0, 0.8, 0.0), lunge.clone());
+        g.ground(&mut root, &mut rotations, DT);
+        let p = positions(root, &rotations);
+        stepped = stepped.max(p[3].y.min(p[8].y));
+        root_y = root.y;
+        frames.push(p);
+    }
+    let p = frames.last().unwrap();
+    let stance = (p[3].z - p[8].z).abs();
+    let model = positions(Vec3::ZERO, &lunge);
+    assert!(
+        stance < (model[3].z - model[8].z).abs() - 0.2,
+        "the stance stayed {stance} m long"
+    );
+    assert!(
+        stepped < 0.01,
+        "both feet off the floor at once ({stepped} m)"
+    );
+    assert_eq!(
+        skating_frames(&frames),
+        0,
+        "foot points slid over the floor"
+    );
+    assert!(
+        root_y >= hold - 1e-3,
+        "the root at {root_y} m, the hold {hold} m"
+    );
+}
