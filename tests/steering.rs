@@ -2,17 +2,20 @@
 //! on the shipped model walking after the example seed: the heading convention is the direction
 //! it walks, 90 and 180 degree turns are done within 1.2 s, a stop goal holds the root, and ticks
 //! allocate nothing with or without a goal. The square course on a steady walker is a unit test
-//! of `motion_core::steering`.
+//! of `motion_core::steering`. The motion-matching baseline (`motion_core::matching`) steps
+//! without allocating and, on the training walks (data tests), answers every goal change.
 use std::path::PathBuf;
 use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
 use motion::core::formats::expmap_bvh::ExpMapTarget;
 use motion::core::grounding::find_body_parts;
+use motion::core::matching::{Matcher, MatchingDatabase};
 use motion::core::model::{Character, MotionModel, Noise};
 use motion::core::pose::Pose;
 use motion::core::seed::load_seed;
 use motion::core::steering::{direction_of, facing_of, Goal};
+use motion::metrics::responsiveness::measure;
 
 mod common;
 use common::allocations;
@@ -209,4 +212,84 @@ fn ticks_allocate_nothing_without_a_goal() {
         pose.clone_from(character.advance(TICK).unwrap());
     }
     assert_eq!(allocations() - before, 0);
+}
+
+/// A motion-matching database of the example's procedural walk (no data needed).
+fn example_walk_matcher() -> Matcher {
+    let clip = load_seed(
+        &repo().join("examples/walk_seed.bvh"),
+        ExpMapTarget::H36m,
+        25.0,
+        25.0,
+        None,
+    )
+    .unwrap()
+    .frames;
+    Matcher::new(Arc::new(MatchingDatabase::h36m(&[clip.view()]).unwrap()))
+}
+
+#[test]
+fn motion_matching_steps_allocate_nothing() {
+    let mut matcher = example_walk_matcher();
+    matcher.set_goal(Some(Goal::towards(Vec2::new(0.7, 0.0), 0.0)));
+    for _ in 0..30 {
+        matcher.step();
+    }
+    let before = allocations();
+    for k in 0..240 {
+        if k % 60 == 0 {
+            let turn = direction_of(k as f32 * 0.5);
+            matcher.set_goal(Some(Goal::towards(turn * 0.7, 0.0)));
+        }
+        matcher.step();
+    }
+    assert_eq!(allocations() - before, 0);
+}
+
+/// The H3.6M dataset (`MOTION_DATA_DIR`, default `<repo>/../shared/data`), or `None` with a
+/// visible message.
+fn dataset() -> Option<PathBuf> {
+    let root = std::env::var_os("MOTION_DATA_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| repo().join("../shared/data"));
+    let dataset = motion::core::protocol::dataset_dir(&root);
+    if dataset.join("S1/walking_1.txt.gz").is_file() {
+        Some(dataset)
+    } else {
+        eprintln!(
+            "SKIPPED: the motion-matching baseline needs the H3.6M data at {} (set MOTION_DATA_DIR)",
+            dataset.display()
+        );
+        None
+    }
+}
+
+#[test]
+fn motion_matching_on_the_training_walks_answers_every_goal_change() {
+    // The baseline `examples/steering_compare.rs` reports: built from the training subjects'
+    // walking takes, it turns to 90 and 180 degree goals within a second, stops, and its body
+    // moves like real walking.
+    let Some(dataset) = dataset() else { return };
+    let mut clips = Vec::new();
+    for subject in ["S1", "S6", "S7", "S8", "S9", "S11"] {
+        clips.extend(
+            motion::core::protocol::load_subject_sequences(&dataset, subject, "walking").unwrap(),
+        );
+    }
+    let views: Vec<_> = clips.iter().map(|c| c.view()).collect();
+    let database = Arc::new(MatchingDatabase::h36m(&views).unwrap());
+    let make =
+        || -> Result<Matcher, std::convert::Infallible> { Ok(Matcher::new(database.clone())) };
+    let report = measure("motion matching", make, 0.42, database.bytes()).unwrap();
+    eprintln!("{report:?}");
+    for s in &report.scenarios[..2] {
+        let t = s.heading_s.unwrap_or(f64::INFINITY);
+        assert!(t < 1.0, "{:?}: heading after {t} s", s.scenario);
+    }
+    assert!(report.scenarios[2].speed_s.is_some(), "it never stopped");
+    assert!(
+        (0.5..2.0).contains(&report.body_speed_ratio),
+        "body speed {} of real walking's",
+        report.body_speed_ratio
+    );
 }

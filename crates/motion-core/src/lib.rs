@@ -88,6 +88,7 @@ pub mod grounding;
 pub mod input_file;
 pub mod kinematics;
 pub mod limits;
+pub mod matching;
 pub mod model;
 pub mod motion;
 pub mod nn;

@@ -71,6 +71,25 @@ fn wrap(angle: f32) -> f32 {
     }
 }
 
+/// A character that can be steered toward a [`Goal`], one frame at a time: a model's
+/// [`Character`](crate::model::Character) (root-motion warping, [`Steering`]) or a
+/// [`Matcher`](crate::matching::Matcher) (motion matching). What a steering benchmark drives.
+pub trait Steerable {
+    /// Why a frame could not be made.
+    type Error: std::error::Error + Send + Sync + 'static;
+    /// The skeleton of the poses.
+    fn skeleton(&self) -> &Skeleton;
+    /// Steers toward `goal` from the next frame on (`None`: the character's own motion).
+    fn set_goal(&mut self, goal: Option<Goal>);
+    /// The pose `dt` seconds on.
+    ///
+    /// # Errors
+    /// The character could not make a frame.
+    fn advance(&mut self, dt: f64) -> Result<&Pose, Self::Error>;
+    /// The heading (yaw about +y, `0` facing +z) of `pose`'s pelvis.
+    fn heading_of(&self, pose: &Pose) -> f32;
+}
+
 /// Root-motion warping toward a [`Goal`] (see the module docs), one model frame at a time.
 #[derive(Debug, Clone)]
 pub struct Steering {

@@ -32,6 +32,7 @@ pub mod npss;
 pub mod plausibility;
 pub mod protocol;
 pub mod reference;
+pub mod responsiveness;
 
 pub use apd::{apd, apd_batch};
 pub use classifier::{

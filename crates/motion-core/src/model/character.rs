@@ -21,7 +21,7 @@ use crate::motion::FrameScalar;
 use crate::pose::Pose;
 use crate::resample::ResampleError;
 use crate::skeleton::{Skeleton, H36M_SOURCE_FPS};
-use crate::steering::Goal;
+use crate::steering::{Goal, Steerable};
 
 /// Why a [`Character`] could not start or advance.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -167,6 +167,26 @@ impl Character {
     /// is compared with.
     pub fn heading_of(&self, pose: &Pose) -> f32 {
         self.stream.heading_of(pose)
+    }
+}
+
+impl Steerable for Character {
+    type Error = CharacterError;
+
+    fn skeleton(&self) -> &Skeleton {
+        self.stream.skeleton()
+    }
+
+    fn set_goal(&mut self, goal: Option<Goal>) {
+        Character::set_goal(self, goal);
+    }
+
+    fn advance(&mut self, dt: f64) -> Result<&Pose, CharacterError> {
+        Character::advance(self, dt)
+    }
+
+    fn heading_of(&self, pose: &Pose) -> f32 {
+        Character::heading_of(self, pose)
     }
 }
 

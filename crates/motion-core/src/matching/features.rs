@@ -1,0 +1,109 @@
+//! The matching features of one frame: where the feet are and how they and the hips move, and
+//! where the root goes and faces over the next second, all in the frame's own ground frame
+//! (root on the floor, its facing along +z).
+
+use glam::{Vec2, Vec3};
+
+use crate::steering::direction_of;
+
+/// Numbers per feature vector.
+pub const FEATURES: usize = 27;
+/// Frames ahead (at 25 Hz) of the three trajectory samples: 0.32, 0.68 and 1.0 s.
+pub const TRAJECTORY_FRAMES: [usize; 3] = [8, 17, 25];
+/// The feature groups (start, length): foot positions, foot velocities, hip velocity,
+/// trajectory positions, trajectory directions. Each group is scaled by its own spread.
+pub const GROUPS: [(usize, usize); 5] = [(0, 6), (6, 6), (12, 3), (15, 6), (21, 6)];
+/// Where the trajectory part starts (positions, then directions).
+pub const TRAJECTORY_START: usize = 15;
+
+/// A frame's ground frame: the root on the floor and the facing (yaw about +y).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GroundFrame {
+    /// The root's floor position `(x, z)`, metres.
+    pub position: Vec2,
+    /// Yaw about +y, radians (`0` facing +z).
+    pub facing: f32,
+}
+
+impl GroundFrame {
+    /// A world floor vector `(x, z)` in this frame (+z forward, +x to the facing's left).
+    pub fn local(&self, v: Vec2) -> Vec2 {
+        rotate(v, -self.facing)
+    }
+
+    /// A world 3-vector in this frame (its floor part turned, its height kept).
+    pub fn local3(&self, v: Vec3) -> Vec3 {
+        let f = self.local(Vec2::new(v.x, v.z));
+        Vec3::new(f.x, v.y, f.y)
+    }
+}
+
+/// `v` turned by `angle` about +y (a facing of `angle` maps +z to `direction_of(angle)`).
+pub fn rotate(v: Vec2, angle: f32) -> Vec2 {
+    let (s, c) = angle.sin_cos();
+    Vec2::new(c * v.x + s * v.y, -s * v.x + c * v.y)
+}
+
+/// The pose part of the features (`out[..15]`): both ankles relative to the root's floor point,
+/// their velocities and the root's velocity, in `frame` (world metres, `dt` seconds between
+/// `previous` and `current` positions).
+pub fn pose_features(
+    frame: &GroundFrame,
+    root: Vec3,
+    ankles: [Vec3; 2],
+    previous_root: Vec3,
+    previous_ankles: [Vec3; 2],
+    dt: f32,
+    out: &mut [f32; FEATURES],
+) {
+    let floor = Vec3::new(root.x, 0.0, root.z);
+    for (side, (&now, &before)) in ankles.iter().zip(&previous_ankles).enumerate() {
+        let p = frame.local3(now - floor);
+        let v = frame.local3((now - before) / dt);
+        out[3 * side..3 * side + 3].copy_from_slice(&p.to_array());
+        out[6 + 3 * side..9 + 3 * side].copy_from_slice(&v.to_array());
+    }
+    let v = frame.local3((root - previous_root) / dt);
+    out[12..15].copy_from_slice(&v.to_array());
+}
+
+/// The trajectory part of the features (`out[15..]`): the ground frames `ahead` (at
+/// [`TRAJECTORY_FRAMES`]) as positions and facing directions in `frame`.
+pub fn trajectory_features(
+    frame: &GroundFrame,
+    ahead: [GroundFrame; 3],
+    out: &mut [f32; FEATURES],
+) {
+    for (k, a) in ahead.iter().enumerate() {
+        let p = frame.local(a.position - frame.position);
+        let d = direction_of(a.facing - frame.facing);
+        out[TRAJECTORY_START + 2 * k..TRAJECTORY_START + 2 * k + 2].copy_from_slice(&p.to_array());
+        out[TRAJECTORY_START + 6 + 2 * k..TRAJECTORY_START + 8 + 2 * k]
+            .copy_from_slice(&d.to_array());
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_frame_facing_x_sees_x_ahead() {
+        let frame = GroundFrame {
+            position: Vec2::new(1.0, 2.0),
+            facing: std::f32::consts::FRAC_PI_2,
+        };
+        // Facing +x: one metre further along +x is one metre ahead (+z local).
+        let ahead = frame.local(Vec2::new(1.0, 0.0));
+        assert!((ahead - Vec2::new(0.0, 1.0)).length() < 1e-6, "{ahead}");
+        let mut out = [0.0; FEATURES];
+        let later = GroundFrame {
+            position: Vec2::new(2.0, 2.0),
+            facing: std::f32::consts::FRAC_PI_2,
+        };
+        trajectory_features(&frame, [later; 3], &mut out);
+        assert!((out[15] - 0.0).abs() < 1e-6 && (out[16] - 1.0).abs() < 1e-6);
+        // The same facing: straight ahead.
+        assert!((out[21]).abs() < 1e-6 && (out[22] - 1.0).abs() < 1e-6);
+    }
+}
