@@ -1,10 +1,17 @@
-//! A crowd: N characters on the built-in model (default 16), walking and switching actions every
-//! few seconds, skeletons drawn with gizmos; the camera circles them.
+//! A crowd: N characters on the built-in model (default 16), skeletons drawn with gizmos, the
+//! camera circling them. Every other character walks a 3 m square of waypoints around where it
+//! was spawned (`motion_core::steering::Waypoints` setting `MotionCharacter::goal` every frame,
+//! the square drawn in blue); the others switch actions every few seconds.
 //!
 //! `cargo run --release -p motion-bevy --example crowd --features render -- 32`
 use bevy::prelude::*;
 use bevy::transform::TransformSystems;
-use motion_bevy::{MotionCharacter, MotionFailed, MotionPlugin, MotionRig};
+use motion_bevy::{MotionCharacter, MotionFailed, MotionGoal, MotionPlugin, MotionRig};
+use motion_core::steering::{Vec2 as FloorVec, Waypoints};
+
+/// Side of each walker's square (metres) and its walking speed (m/s).
+const SQUARE_M: f32 = 3.0;
+const WALK_SPEED: f32 = 0.5;
 
 /// The actions the crowd cycles through.
 const ACTIONS: [&str; 6] = [
@@ -22,6 +29,10 @@ struct Switch(Timer);
 #[derive(Component)]
 struct Member(usize);
 
+/// A walker's waypoints (world `x`, `z`).
+#[derive(Component)]
+struct Route(Waypoints);
+
 fn main() {
     let n: usize = std::env::args()
         .nth(1)
@@ -38,10 +49,13 @@ fn main() {
                 setup(n, commands, meshes, materials)
             },
         )
-        .add_systems(Update, (switch_actions, orbit_camera, report_failures))
+        .add_systems(
+            Update,
+            (follow_routes, switch_actions, orbit_camera, report_failures),
+        )
         .add_systems(
             PostUpdate,
-            draw_skeletons.after(TransformSystems::Propagate),
+            (draw_skeletons, draw_routes).after(TransformSystems::Propagate),
         )
         .run();
 }
@@ -73,19 +87,53 @@ fn setup(
             (row as f32 - side as f32 / 2.0) * 2.0,
         );
         let heading = Quat::from_rotation_y(i as f32 * 0.7);
-        commands.spawn((
-            MotionCharacter::new(ACTIONS[i % ACTIONS.len()], i as u64),
-            Transform::from_translation(at).with_rotation(heading),
-            Member(i),
-        ));
+        let placed = Transform::from_translation(at).with_rotation(heading);
+        if i % 2 == 0 {
+            let corner = |x: f32, z: f32| FloorVec::new(at.x + x, at.z + z);
+            let half = SQUARE_M / 2.0;
+            let square = vec![
+                corner(half, half),
+                corner(-half, half),
+                corner(-half, -half),
+                corner(half, -half),
+            ];
+            commands.spawn((
+                MotionCharacter::new("walking", i as u64),
+                placed,
+                Member(i),
+                Route(Waypoints::new(square, WALK_SPEED, 0.4, true)),
+            ));
+        } else {
+            commands.spawn((
+                MotionCharacter::new(ACTIONS[i % ACTIONS.len()], i as u64),
+                placed,
+                Member(i),
+            ));
+        }
     }
 }
 
-/// Every few seconds each character moves on to the next action of the list.
+/// Every frame each walker's goal: toward its next waypoint (the character entity's transform
+/// is where its root motion has taken it).
+fn follow_routes(mut walkers: Query<(&mut MotionCharacter, &mut Route, &Transform)>) {
+    for (mut character, mut route, at) in &mut walkers {
+        let forward = at.rotation * Vec3::Z;
+        let facing = forward.x.atan2(forward.z);
+        let goal = route
+            .0
+            .goal(FloorVec::new(at.translation.x, at.translation.z), facing);
+        character.goal = Some(MotionGoal {
+            velocity: Vec2::new(goal.velocity.x, goal.velocity.y),
+            facing: goal.facing,
+        });
+    }
+}
+
+/// Every few seconds each character without a route moves on to the next action of the list.
 fn switch_actions(
     time: Res<Time>,
     mut timer: ResMut<Switch>,
-    mut characters: Query<(&mut MotionCharacter, &Member)>,
+    mut characters: Query<(&mut MotionCharacter, &Member), Without<Route>>,
     mut round: Local<usize>,
 ) {
     if !timer.0.tick(time.delta()).just_finished() {
@@ -102,6 +150,24 @@ fn orbit_camera(time: Res<Time>, mut camera: Query<&mut Transform, With<Camera3d
     for mut t in &mut camera {
         *t = Transform::from_xyz(14.0 * angle.sin(), 6.0, 14.0 * angle.cos())
             .looking_at(Vec3::new(0.0, 0.8, 0.0), Vec3::Y);
+    }
+}
+
+/// Each walker's square, its next waypoint marked.
+fn draw_routes(mut gizmos: Gizmos, routes: Query<&Route>) {
+    let blue = Color::srgb(0.3, 0.6, 1.0);
+    for route in &routes {
+        let points = route.0.points();
+        let floor = |p: &FloorVec| Vec3::new(p.x, 0.02, p.y);
+        gizmos.linestrip(points.iter().chain(points.first()).map(floor), blue);
+        let Some(next) = route.0.target() else {
+            continue;
+        };
+        gizmos.sphere(
+            Isometry3d::from_translation(Vec3::new(next.x, 0.05, next.y)),
+            0.1,
+            blue,
+        );
     }
 }
 

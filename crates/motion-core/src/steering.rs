@@ -240,6 +240,65 @@ impl Steering {
     }
 }
 
+/// A path on the floor for a character to follow: a [`Goal`] toward the next point at a
+/// speed, moving on to the point after once within a radius of it (a loop starts again at the
+/// first point). What the engine demos and the square-course checks steer with.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Waypoints {
+    points: Vec<Vec2>,
+    next: usize,
+    speed: f32,
+    radius: f32,
+    looping: bool,
+}
+
+impl Waypoints {
+    /// Follow `points` (`(x, z)` metres) at `speed` (m/s), each reached within `radius` (m).
+    pub fn new(points: Vec<Vec2>, speed: f32, radius: f32, looping: bool) -> Waypoints {
+        Waypoints {
+            points,
+            next: 0,
+            speed,
+            radius,
+            looping,
+        }
+    }
+
+    /// The points, in order.
+    pub fn points(&self) -> &[Vec2] {
+        &self.points
+    }
+
+    /// The point being walked to (`None`: the path is done).
+    pub fn target(&self) -> Option<Vec2> {
+        self.points.get(self.next).copied()
+    }
+
+    /// Index of the point being walked to (`points.len()` when done).
+    pub fn next_index(&self) -> usize {
+        self.next
+    }
+
+    /// The goal for a character at `here` (`(x, z)`) facing `facing`: toward the next point,
+    /// moving on past those within the radius; standing still facing `facing` when done.
+    pub fn goal(&mut self, here: Vec2, facing: f32) -> Goal {
+        for _ in 0..self.points.len() {
+            let Some(point) = self.target() else { break };
+            if (point - here).length() > self.radius {
+                return Goal::towards((point - here).normalize() * self.speed, facing);
+            }
+            self.next += 1;
+            if self.looping {
+                self.next %= self.points.len();
+            }
+        }
+        Goal {
+            velocity: Vec2::ZERO,
+            facing,
+        }
+    }
+}
+
 /// `v` turned by `angle` about +y (the facing convention: `rotate(+z, a) = direction_of(a)`).
 fn rotate(v: Vec2, angle: f32) -> Vec2 {
     let (s, c) = angle.sin_cos();
@@ -250,6 +309,30 @@ fn rotate(v: Vec2, angle: f32) -> Vec2 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn waypoints_lead_on_and_stop_at_the_end() {
+        let mut path = Waypoints::new(
+            vec![Vec2::new(0.0, 2.0), Vec2::new(2.0, 2.0)],
+            0.5,
+            0.3,
+            false,
+        );
+        let g = path.goal(Vec2::ZERO, 1.0);
+        assert!((g.velocity - Vec2::new(0.0, 0.5)).length() < 1e-6 && g.facing.abs() < 1e-6);
+        let g = path.goal(Vec2::new(0.0, 1.8), 1.0);
+        assert_eq!(path.next_index(), 1);
+        assert!((g.velocity - Vec2::new(2.0, 0.2).normalize() * 0.5).length() < 1e-6);
+        let g = path.goal(Vec2::new(2.0, 2.1), 1.0);
+        assert_eq!(
+            (path.target(), g.velocity, g.facing),
+            (None, Vec2::ZERO, 1.0)
+        );
+        // A loop starts again; standing on every point of it, the goal is to stand.
+        let mut ring = Waypoints::new(vec![Vec2::ZERO, Vec2::new(0.1, 0.0)], 0.5, 0.3, true);
+        assert_eq!(ring.goal(Vec2::ZERO, 0.0).velocity, Vec2::ZERO);
+        assert!(ring.target().is_some());
+    }
 
     #[test]
     fn facings_and_rotations_agree() {
@@ -275,7 +358,7 @@ mod tests {
     }
 
     /// A synthetic walker (stride 1 m/s along a heading that wobbles ±0.15 rad) steered around a
-    /// 4 m square by a waypoint controller at 1 m/s reaches each corner within 1 m by the ideal
+    /// 4 m square by [`Waypoints`] at 1 m/s reaches each corner within 1 m by the ideal
     /// time plus 2 s, and faces where it goes.
     #[test]
     fn a_steady_walker_is_steered_around_a_square() {
@@ -291,18 +374,16 @@ mod tests {
             Vec2::new(4.0, 0.0),
             Vec2::new(0.0, 0.0),
         ];
-        let (mut target, mut reached, mut time) = (0, [None; 4], 0.0f32);
+        let mut path = Waypoints::new(corners.to_vec(), 1.0, 0.3, false);
+        let (mut reached, mut time) = ([None; 4], 0.0f32);
         let mut here = Vec2::ZERO;
-        while target < 4 && time < 30.0 {
-            let to = corners[target] - here;
-            if to.length() < 1.0 && reached[target].is_none() {
-                reached[target] = Some(time);
+        while path.target().is_some() && time < 30.0 {
+            for (k, corner) in corners.iter().enumerate() {
+                if (*corner - here).length() < 1.0 && k <= path.next_index() {
+                    reached[k].get_or_insert(time);
+                }
             }
-            if to.length() < 0.3 {
-                target += 1;
-                continue;
-            }
-            steering.set_goal(Some(Goal::towards(to.normalize(), 0.0)));
+            steering.set_goal(Some(path.goal(here, 0.0)));
             time += dt;
             let heading = 0.15 * (time * 2.0).sin();
             let step = direction_of(heading) * dt;
