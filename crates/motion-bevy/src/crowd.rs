@@ -1,26 +1,20 @@
 //! The batched stepping: characters grouped by (model, playback rate), each group one
-//! [`BatchGenerator`] stepped once per model frame for all its rows, every row with its own
-//! pose decoder and resampler (the game's frame rate, any and variable).
-//!
-//! A group is (re)started when characters join or leave it: every row is re-seeded from its
-//! last `seed_frames` frames (its own seed at first, its generated frames later), so the motion
-//! goes on from where it was; each row draws noise from its character's `rng_seed`. Between
-//! membership changes a tick allocates nothing of its own (a group of 16 or more characters
-//! steps in shards over the rayon pool, which allocates one small job record per extra shard; see
-//! `motion_core::model::BatchGenerator`).
-use std::collections::VecDeque;
+//! motion-core [`Crowd`] (one `BatchGenerator` stepped once per model frame for all its members,
+//! every member with its own pose stream resampled to the game's frame rate, any and variable),
+//! each member an entity. Members join and leave as characters spawn and despawn (the crowd
+//! re-seeds the others from what they generated, so their motion goes on); between membership
+//! changes a tick allocates nothing of its own (see `motion_core::model::Crowd`).
 use std::path::Path;
 use std::sync::Arc;
 
 use bevy::prelude::*;
 use motion_core::formats::expmap_bvh::ExpMapTarget;
 use motion_core::grounding::GroundingConfig;
-use motion_core::model::{BatchGenerator, MotionModel, Noise, PoseStream};
-use motion_core::pose::{root_motion_between, METRES_PER_MM};
+use motion_core::model::{CharacterError, Crowd, GenerateError, MemberId, MotionModel};
+use motion_core::pose::{root_motion_between, Pose, METRES_PER_MM};
 use motion_core::seed::seed_from_bvh;
-use motion_core::skeleton::{Skeleton, H36M_SOURCE_FPS};
+use motion_core::skeleton::Skeleton;
 use motion_core::steering::Goal;
-use ndarray::{s, Array2, Array3, ArrayView2};
 
 use crate::asset::MotionWeights;
 use crate::character::{MotionCharacter, MotionFailed, MotionModelSource, MotionPose, MotionRig};
@@ -46,119 +40,14 @@ impl BuiltinModel {
     }
 }
 
-/// One character's row of a group.
-struct Member {
-    entity: Entity,
-    action: String,
-    rng_seed: u64,
-    /// Decoding, steering, grounding and resampling of the generated frames (motion-core's one
-    /// chain, as `Character` uses it).
-    stream: PoseStream,
-    /// Generated frames not yet decoded (`frame_dims` floats each).
-    pending: VecDeque<f32>,
-    /// The last `seed_frames` frames, a ring (`next` is the oldest): what a restart re-seeds from.
-    history: Array2<f32>,
-    next: usize,
-    scratch: Vec<f32>,
-}
-
-impl Member {
-    fn remember(&mut self, frame: &[f32]) {
-        self.history
-            .row_mut(self.next)
-            .as_slice_mut()
-            .expect("contiguous")
-            .copy_from_slice(frame);
-        self.next = (self.next + 1) % self.history.nrows();
-    }
-
-    /// Decodes one pending frame into the resampler.
-    fn consume(&mut self) -> Result<(), String> {
-        let dims = self.scratch.len();
-        for (dst, v) in self.scratch.iter_mut().zip(self.pending.drain(..dims)) {
-            *dst = v;
-        }
-        self.stream.push(&self.scratch).map_err(|e| e.to_string())
-    }
-
-    /// Feeds the resampler from `pending` until it can advance by `dt` or `pending` runs out;
-    /// whether it still needs a frame.
-    fn feed(&mut self, dt: f64) -> Result<bool, String> {
-        while self.stream.needs(dt) {
-            if self.pending.is_empty() {
-                return Ok(true);
-            }
-            self.consume()?;
-        }
-        Ok(false)
-    }
-}
-
-/// Characters of one model at one playback rate, one batch.
+/// Characters of one model at one playback rate: one [`Crowd`] (motion-core's batch of
+/// characters), each member an entity.
 struct Group {
     model: Arc<MotionModel>,
     rate: f32,
-    members: Vec<Member>,
-    batch: Option<BatchGenerator>,
-    dirty: bool,
-}
-
-impl Group {
-    fn restart(&mut self) -> Result<(), String> {
-        let cfg = self.model.config();
-        let (rows, len, dims) = (self.members.len(), cfg.seed_frames, cfg.frame_dims);
-        let mut seeds = Array3::<f32>::zeros((rows, len, dims));
-        for (i, m) in self.members.iter().enumerate() {
-            let oldest = m.next;
-            let mut out = seeds.slice_mut(s![i, .., ..]);
-            out.slice_mut(s![..len - oldest, ..])
-                .assign(&m.history.slice(s![oldest.., ..]));
-            out.slice_mut(s![len - oldest.., ..])
-                .assign(&m.history.slice(s![..oldest, ..]));
-        }
-        let actions: Vec<&str> = if cfg.actions.is_empty() {
-            Vec::new()
-        } else {
-            self.members.iter().map(|m| m.action.as_str()).collect()
-        };
-        let noise: Vec<Noise<'_>> = self
-            .members
-            .iter()
-            .map(|m| Noise::Seed(m.rng_seed))
-            .collect();
-        let mut batch = BatchGenerator::new(Arc::clone(&self.model), rows);
-        batch
-            .start(seeds.view(), &actions, &noise)
-            .map_err(|e| e.to_string())?;
-        self.batch = Some(batch);
-        self.dirty = false;
-        Ok(())
-    }
-
-    /// Moves every row's clock by `dt` (at most one model frame), stepping the batch as often as
-    /// the row that needs most frames asks.
-    fn tick(&mut self, dt: f64) -> Result<(), String> {
-        let batch = self.batch.as_mut().ok_or("the group was not started")?;
-        loop {
-            let mut starving = false;
-            for m in &mut self.members {
-                starving |= m.feed(dt)?;
-            }
-            if !starving {
-                break;
-            }
-            let frames = batch.step().map_err(|e| e.to_string())?;
-            for (m, frame) in self.members.iter_mut().zip(frames.rows()) {
-                let frame = frame.to_slice().expect("contiguous rows");
-                m.pending.extend(frame);
-                m.remember(frame);
-            }
-        }
-        for m in &mut self.members {
-            m.stream.advance(dt).map_err(|e| e.to_string())?;
-        }
-        Ok(())
-    }
+    crowd: Crowd,
+    /// Each member's entity, id and the action it was last given.
+    members: Vec<(Entity, MemberId, String)>,
 }
 
 /// Every group of characters.
@@ -168,95 +57,77 @@ pub(crate) struct Crowds {
 }
 
 impl Crowds {
-    fn join(&mut self, model: Arc<MotionModel>, rate: f32, member: Member) {
-        let group = match self
+    /// The group of `model` at `rate`, made when there is none.
+    fn group(&mut self, model: Arc<MotionModel>, rate: f32) -> Result<&mut Group, String> {
+        let found = self
             .groups
-            .iter_mut()
-            .position(|g| Arc::ptr_eq(&g.model, &model) && g.rate == rate)
-        {
-            Some(i) => &mut self.groups[i],
+            .iter()
+            .position(|g| Arc::ptr_eq(&g.model, &model) && g.rate == rate);
+        let i = match found {
+            Some(i) => i,
             None => {
+                let crowd = Crowd::new(Arc::clone(&model)).map_err(|e| e.to_string())?;
                 self.groups.push(Group {
                     model,
                     rate,
+                    crowd,
                     members: Vec::new(),
-                    batch: None,
-                    dirty: true,
                 });
-                self.groups.last_mut().expect("just pushed")
+                self.groups.len() - 1
             }
         };
-        group.members.push(member);
-        group.dirty = true;
+        Ok(&mut self.groups[i])
     }
 }
 
-/// The row of a new character and its first pose, or why it cannot start.
-fn new_member(
+/// Joins a new character to its model's group; its first pose, or why it cannot start.
+fn join(
+    crowds: &mut Crowds,
     entity: Entity,
-    model: &MotionModel,
+    model: Arc<MotionModel>,
     character: &MotionCharacter,
-) -> Result<Member, String> {
-    let cfg = model.config();
-    if cfg.skeleton != "h36m-32" {
-        return Err(format!(
-            "the model's skeleton {:?} has no built-in pose layout (h36m-32 has)",
-            cfg.skeleton
-        ));
-    }
-    if !cfg.actions.is_empty() && !cfg.actions.contains(&character.action) {
-        return Err(format!(
-            "unknown action {:?}; the model knows {}",
-            character.action,
-            cfg.actions.join(", ")
-        ));
-    }
+) -> Result<(Arc<Skeleton>, Pose), String> {
     if !(character.playback_rate.is_finite() && character.playback_rate >= 0.0) {
         return Err(format!(
             "playback rate {} (finite, >= 0)",
             character.playback_rate
         ));
     }
+    let fps = model.config().fps;
     let seed = seed_from_bvh(
         (*character.seed.bvh).clone(),
         Path::new(&*character.seed.label),
         ExpMapTarget::H36m,
-        cfg.fps,
+        fps,
         None,
     )
     .map_err(|e| e.to_string())?;
-    let needed = cfg.seed_frames;
-    let have = seed.frames.nrows();
-    if have < needed {
-        return Err(format!(
-            "{}: {have} frames at the model's {} Hz, it needs {needed}",
-            character.seed.label, cfg.fps
-        ));
-    }
-    let window: ArrayView2<'_, f64> = seed.frames.slice(s![have - needed.., ..]);
-    let skeleton = Arc::new(Skeleton::h36m());
-    let step = ((H36M_SOURCE_FPS / cfg.fps).round() as usize).max(1);
     let grounding = if character.grounding {
         GroundingConfig::default()
     } else {
         GroundingConfig::off()
     };
-    let mut stream =
-        PoseStream::new(skeleton, cfg.fps, step, grounding).map_err(|e| e.to_string())?;
-    stream
-        .start(window, Some(&character.action))
-        .map_err(|e| e.to_string())?;
-    let dims = cfg.frame_dims;
-    Ok(Member {
-        entity,
-        action: character.action.clone(),
-        rng_seed: character.rng_seed,
-        stream,
-        pending: VecDeque::with_capacity(8 * dims),
-        history: window.mapv(|v| v as f32),
-        next: 0,
-        scratch: vec![0.0; dims],
-    })
+    let group = crowds.group(model, character.playback_rate)?;
+    let id = group
+        .crowd
+        .add(
+            seed.frames.view(),
+            Some(&character.action),
+            character.rng_seed,
+            grounding,
+        )
+        .map_err(|e| match e {
+            // Errors of the seed name its file.
+            CharacterError::Generate(
+                GenerateError::TooFewSeedFrames { .. }
+                | GenerateError::WrongWidth { .. }
+                | GenerateError::NonFiniteSeed { .. },
+            ) => format!("{}: {e}", character.seed.label),
+            e => e.to_string(),
+        })?;
+    group.members.push((entity, id, character.action.clone()));
+    let pose = group.crowd.pose(id).expect("just added").clone();
+    Ok((group.crowd.skeleton().clone(), pose))
 }
 
 /// Bevy's glam type from motion-core's (they may be different glam versions).
@@ -289,17 +160,13 @@ pub(crate) fn start_characters(
                 },
             },
         };
-        let started = model
-            .and_then(|model| new_member(entity, &model, character).map(|member| (model, member)));
-        let (model, member) = match started {
+        let (skeleton, pose) = match model.and_then(|m| join(&mut crowds, entity, m, character)) {
             Ok(ok) => ok,
             Err(e) => {
                 commands.entity(entity).insert(MotionFailed(e));
                 continue;
             }
         };
-        let skeleton = member.stream.skeleton().clone();
-        let pose = member.stream.current().clone();
         let mut joints = Vec::with_capacity(skeleton.len());
         for (j, joint) in skeleton.joints().iter().enumerate() {
             let parent = joint.parent.map_or(entity, |p| joints[p]);
@@ -323,7 +190,6 @@ pub(crate) fn start_characters(
             },
             MotionPose(pose),
         ));
-        crowds.join(model, character.playback_rate, member);
     }
 }
 
@@ -334,9 +200,13 @@ pub(crate) fn remove_characters(
 ) {
     for entity in removed.read() {
         for group in &mut crowds.groups {
-            let before = group.members.len();
-            group.members.retain(|m| m.entity != entity);
-            group.dirty |= group.members.len() != before;
+            group.members.retain(|&(e, id, _)| {
+                let leaving = e == entity;
+                if leaving {
+                    group.crowd.remove(id);
+                }
+                !leaving
+            });
         }
     }
     crowds.groups.retain(|g| !g.members.is_empty());
@@ -361,58 +231,39 @@ pub(crate) fn step_characters(
 ) {
     let mut failed: Vec<(Entity, String)> = Vec::new();
     crowds.groups.retain_mut(|group| {
-        if group.dirty {
-            if let Err(e) = group.restart() {
-                failed.extend(group.members.iter().map(|m| (m.entity, e.clone())));
-                return false;
-            }
-        }
-        // Action changes from game code.
-        let batch = group.batch.as_mut().expect("started above");
-        for (row, m) in group.members.iter_mut().enumerate() {
-            let Ok((character, rig, ..)) = characters.get(m.entity) else {
+        // Goals and action changes from game code.
+        for (entity, id, action) in &mut group.members {
+            let Ok((character, rig, ..)) = characters.get(*entity) else {
                 continue;
             };
-            m.stream
-                .set_goal(character.goal.map(|g| motion_goal(g, rig.origin)));
-            if character.action != m.action {
-                if let Err(e) = batch.set_action(row, &character.action, 0) {
-                    failed.push((m.entity, format!("{e}; carrying on with {:?}", m.action)));
+            group
+                .crowd
+                .set_goal(*id, character.goal.map(|g| motion_goal(g, rig.origin)));
+            if character.action != *action {
+                if let Err(e) = group.crowd.set_action(*id, &character.action) {
+                    failed.push((*entity, format!("{e}; carrying on with {action:?}")));
                 }
-                m.action.clone_from(&character.action);
-                m.stream.set_action(Some(&character.action));
+                action.clone_from(&character.action);
             }
         }
-        // The clock, walked through a model frame at a time (a long frame of the game's).
-        let frame = 1.0 / group.model.config().fps;
-        let mut left = time.delta_secs_f64() * f64::from(group.rate);
-        let mut substeps = 0;
-        loop {
-            substeps += 1;
-            let dt = left.min(frame);
-            left -= dt;
-            if let Err(e) = group.tick(dt) {
-                failed.extend(group.members.iter().map(|m| (m.entity, e.clone())));
-                return false;
-            }
-            if left <= 0.0 {
-                break;
-            }
+        let dt = time.delta_secs_f64() * f64::from(group.rate);
+        if let Err(e) = group.crowd.advance(dt) {
+            failed.extend(group.members.iter().map(|m| (m.0, e.to_string())));
+            return false;
         }
-        for m in &mut group.members {
-            let Ok((_, rig, mut root, mut pose)) = characters.get_mut(m.entity) else {
+        for &(entity, id, _) in &group.members {
+            let Ok((_, rig, mut root, mut pose)) = characters.get_mut(entity) else {
                 continue;
             };
-            let now = m.stream.current();
-            let mut motion = now.root_motion;
-            if substeps > 1 {
-                // The deltas over the whole tick, not its last model frame.
-                motion = root_motion_between(
-                    now.root_translation.as_dvec3(),
-                    now.local_rotations[0].as_dquat(),
-                    Some(pose.0.root_motion),
-                );
-            }
+            let Some(now) = group.crowd.pose(id) else {
+                continue;
+            };
+            // The root motion over the whole tick (a long one spans several model frames).
+            let motion = root_motion_between(
+                now.root_translation.as_dvec3(),
+                now.local_rotations[0].as_dquat(),
+                Some(pose.0.root_motion),
+            );
             *root = rig.origin.mul_transform(
                 Transform::from_translation(vec3(motion.ground_translation.to_array()))
                     .with_rotation(quat(motion.ground_yaw.to_array())),
@@ -431,7 +282,7 @@ pub(crate) fn step_characters(
             pose.0.clone_from(now);
             pose.0.root_motion = motion;
         }
-        true
+        !group.members.is_empty()
     });
     for (entity, e) in failed {
         commands.entity(entity).insert(MotionFailed(e));

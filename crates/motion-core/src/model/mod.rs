@@ -5,7 +5,8 @@
 //! - [`config`]: the `config` / `provenance` metadata of the schema in `weights/README.md`.
 //! - [`MotionModel`]: a loaded predictor (shared, immutable); [`vgru`], [`grud`], [`dae_lstm`]
 //!   and [`intention`] its networks.
-//! - [`Generator`] (one character) and [`BatchGenerator`] (many in lockstep): closed-loop frames.
+//! - [`Generator`] (one character) and [`BatchGenerator`] (many in lockstep): closed-loop frames;
+//!   [`Character`] and [`Crowd`] turn them into engine poses.
 //! - [`ActionClassifier`]: the action classifier of Ghosh et al. 2017 (section 4.5), the long-horizon
 //!   evaluation instrument.
 //! - [`random`]: schema-conformant files with random weights (benchmarks, tests).
@@ -31,6 +32,7 @@ pub mod builtin;
 pub mod character;
 pub mod classifier;
 pub mod config;
+pub mod crowd;
 pub mod dae_lstm;
 pub mod generate_error;
 pub mod generator;
@@ -53,6 +55,7 @@ pub use config::{
     ArchConfig, Architecture, DaeLstmFields, GruDFields, IntentionFields, ModelConfig, Provenance,
     VgruDFields,
 };
+pub use crowd::{Crowd, MemberId};
 pub use generate_error::GenerateError;
 pub use generator::Generator;
 pub use pose_stream::PoseStream;

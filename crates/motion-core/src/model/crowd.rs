@@ -1,0 +1,385 @@
+//! Many characters of one model stepped as one batch: a [`Crowd`] holds a [`BatchGenerator`]
+//! stepped once per model frame for every member, and each member's [`PoseStream`] (decoding,
+//! steering, grounding, resampling to any clock), as [`Character`](super::Character) does for
+//! one. Engines with many characters (the Bevy plugin) drive this.
+//!
+//! Members join and leave at any time: the batch restarts on the next
+//! [`advance`](Crowd::advance), every member re-seeded from the last `seed_frames` frames it
+//! generated (its seed at first), so the motion goes on from where it was; each draws noise
+//! from its own `rng_seed`. Between membership changes an advance allocates nothing of its own
+//! (a batch of 16 or more rows steps in shards over the rayon pool; see [`BatchGenerator`]).
+//!
+//! ```no_run
+//! use motion_core::grounding::GroundingConfig;
+//! use motion_core::model::{Crowd, MotionModel};
+//! use std::sync::Arc;
+//!
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! let model = Arc::new(MotionModel::load("weights/intention_actions.safetensors")?);
+//! let seed = ndarray::Array2::<f32>::zeros((50, model.config().frame_dims));
+//! let mut crowd = Crowd::new(model)?;
+//! let a = crowd.add(seed.view(), Some("walking"), 1, GroundingConfig::default())?;
+//! let b = crowd.add(seed.view(), Some("eating"), 2, GroundingConfig::default())?;
+//! for _ in 0..120 {
+//!     crowd.advance(1.0 / 60.0)?; // both characters, one batch step per model frame
+//!     let _walker = crowd.pose(a).expect("a member");
+//! }
+//! crowd.set_action(b, "smoking")?;
+//! # Ok(())
+//! # }
+//! ```
+use std::collections::VecDeque;
+use std::sync::Arc;
+
+use ndarray::{s, Array2, Array3, ArrayView2};
+
+use super::batch::{BatchGenerator, Noise};
+use super::character::CharacterError;
+use super::generate_error::GenerateError;
+use super::pose_stream::PoseStream;
+use super::predictor::MotionModel;
+use crate::grounding::GroundingConfig;
+use crate::motion::FrameScalar;
+use crate::pose::Pose;
+use crate::skeleton::{Skeleton, H36M_SOURCE_FPS};
+use crate::steering::Goal;
+
+/// A member of a [`Crowd`] (unique within it, never reused).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct MemberId(u64);
+
+/// One member's row.
+#[derive(Debug)]
+struct Member {
+    id: MemberId,
+    action: Option<String>,
+    rng_seed: u64,
+    stream: PoseStream,
+    /// Generated frames not yet decoded (`frame_dims` floats each).
+    pending: VecDeque<f32>,
+    /// The last `seed_frames` frames, a ring (`next` is the oldest): what a restart re-seeds from.
+    history: Array2<f32>,
+    next: usize,
+    scratch: Vec<f32>,
+}
+
+impl Member {
+    fn remember(&mut self, frame: &[f32]) {
+        self.history
+            .row_mut(self.next)
+            .as_slice_mut()
+            .expect("contiguous")
+            .copy_from_slice(frame);
+        self.next = (self.next + 1) % self.history.nrows();
+    }
+
+    /// Feeds the resampler from `pending` until it can advance by `dt` or `pending` runs out;
+    /// whether it still needs a frame.
+    fn feed(&mut self, dt: f64) -> Result<bool, CharacterError> {
+        let dims = self.scratch.len();
+        while self.stream.needs(dt) {
+            if self.pending.is_empty() {
+                return Ok(true);
+            }
+            for (dst, v) in self.scratch.iter_mut().zip(self.pending.drain(..dims)) {
+                *dst = v;
+            }
+            self.stream.push(&self.scratch)?;
+        }
+        Ok(false)
+    }
+}
+
+/// Characters of one model stepped as one batch (see the module docs).
+#[derive(Debug)]
+pub struct Crowd {
+    model: Arc<MotionModel>,
+    skeleton: Arc<Skeleton>,
+    root_step: usize,
+    members: Vec<Member>,
+    batch: Option<BatchGenerator>,
+    /// Whether membership changed since the batch started.
+    dirty: bool,
+    next_id: u64,
+}
+
+impl Crowd {
+    /// An empty crowd of `model`'s characters.
+    ///
+    /// # Errors
+    /// A model whose skeleton is not the H3.6M one.
+    pub fn new(model: Arc<MotionModel>) -> Result<Crowd, CharacterError> {
+        let config = model.config();
+        if config.skeleton != "h36m-32" {
+            return Err(CharacterError::Skeleton(config.skeleton.clone()));
+        }
+        // H3.6M root deltas are per 50 Hz source frame: a 25 Hz model frame spans 2.
+        let root_step = ((H36M_SOURCE_FPS / config.fps).round() as usize).max(1);
+        Ok(Crowd {
+            model,
+            skeleton: Arc::new(Skeleton::h36m()),
+            root_step,
+            members: Vec::new(),
+            batch: None,
+            dirty: false,
+            next_id: 0,
+        })
+    }
+
+    /// The model.
+    pub fn model(&self) -> &Arc<MotionModel> {
+        &self.model
+    }
+
+    /// The skeleton of the poses.
+    pub fn skeleton(&self) -> &Arc<Skeleton> {
+        &self.skeleton
+    }
+
+    /// Members.
+    pub fn len(&self) -> usize {
+        self.members.len()
+    }
+
+    /// Whether the crowd has no member.
+    pub fn is_empty(&self) -> bool {
+        self.members.is_empty()
+    }
+
+    /// Every member, in the order they joined.
+    pub fn members(&self) -> impl Iterator<Item = MemberId> + '_ {
+        self.members.iter().map(|m| m.id)
+    }
+
+    /// A new member seeded from the last `seed_frames` frames of `clip` (exp-map frames at the
+    /// model's rate: a loaded seed file, [`crate::seed`]) doing `action`, drawing noise from
+    /// `rng_seed`, grounded as `grounding` says; it moves from the next
+    /// [`advance`](Self::advance) on, its first pose (the last seed frame's) is there at once.
+    ///
+    /// # Errors
+    /// A clip shorter than `seed_frames`, of the wrong width or with a non-finite value; an
+    /// action the model does not know (or none for an action-conditioned model).
+    pub fn add<T: FrameScalar>(
+        &mut self,
+        clip: ArrayView2<'_, T>,
+        action: Option<&str>,
+        rng_seed: u64,
+        grounding: GroundingConfig,
+    ) -> Result<MemberId, CharacterError> {
+        let config = self.model.config();
+        let (needed, dims) = (config.seed_frames, config.frame_dims);
+        if clip.nrows() < needed {
+            return Err(GenerateError::TooFewSeedFrames {
+                needed,
+                got: clip.nrows(),
+            }
+            .into());
+        }
+        if clip.ncols() != dims {
+            return Err(GenerateError::WrongWidth {
+                expected: dims,
+                got: clip.ncols(),
+            }
+            .into());
+        }
+        let window = clip.slice_move(s![clip.nrows() - needed.., ..]);
+        let history = window.mapv(|v| v.to_f64() as f32);
+        if let Some(((frame, dim), &value)) = history.indexed_iter().find(|(_, v)| !v.is_finite()) {
+            return Err(GenerateError::NonFiniteSeed {
+                character: self.members.len(),
+                frame,
+                dim,
+                value: f64::from(value),
+            }
+            .into());
+        }
+        let action = check_action(&self.model, action)?;
+        let mut stream =
+            PoseStream::new(self.skeleton.clone(), config.fps, self.root_step, grounding)?;
+        stream.start(history.view(), action.as_deref())?;
+        let id = MemberId(self.next_id);
+        self.next_id += 1;
+        self.members.push(Member {
+            id,
+            action,
+            rng_seed,
+            stream,
+            pending: VecDeque::with_capacity(8 * dims),
+            history,
+            next: 0,
+            scratch: vec![0.0; dims],
+        });
+        self.dirty = true;
+        Ok(id)
+    }
+
+    /// Removes a member (the others go on from where they are); whether it was one.
+    pub fn remove(&mut self, id: MemberId) -> bool {
+        let before = self.members.len();
+        self.members.retain(|m| m.id != id);
+        let removed = self.members.len() != before;
+        self.dirty |= removed;
+        removed
+    }
+
+    /// The current pose of a member.
+    pub fn pose(&self, id: MemberId) -> Option<&Pose> {
+        self.member(id).map(|m| m.stream.current())
+    }
+
+    /// The heading (yaw about +y, `0` facing +z) of a member's pose's pelvis.
+    pub fn heading_of(&self, id: MemberId, pose: &Pose) -> Option<f32> {
+        self.member(id).map(|m| m.stream.heading_of(pose))
+    }
+
+    /// A member's action.
+    pub fn action(&self, id: MemberId) -> Option<&str> {
+        self.member(id).and_then(|m| m.action.as_deref())
+    }
+
+    /// Steers a member toward `goal` (`None`: the model's own root motion) from its next model
+    /// frame on; whether it is a member.
+    pub fn set_goal(&mut self, id: MemberId, goal: Option<Goal>) -> bool {
+        match self.members.iter_mut().find(|m| m.id == id) {
+            Some(m) => {
+                m.stream.set_goal(goal);
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// Switches a member to `action` from its next model frame on, without re-seeding.
+    ///
+    /// # Errors
+    /// Not a member ([`GenerateError::NoSuchRow`]), an action the model does not know, or a
+    /// model without actions.
+    pub fn set_action(&mut self, id: MemberId, action: &str) -> Result<(), CharacterError> {
+        let row = self
+            .members
+            .iter()
+            .position(|m| m.id == id)
+            .ok_or(GenerateError::NoSuchRow {
+                row: id.0 as usize,
+                batch: self.members.len(),
+            })?;
+        let known = check_action(&self.model, Some(action))?;
+        if let (Some(batch), false) = (self.batch.as_mut(), self.dirty) {
+            batch.set_action(row, action, 0)?;
+        }
+        let m = &mut self.members[row];
+        m.action = known;
+        m.stream.set_action(Some(action));
+        Ok(())
+    }
+
+    /// Moves every member's clock by `dt` seconds (any rate, variable steps; a long `dt` is
+    /// walked through a model frame at a time), stepping the batch as often as the member that
+    /// needs most frames asks.
+    ///
+    /// # Errors
+    /// A bad time step, or the generator failed (a non-finite output).
+    pub fn advance(&mut self, dt: f64) -> Result<(), CharacterError> {
+        if self.members.is_empty() {
+            return Ok(());
+        }
+        if self.dirty || self.batch.is_none() {
+            self.restart()?;
+        }
+        let frame = 1.0 / self.model.config().fps;
+        let mut left = dt;
+        loop {
+            let step = left.min(frame);
+            left -= step;
+            self.tick(step)?;
+            if left <= 0.0 {
+                return Ok(());
+            }
+        }
+    }
+
+    fn member(&self, id: MemberId) -> Option<&Member> {
+        self.members.iter().find(|m| m.id == id)
+    }
+
+    /// A new batch of every member, each re-seeded from its history.
+    fn restart(&mut self) -> Result<(), CharacterError> {
+        let config = self.model.config();
+        let (rows, len, dims) = (self.members.len(), config.seed_frames, config.frame_dims);
+        let mut seeds = Array3::<f32>::zeros((rows, len, dims));
+        for (i, m) in self.members.iter().enumerate() {
+            let oldest = m.next;
+            let mut out = seeds.slice_mut(s![i, .., ..]);
+            out.slice_mut(s![..len - oldest, ..])
+                .assign(&m.history.slice(s![oldest.., ..]));
+            out.slice_mut(s![len - oldest.., ..])
+                .assign(&m.history.slice(s![..oldest, ..]));
+        }
+        let actions: Vec<&str> = if config.actions.is_empty() {
+            Vec::new()
+        } else {
+            self.members
+                .iter()
+                .map(|m| m.action.as_deref().unwrap_or_default())
+                .collect()
+        };
+        let noise: Vec<Noise<'_>> = self
+            .members
+            .iter()
+            .map(|m| Noise::Seed(m.rng_seed))
+            .collect();
+        let mut batch = BatchGenerator::new(Arc::clone(&self.model), rows);
+        batch.start(seeds.view(), &actions, &noise)?;
+        self.batch = Some(batch);
+        self.dirty = false;
+        Ok(())
+    }
+
+    /// Moves every member's clock by `dt` (at most one model frame).
+    fn tick(&mut self, dt: f64) -> Result<(), CharacterError> {
+        let batch = self.batch.as_mut().ok_or(GenerateError::NotStarted)?;
+        loop {
+            let mut starving = false;
+            for m in &mut self.members {
+                starving |= m.feed(dt)?;
+            }
+            if !starving {
+                break;
+            }
+            let frames = batch.step()?;
+            for (m, frame) in self.members.iter_mut().zip(frames.rows()) {
+                let frame = frame.to_slice().expect("contiguous rows");
+                m.pending.extend(frame);
+                m.remember(frame);
+            }
+        }
+        for m in &mut self.members {
+            m.stream.advance(dt)?;
+        }
+        Ok(())
+    }
+}
+
+/// `action` checked against the model's labels (`None` for a model without actions).
+fn check_action(
+    model: &MotionModel,
+    action: Option<&str>,
+) -> Result<Option<String>, GenerateError> {
+    let config = model.config();
+    if config.actions.is_empty() {
+        return Ok(None);
+    }
+    let action = action.ok_or_else(|| GenerateError::MissingAction {
+        valid: config.actions.clone(),
+    })?;
+    if config.action_index(action).is_none() {
+        return Err(GenerateError::UnknownAction {
+            label: action.to_string(),
+            valid: config.actions.clone(),
+        });
+    }
+    Ok(Some(action.to_string()))
+}
+
+#[cfg(test)]
+mod tests;
