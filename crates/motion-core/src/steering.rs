@@ -60,8 +60,8 @@ pub fn direction_of(facing: f32) -> Vec2 {
     Vec2::new(facing.sin(), facing.cos())
 }
 
-/// `angle` brought into `(-π, π]`.
-fn wrap(angle: f32) -> f32 {
+/// `angle` brought into `(-π, π]` (radians).
+pub fn wrap_angle(angle: f32) -> f32 {
     let tau = std::f32::consts::TAU;
     let a = (angle + std::f32::consts::PI).rem_euclid(tau) - std::f32::consts::PI;
     if a <= -std::f32::consts::PI {
@@ -183,7 +183,7 @@ impl Steering {
     pub fn steer<'a>(&'a mut self, pose: &'a Pose) -> &'a Pose {
         let raw_heading = self.heading_of(pose);
         let raw_step = pose.root_translation - self.raw_root;
-        let raw_turn = wrap(raw_heading - self.raw_heading);
+        let raw_turn = wrap_angle(raw_heading - self.raw_heading);
         // The raw step in the previous raw heading's frame (forward = +z).
         let local = rotate(Vec2::new(raw_step.x, raw_step.z), -self.raw_heading);
         self.raw_root = pose.root_translation;
@@ -195,7 +195,7 @@ impl Steering {
                 return pose;
             }
             // After a goal: the model's own motion, carried on from the warped frame.
-            self.heading = wrap(self.heading + raw_turn);
+            self.heading = wrap_angle(self.heading + raw_turn);
             self.root += rotate(local, self.heading - raw_turn);
             return self.write(pose, raw_heading);
         };
@@ -204,10 +204,10 @@ impl Steering {
         let blend = (dt / VELOCITY_TIME).min(1.0);
         self.command += (goal.velocity - self.command) * blend;
         // Heading: toward the goal's facing at a bounded rate.
-        let error = wrap(goal.facing - self.heading);
+        let error = wrap_angle(goal.facing - self.heading);
         let turn =
             (error * (dt / TURN_TIME).min(1.0)).clamp(-MAX_TURN_RATE * dt, MAX_TURN_RATE * dt);
-        self.heading = wrap(self.heading + turn);
+        self.heading = wrap_angle(self.heading + turn);
         // Translation: the model's stride length, scaled toward the commanded speed, along the
         // commanded direction.
         let stride = local.length();
@@ -226,7 +226,7 @@ impl Steering {
 
     /// `pose` moved to the warped root and turned by the warped minus the raw heading.
     fn write(&mut self, pose: &Pose, raw_heading: f32) -> &Pose {
-        let turn = Quat::from_rotation_y(wrap(self.heading - raw_heading));
+        let turn = Quat::from_rotation_y(wrap_angle(self.heading - raw_heading));
         let out = &mut self.out;
         out.local_rotations.copy_from_slice(&pose.local_rotations);
         out.local_rotations[0] = (turn * pose.local_rotations[0]).normalize();
@@ -341,7 +341,7 @@ mod tests {
             assert!((facing_of(d) - a).abs() < 1e-5);
             assert!((rotate(Vec2::Y, a) - d).length() < 1e-6);
         }
-        assert!((wrap(3.5 * std::f32::consts::PI) + 0.5 * std::f32::consts::PI).abs() < 1e-5);
+        assert!((wrap_angle(3.5 * std::f32::consts::PI) + 0.5 * std::f32::consts::PI).abs() < 1e-5);
     }
 
     #[test]
@@ -401,7 +401,7 @@ mod tests {
         // Facing the last leg's direction (-x).
         let facing = steering.heading;
         assert!(
-            wrap(facing + std::f32::consts::FRAC_PI_2).abs() < 0.2,
+            wrap_angle(facing + std::f32::consts::FRAC_PI_2).abs() < 0.2,
             "{facing}"
         );
     }

@@ -23,7 +23,7 @@ use glam::{Quat, Vec2, Vec3};
 use motion_core::grounding::find_body_parts;
 use motion_core::pose::Pose;
 use motion_core::skeleton::Skeleton;
-use motion_core::steering::{direction_of, Goal, Steerable};
+use motion_core::steering::{direction_of, wrap_angle, Goal, Steerable};
 use serde::Serialize;
 
 /// Seconds per frame (the 25 Hz model rate).
@@ -201,7 +201,7 @@ where
                 skating_frames += 1;
             }
             let h = character.heading_of(&pose);
-            let off = wrap(h - goal.facing).abs().to_degrees();
+            let off = wrap_angle(h - goal.facing).abs().to_degrees();
             heading_at.offer(now, off <= HEADING_TOLERANCE_DEG);
             roots.push(floor(pose.root_translation));
             if roots.len() > window {
@@ -366,11 +366,6 @@ fn late_speed(roots: &[Vec2]) -> f32 {
 
 fn floor(p: Vec3) -> Vec2 {
     Vec2::new(p.x, p.z)
-}
-
-fn wrap(angle: f32) -> f32 {
-    let d = direction_of(angle);
-    d.x.atan2(d.y)
 }
 
 #[cfg(test)]

@@ -39,7 +39,7 @@ use crate::grounding::{find_body_parts, LegsError};
 use crate::pose::{root_motion_between, Pose, PoseDecoder};
 use crate::root::RootEncoding;
 use crate::skeleton::Skeleton;
-use crate::steering::{direction_of, Goal, Steerable, Steering, TURN_TIME, VELOCITY_TIME};
+use crate::steering::{wrap_angle, Goal, Steerable, Steering, TURN_TIME, VELOCITY_TIME};
 use features::{
     pose_features, rotate, trajectory_features, GroundFrame, FEATURES, GROUPS, TRAJECTORY_FRAMES,
     TRAJECTORY_START,
@@ -397,7 +397,7 @@ impl Matcher {
                 (1.0, 1.0)
             };
             self.velocity += (goal.velocity - self.velocity) * k;
-            self.facing += wrap(goal.facing - self.facing) * turn;
+            self.facing += wrap_angle(goal.facing - self.facing) * turn;
         }
         // Play on; search every few frames with a goal, on the first frame, and where the clip
         // has less than a second left.
@@ -436,15 +436,15 @@ impl Matcher {
             let (from, to) = (db.grounds[next - 1], db.grounds[next]);
             let step = from.local(to.position - from.position);
             self.ground.position += rotate(step, self.ground.facing);
-            self.ground.facing += wrap(to.facing - from.facing);
+            self.ground.facing += wrap_angle(to.facing - from.facing);
             if self.goal.is_some() {
                 let turn = 1.0 - (-dt / TURN_TIME).exp();
-                self.ground.facing += wrap(self.facing - self.ground.facing) * turn;
+                self.ground.facing += wrap_angle(self.facing - self.ground.facing) * turn;
             }
         } else if self.goal.is_some() {
             self.ground.facing = self.facing;
         }
-        self.ground.facing = wrap(self.ground.facing);
+        self.ground.facing = wrap_angle(self.ground.facing);
         self.frame = next;
         self.pose_from(&db, next);
         // The jump's offsets decay.
@@ -471,7 +471,7 @@ impl Matcher {
         for f in 1..=TRAJECTORY_FRAMES[2] {
             velocity += (goal.velocity - velocity) * k;
             position += velocity * FRAME_TIME;
-            facing += wrap(goal.facing - facing) * turn;
+            facing += wrap_angle(goal.facing - facing) * turn;
             if f == TRAJECTORY_FRAMES[n] {
                 ahead[n] = GroundFrame { position, facing };
                 n += 1;
@@ -556,12 +556,6 @@ impl Steerable for Matcher {
     fn heading_of(&self, pose: &Pose) -> f32 {
         Matcher::heading_of(self, pose)
     }
-}
-
-/// `angle` brought into `(-π, π]`.
-fn wrap(angle: f32) -> f32 {
-    let a = direction_of(angle);
-    a.x.atan2(a.y)
 }
 
 #[cfg(test)]

@@ -70,7 +70,7 @@ fn a_walk_database_walks_where_it_is_sent() {
         "travelled {travelled}"
     );
     assert!(
-        wrap(heading - goal.facing).abs() < 0.2,
+        wrap_angle(heading - goal.facing).abs() < 0.2,
         "heading {heading} for {}",
         goal.facing
     );
