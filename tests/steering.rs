@@ -10,8 +10,9 @@ use std::sync::Arc;
 use glam::{Vec2, Vec3};
 use motion::core::formats::expmap_bvh::ExpMapTarget;
 use motion::core::grounding::find_body_parts;
+use motion::core::grounding::GroundingConfig;
 use motion::core::matching::{Matcher, MatchingDatabase};
-use motion::core::model::{Character, MotionModel, Noise};
+use motion::core::model::{Character, Crowd, MotionModel, Noise};
 use motion::core::pose::Pose;
 use motion::core::seed::load_seed;
 use motion::core::steering::{direction_of, facing_of, Goal, Waypoints};
@@ -350,4 +351,49 @@ fn motion_matching_on_the_training_walks_answers_every_goal_change() {
         "body speed {} of real walking's",
         report.body_speed_ratio
     );
+}
+
+#[test]
+fn a_crowd_allocates_nothing_per_advance() {
+    // Three characters of the shipped model as one batch, steered: after the first advance
+    // (which starts the batch), advancing allocates nothing.
+    let model = Arc::new(
+        MotionModel::load(repo().join("weights/vgru_d_multi.safetensors"))
+            .expect("shipped weights"),
+    );
+    let seed = load_seed(
+        &repo().join("examples/walk_seed.bvh"),
+        ExpMapTarget::H36m,
+        model.config().fps,
+        50.0,
+        None,
+    )
+    .unwrap();
+    let mut crowd = Crowd::new(model).unwrap();
+    let ids: Vec<_> = (0..3)
+        .map(|k| {
+            crowd
+                .add(
+                    seed.frames.view(),
+                    Some("walking"),
+                    k,
+                    GroundingConfig::default(),
+                )
+                .unwrap()
+        })
+        .collect();
+    for _ in 0..30 {
+        crowd.advance(TICK).unwrap();
+    }
+    let before = allocations();
+    for k in 0..240 {
+        if k % 60 == 0 {
+            for (i, &id) in ids.iter().enumerate() {
+                let turn = direction_of(k as f32 * 0.5 + i as f32);
+                crowd.set_goal(id, Some(Goal::towards(turn * 0.5, 0.0)));
+            }
+        }
+        crowd.advance(TICK).unwrap();
+    }
+    assert_eq!(allocations() - before, 0);
 }
