@@ -5,7 +5,7 @@ use ndarray::{s, Array2, Array3, ArrayView2};
 use motion_core::protocol::ROOT_STEP_25HZ;
 
 /// World joint positions (mm, `T x J x 3`) of protocol frames (25 Hz H3.6M exp-map frames, root
-/// deltas each applied [`ROOT_STEP_25HZ`](motion_core::protocol::ROOT_STEP_25HZ) times, integrated from the first frame).
+/// deltas each applied [`motion_core::protocol::ROOT_STEP_25HZ`] times, integrated from the first frame).
 pub fn protocol_positions(
     skeleton: &motion_core::Skeleton,
     frames: ArrayView2<'_, f64>,

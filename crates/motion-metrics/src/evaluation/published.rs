@@ -122,7 +122,7 @@ pub const P000_TABLE7_EULER: [EulerRow; 2] = [
 ];
 /// Ghosh et al. 2017 Table 2: "the Euclidean norm (L2) of un-normalized ground truth and predicted MOCAP
 /// vectors" (exp-map, H3.6M) at [`P002_TABLE2_HORIZONS_MS`], per action of [`PAPER000_ACTIONS`]; the
-/// baselines' rows are the paper's copies of SRNN [19]'s. Printed beside the Euler error of the
+/// baselines' rows are the paper's copies of SRNN \[19\]'s. Printed beside the Euler error of the
 /// standard protocol, its closest measured counterpart (the paper does not say how it averaged).
 #[rustfmt::skip]
 pub const P002_TABLE2_L2: [EulerRow<5>; 4] = [
@@ -290,7 +290,7 @@ fn ndms_bins_by_method(action: &str) -> BTreeMap<String, Vec<Option<f64>>> {
 }
 
 /// Tanke et al. 2021 Table 5: diversity (APD) on Human3.6M, per method as the paper names it. The paper
-/// does not state the unit or joint set of these numbers (DLow's are "taken from [3]"); `eval`'s
+/// does not state the unit or joint set of these numbers (DLow's are "taken from \[3\]"); `eval`'s
 /// APD is over world positions of all 32 joints in mm, so only the ranking is comparable.
 pub const P003_TABLE5_APD_H36M: [(&str, f64); 6] = [
     ("[36]", 0.26),
