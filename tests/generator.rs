@@ -542,10 +542,7 @@ fn shipped_weights_continue_real_motion() {
         );
         return;
     }
-    let data_dir = std::env::var_os("MOTION_DATA_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data"));
-    let clip = data_dir.join("h3.6m/dataset/S5/walking_1.txt.gz");
+    let clip = common::data_root().join("h3.6m/dataset/S5/walking_1.txt.gz");
     if !clip.exists() {
         eprintln!(
             "SKIPPED: shipped_weights_continue_real_motion: {} not found (set MOTION_DATA_DIR)",

@@ -308,10 +308,7 @@ fn motion_matching_steps_allocate_nothing() {
 /// The H3.6M dataset (`MOTION_DATA_DIR`, default `<repo>/../shared/data`), or `None` with a
 /// visible message.
 fn dataset() -> Option<PathBuf> {
-    let root = std::env::var_os("MOTION_DATA_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| repo().join("../shared/data"));
-    let dataset = motion::core::protocol::dataset_dir(&root);
+    let dataset = motion::core::protocol::dataset_dir(&common::data_root());
     if dataset.join("S1/walking_1.txt.gz").is_file() {
         Some(dataset)
     } else {

@@ -1,8 +1,10 @@
 //! Shared by the facade's test binaries: a global allocator that counts each thread's heap
 //! allocations (so tests running in parallel do not disturb each other), for the "no allocation
-//! per step" checks. A test binary that declares `mod common;` gets it as its allocator.
+//! per step" checks, and where the data tests find the data. A test binary that declares
+//! `mod common;` gets the allocator as its allocator.
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
+use std::path::PathBuf;
 
 struct CountingAllocator;
 
@@ -31,4 +33,11 @@ static GLOBAL: CountingAllocator = CountingAllocator;
 /// Heap allocations made by this thread so far.
 pub fn allocations() -> usize {
     ALLOCATIONS.with(|c| c.get())
+}
+
+/// The data root of the data tests: `MOTION_DATA_DIR`, default `<repo>/../shared/data`.
+pub fn data_root() -> PathBuf {
+    std::env::var_os("MOTION_DATA_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data"))
 }

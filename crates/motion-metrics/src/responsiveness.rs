@@ -87,20 +87,7 @@ impl Scenario {
                 velocity: Vec2::ZERO,
                 facing: heading,
             },
-            Scenario::SpeedUp => turn(0.0).with_speed(speed * SPEED_UP),
-        }
-    }
-}
-
-trait WithSpeed {
-    fn with_speed(self, speed: f32) -> Self;
-}
-
-impl WithSpeed for Goal {
-    fn with_speed(self, speed: f32) -> Goal {
-        Goal {
-            velocity: self.velocity.normalize_or_zero() * speed,
-            ..self
+            Scenario::SpeedUp => Goal::towards(direction_of(heading) * speed * SPEED_UP, 0.0),
         }
     }
 }

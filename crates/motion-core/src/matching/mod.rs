@@ -144,6 +144,7 @@ impl MatchingDatabase {
         let width = skeleton.expmap_width();
         let mut decoder = PoseDecoder::new(skeleton.clone(), root, step);
         let mut positions = vec![Vec3::ZERO; joints];
+        let mut frame: Vec<f64> = Vec::with_capacity(width);
         let (mut rotations, mut roots, mut grounds) = (Vec::new(), Vec::new(), Vec::new());
         let (mut ankle_positions, mut lowest, mut clip_end) = (Vec::new(), Vec::new(), Vec::new());
         for (c, clip) in clips.iter().enumerate() {
@@ -160,7 +161,8 @@ impl MatchingDatabase {
                 if row.iter().any(|v| !v.is_finite()) {
                     return Err(MatchingError::NotFinite { clip: c, frame: f });
                 }
-                let frame: Vec<f64> = row.to_vec();
+                frame.clear();
+                frame.extend(row.iter());
                 decoder.push(&frame);
                 decoder.world_positions(&mut positions);
                 let pose = decoder.pose();
