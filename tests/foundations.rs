@@ -1,7 +1,9 @@
 //! Facade-level tests of the motion-core foundations (rotations, skeleton, root integration, FK,
 //! derivative features, H3.6M text and `.npy`), on synthetic motion and, when present, on the
 //! real H3.6M data under `MOTION_DATA_DIR` (default `<repo>/../shared/data`).
-use std::path::{Path, PathBuf};
+mod common;
+
+use std::path::PathBuf;
 use std::sync::Arc;
 
 use motion::core::derivatives::{derivative_features, DerivativeBuffer};
@@ -17,15 +19,9 @@ use motion::core::skeleton::{Skeleton, H36M_ACTIONS, H36M_DIMS_USED};
 use motion::core::FormatError;
 use ndarray::{Array2, Array3};
 
-fn data_dir() -> PathBuf {
-    std::env::var_os("MOTION_DATA_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data"))
-}
-
 /// `S5/{name}.txt.gz` of the H3.6M data, or `None` after a visible SKIPPED message.
 fn s5(name: &str, test: &str) -> Option<Array2<f64>> {
-    let path = data_dir().join(format!("h3.6m/dataset/S5/{name}.txt.gz"));
+    let path = common::data_root().join(format!("h3.6m/dataset/S5/{name}.txt.gz"));
     if !path.exists() {
         eprintln!(
             "SKIPPED: {test}: {} not found (set MOTION_DATA_DIR)",
@@ -247,7 +243,7 @@ fn real_text_round_trips_bit_exactly_through_txt_and_gz() {
 #[test]
 fn missing_h36m_files_are_clear_errors() {
     // S5 directions_1 is one of the files the data release does not have (h36m.md).
-    let path = data_dir().join("h3.6m/dataset/S5/directions_1.txt.gz");
+    let path = common::data_root().join("h3.6m/dataset/S5/directions_1.txt.gz");
     let err = read_expmap_text(&path).unwrap_err();
     assert!(matches!(err, FormatError::Io { .. }));
     assert!(err.to_string().contains("directions_1.txt.gz"), "{err}");
@@ -352,7 +348,7 @@ fn npy_round_trips_frames_and_positions() {
 
 #[test]
 fn cmu_clips_stand_on_the_floor_with_an_absolute_root() {
-    let path = data_dir().join("cmu/train/walking/walking_1.txt.gz");
+    let path = common::data_root().join("cmu/train/walking/walking_1.txt.gz");
     if !path.exists() {
         eprintln!(
             "SKIPPED: cmu_clips_stand_on_the_floor: {} not found (set MOTION_DATA_DIR)",
@@ -430,7 +426,7 @@ fn validation_windows_are_training_datas() {
             ],
         ),
     ];
-    let dataset = data_dir().join("h3.6m/dataset");
+    let dataset = common::data_root().join("h3.6m/dataset");
     if !dataset.join("S5").exists() {
         eprintln!(
             "SKIPPED: validation_windows_are_training_datas: no S5 data (set MOTION_DATA_DIR)"

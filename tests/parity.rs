@@ -1,10 +1,10 @@
 //! Parity with the PyTorch reference modules (`training/layers.py`, `training/models.py`): the
 //! committed fixtures in `tests/fixtures/parity/` (written by `python -m training.export_fixtures`)
 //! must be reproduced within 1e-5, and loading errors must name the tensor and the file.
+use motion::core::model::intention::Intention;
 use motion::core::model::weights::serialize_f32;
 use motion::core::model::{
-    BatchGenerator, GenerateError, Generator, MotionModel, Network, Noise, WeightStore,
-    WeightsError,
+    BatchGenerator, GenerateError, Generator, MotionModel, Noise, WeightStore, WeightsError,
 };
 use motion::core::nn::{
     BodyGruCell, BodyGruConfig, GruCell, GruConfig, GruConvention, GruScratch, Linear,
@@ -323,7 +323,7 @@ fn check_intention(name: &str) -> f32 {
     let width = ss[1];
     let seed = ArrayView2::from_shape((ss[0], width), &seed).unwrap();
 
-    let Network::Intention(net) = model.network() else {
+    let Some(net) = model.network().downcast_ref::<Intention>() else {
         panic!("{name}: not an intention model")
     };
     let o = model.config().output_dims();
@@ -834,7 +834,7 @@ fn intention_labels_ties_go_to_the_lowest_cluster() {
         });
     });
     let model = MotionModel::load(&path).unwrap();
-    let Network::Intention(net) = model.network() else {
+    let Some(net) = model.network().downcast_ref::<Intention>() else {
         panic!("not an intention model")
     };
     let store = WeightStore::open(&path).unwrap();

@@ -11,11 +11,134 @@
 //! The first LSTM layer reads the frame's features followed by the action one-hot when the
 //! config names actions. The autoencoder maps the decoded (normalized) pose to its filtered
 //! version in the same space; that filtered pose is both the output and the next input.
-use super::config::{ArchConfig, ModelConfig};
+use std::sync::Arc;
+
+use serde::{Deserialize, Serialize};
+
+use super::arch::ArchFields;
+use super::config::{limits, ModelConfig};
 use super::generate_error::GenerateError;
 use super::net::{own, Begin, Net, NetState};
 use super::weights::{WeightStore, WeightsError};
 use crate::nn::{LstmCell, LstmScratch, Mlp, MlpConfig, MlpScratch, Stack, StackState};
+
+/// The config fields only `dae-lstm` has.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct DaeLstmFields {
+    /// Units of each hidden layer of the dropout autoencoder.
+    pub dae_hidden: usize,
+    /// Hidden layers of the dropout autoencoder (Ghosh et al. 2017: 3).
+    pub dae_layers: usize,
+}
+
+impl ArchFields for DaeLstmFields {
+    const STOCHASTIC: bool = false;
+
+    /// Ghosh et al. 2017, section 4.1: 3 LSTM layers of 1000 units over plain, min-max scaled
+    /// poses and the action one-hot, an autoencoder of 3 x 3000 units.
+    fn paper() -> ModelConfig {
+        ModelConfig {
+            normalization: "min-max".into(),
+            actions: ModelConfig::h36m_actions(),
+            ..ModelConfig::h36m(
+                DaeLstmFields {
+                    dae_hidden: 3000,
+                    dae_layers: 3,
+                }
+                .into(),
+                1000,
+                3,
+            )
+        }
+    }
+
+    /// LSTM layers and an autoencoder with units, within the limits.
+    fn validate(&self, config: &ModelConfig) -> Result<(), String> {
+        if self.dae_hidden > limits::UNITS {
+            return Err(format!(
+                "dae_hidden {} is over the limit of {}",
+                self.dae_hidden,
+                limits::UNITS
+            ));
+        }
+        if self.dae_layers > limits::LAYERS {
+            return Err(format!(
+                "dae_layers {} is over the limit of {}",
+                self.dae_layers,
+                limits::LAYERS
+            ));
+        }
+        if config.layers == 0 {
+            return Err("dae-lstm with 0 LSTM layers".into());
+        }
+        if self.dae_hidden == 0 {
+            return Err("dae-lstm needs dae_hidden > 0".into());
+        }
+        Ok(())
+    }
+
+    /// `motion-cli info`'s lines: what the architecture is, then its sizes (last).
+    fn describe(&self, config: &ModelConfig) -> Vec<(&'static str, String)> {
+        vec![
+            (
+                "architecture",
+                "dae-lstm (stacked LSTM + linear decoder, each output filtered by a dropout \
+                 autoencoder before it is fed back, Ghosh et al. 2017)"
+                    .into(),
+            ),
+            (
+                "sizes",
+                format!(
+                    "{} LSTM layers x {} units (first layer input {} = features + {} action \
+                     one-hot); autoencoder {} ReLU layers x {} units",
+                    config.layers,
+                    config.hidden,
+                    config.rnn_input_dims(),
+                    config.actions.len(),
+                    self.dae_layers,
+                    self.dae_hidden
+                ),
+            ),
+        ]
+    }
+
+    fn rnn_input_dims(&self, config: &ModelConfig) -> usize {
+        config.input_dims() + config.actions.len()
+    }
+
+    fn tensor_shapes(&self, config: &ModelConfig, shapes: &mut Vec<(String, Vec<usize>)>) {
+        let h = config.hidden;
+        for k in 0..config.layers {
+            let inputs = if k == 0 { config.rnn_input_dims() } else { h };
+            shapes.push((format!("rnn.{k}.weight_ih"), vec![4 * h, inputs]));
+            shapes.push((format!("rnn.{k}.weight_hh"), vec![4 * h, h]));
+            shapes.push((format!("rnn.{k}.bias_ih"), vec![4 * h]));
+            shapes.push((format!("rnn.{k}.bias_hh"), vec![4 * h]));
+        }
+        for (k, w) in self.widths(config.output_dims()).windows(2).enumerate() {
+            shapes.push((format!("dae.layers.{k}.weight"), vec![w[1], w[0]]));
+            shapes.push((format!("dae.layers.{k}.bias"), vec![w[1]]));
+        }
+    }
+
+    fn load(
+        &self,
+        store: &WeightStore,
+        config: &ModelConfig,
+    ) -> Result<Arc<dyn Net>, WeightsError> {
+        Ok(Arc::new(DaeLstm::load(store, config, self)?))
+    }
+}
+
+impl DaeLstmFields {
+    /// The autoencoder's layer widths `[O, dae_hidden x dae_layers, O]`.
+    pub fn widths(&self, outputs: usize) -> Vec<usize> {
+        let mut widths = vec![outputs];
+        widths.extend(std::iter::repeat_n(self.dae_hidden, self.dae_layers));
+        widths.push(outputs);
+        widths
+    }
+}
 
 /// DAE-LSTM weights (immutable, shareable).
 #[derive(Debug, Clone)]
@@ -42,7 +165,11 @@ pub struct DaeLstmState {
 
 impl DaeLstm {
     /// Reads `rnn.{k}.*` for `k in 0..layers` and `dae.layers.{k}.*` for the config's widths.
-    pub fn load(store: &WeightStore, config: &ModelConfig) -> Result<Self, WeightsError> {
+    pub fn load(
+        store: &WeightStore,
+        config: &ModelConfig,
+        fields: &DaeLstmFields,
+    ) -> Result<Self, WeightsError> {
         let rnn = Stack::load_lstm(
             store,
             "rnn",
@@ -54,10 +181,7 @@ impl DaeLstm {
             store,
             "dae",
             &MlpConfig {
-                widths: match &config.arch {
-                    ArchConfig::DaeLstm(f) => f.widths(config.output_dims()),
-                    _ => vec![config.output_dims(); 2],
-                },
+                widths: fields.widths(config.output_dims()),
             },
         )?;
         Ok(Self {

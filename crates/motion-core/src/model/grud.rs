@@ -3,10 +3,70 @@
 //! Citation: Gopalakrishnan, Mali, Kifer, Giles, Ororbia, "A Neural Temporal Model for Human
 //! Motion Prediction", CVPR 2019 — Gopalakrishnan et al. 2019, sections 3.2-3.3 (the GRU-d baseline: two layers of
 //! 512 units with derivative inputs). Tensors `rnn.{k}.*` as in `training/models.py`.
+use std::sync::Arc;
+
+use serde::{Deserialize, Serialize};
+
+use super::arch::{gru_shapes, ArchFields};
 use super::config::ModelConfig;
 use super::net::{own, Begin, Net, NetState};
 use super::weights::{WeightStore, WeightsError};
 use crate::nn::{GruCell, GruScratch, Stack, StackState};
+
+/// The config fields only `gru-d` has: none; its sizes are the shared `hidden` and `layers`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub struct GruDFields {}
+
+impl ArchFields for GruDFields {
+    const STOCHASTIC: bool = false;
+
+    /// Gopalakrishnan et al. 2019, section 4 (the GRU-d baseline): derivative order 3, 2 layers
+    /// of 512 units, unconditioned.
+    fn paper() -> ModelConfig {
+        ModelConfig {
+            derivative_order: 3,
+            ..ModelConfig::h36m(GruDFields {}.into(), 512, 2)
+        }
+    }
+
+    /// At least one layer.
+    fn validate(&self, config: &ModelConfig) -> Result<(), String> {
+        if config.layers == 0 {
+            return Err("gru-d with 0 layers".into());
+        }
+        Ok(())
+    }
+
+    /// `motion-cli info`'s lines: what the architecture is, then its sizes (last).
+    fn describe(&self, config: &ModelConfig) -> Vec<(&'static str, String)> {
+        vec![
+            (
+                "architecture",
+                "gru-d (stacked GRU + linear decoder, Gopalakrishnan et al. 2019)".into(),
+            ),
+            (
+                "sizes",
+                format!("{} GRU layers x {} units", config.layers, config.hidden),
+            ),
+        ]
+    }
+
+    fn tensor_shapes(&self, config: &ModelConfig, shapes: &mut Vec<(String, Vec<usize>)>) {
+        let h = config.hidden;
+        for k in 0..config.layers {
+            let inputs = if k == 0 { config.input_dims() } else { h };
+            gru_shapes(shapes, &format!("rnn.{k}"), inputs, h);
+        }
+    }
+
+    fn load(
+        &self,
+        store: &WeightStore,
+        config: &ModelConfig,
+    ) -> Result<Arc<dyn Net>, WeightsError> {
+        Ok(Arc::new(GruD::load(store, config)?))
+    }
+}
 
 /// GRU-d recurrent weights (immutable, shareable).
 #[derive(Debug, Clone)]

@@ -38,14 +38,219 @@
 //! a`), as `training/models.py` does. [`Intention::set_action`] switches a row's one-hot: the
 //! next pose step reads the new action, and so does every intention frame not yet forecast (the
 //! forecaster runs `γ - 2` frames ahead of the poses).
-use super::config::{ArchConfig, IntentionFields, ModelConfig};
+use std::sync::Arc;
+
+use serde::{Deserialize, Serialize};
+
+use super::arch::{gru_shapes, ArchFields};
+use super::config::{limits, ModelConfig};
 use super::generate_error::GenerateError;
 use super::net::NoiseSource;
 use super::net::{own, Begin, Net, NetState};
 use super::weights::{WeightStore, WeightsError};
+use super::ArchConfig;
 use crate::nn::{
     GruCell, GruConfig, GruConvention, GruScratch, Linear, LinearConfig, Stack, StackState,
 };
+
+/// The config fields only `intention` has.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct IntentionFields {
+    /// Width `N` of the noise `z` the pose decoder's initial state ends with and its every
+    /// input reads (`0 < N < hidden`; the pose encoder has `hidden - N` units).
+    pub noise_dims: usize,
+    /// Standard deviation `s` of the noise drawn per sample, `z ~ N(0, s² I)` (absent = 1, the
+    /// paper's `N(0, I)`): an inference-time choice stored with the weights, as a GAN's
+    /// truncation. Training always draws `N(0, I)`; an explicit `z` is used as given.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub noise_scale: Option<f32>,
+    /// Units of the intention forecaster's encoder and decoder GRUs.
+    pub label_hidden: usize,
+    /// Number of intention labels `C` (Tanke et al. 2021: 8).
+    pub intentions: usize,
+    /// Pose clusters `K` whose centroids label the seed frames.
+    pub clusters: usize,
+    /// Look-ahead `γ`: intention probabilities of frames `τ-1 .. τ+γ-2` are read by the step
+    /// producing frame `τ` (Tanke et al. 2021: 10).
+    pub lookahead: usize,
+    /// Output channels `Fe` of the temporal convolution over those probabilities.
+    pub intention_features: usize,
+}
+
+impl ArchFields for IntentionFields {
+    const STOCHASTIC: bool = true;
+
+    /// Tanke et al. 2021 (`make_config` of `training/models.py`): 3 GRU layers of 256 units over
+    /// plain poses, residual, unconditioned, noise 32, forecaster 128 units, 8 intentions from 32
+    /// clusters, look-ahead 10, 32 convolution channels.
+    fn paper() -> ModelConfig {
+        let fields = IntentionFields {
+            noise_dims: 32,
+            noise_scale: None,
+            label_hidden: 128,
+            intentions: 8,
+            clusters: 32,
+            lookahead: 10,
+            intention_features: 32,
+        };
+        ModelConfig {
+            residual: true,
+            ..ModelConfig::h36m(fields.into(), 256, 3)
+        }
+    }
+
+    /// In range, and the fixed choices of the model (plain poses, residual, PyTorch GRUs).
+    fn validate(&self, config: &ModelConfig) -> Result<(), String> {
+        let at_most = |what: &str, value: usize, limit: usize| {
+            if value > limit {
+                Err(format!("{what} {value} is over the limit of {limit}"))
+            } else {
+                Ok(())
+            }
+        };
+        at_most("noise_dims", self.noise_dims, limits::UNITS)?;
+        at_most("label_hidden", self.label_hidden, limits::UNITS)?;
+        at_most("intention_features", self.intention_features, limits::UNITS)?;
+        at_most("intentions", self.intentions, limits::INTENTIONS)?;
+        at_most("clusters", self.clusters, limits::INTENTIONS)?;
+        at_most("lookahead", self.lookahead, limits::LOOKAHEAD)?;
+        at_most(
+            "lookahead * intentions",
+            self.lookahead * self.intentions,
+            limits::WINDOW_VALUES,
+        )?;
+        let noise = self.noise_dims;
+        if noise == 0 || noise >= config.hidden {
+            return Err(format!(
+                "intention needs 0 < noise_dims < hidden, got noise_dims {noise}, hidden {}",
+                config.hidden
+            ));
+        }
+        if let Some(scale) = self.noise_scale {
+            if !(0.0..=limits::NOISE_SCALE).contains(&scale) {
+                return Err(format!(
+                    "noise_scale {scale} is not in [0, {}]",
+                    limits::NOISE_SCALE
+                ));
+            }
+        }
+        for (field, value) in [
+            ("label_hidden", self.label_hidden),
+            ("intentions", self.intentions),
+            ("clusters", self.clusters),
+            ("lookahead", self.lookahead),
+            ("intention_features", self.intention_features),
+        ] {
+            if value == 0 {
+                return Err(format!("intention needs {field} >= 1"));
+            }
+        }
+        if config.layers == 0 {
+            return Err("intention with 0 GRU layers".into());
+        }
+        if !config.residual {
+            return Err("intention is residual (output = previous pose + decoder)".into());
+        }
+        if config.derivative_order != 0 {
+            return Err(format!(
+                "intention reads plain poses: derivative_order {} (expected 0)",
+                config.derivative_order
+            ));
+        }
+        if config.gru_convention != GruConvention::PyTorch {
+            return Err(format!(
+                "intention's GRUs use the pytorch convention, the config says `{}`",
+                config.gru_convention.name()
+            ));
+        }
+        Ok(())
+    }
+
+    /// `motion-cli info`'s lines: what the architecture is, its intentions and noise, then its
+    /// sizes (last).
+    fn describe(&self, config: &ModelConfig) -> Vec<(&'static str, String)> {
+        let (n, fe) = (self.noise_dims, self.intention_features);
+        let outputs = config.output_dims();
+        let conditioned = if config.actions.is_empty() {
+            String::new()
+        } else {
+            format!(" + action one-hot {}", config.actions.len())
+        };
+        vec![
+            (
+                "architecture",
+                "intention (seed labelled with intentions, intention forecaster GRU, stacked GRU \
+                 pose generator on noise z and the intentions forecast ahead + linear decoder, \
+                 Tanke et al. 2021)"
+                    .into(),
+            ),
+            (
+                "intentions",
+                format!(
+                    "{} intentions from {} pose clusters (labels.centroids, labels.merge); \
+                     forecaster GRUs (label_hidden) {} units; look-ahead {} frames, \
+                     intent_conv {fe} channels",
+                    self.intentions, self.clusters, self.label_hidden, self.lookahead
+                ),
+            ),
+            (
+                "noise",
+                format!(
+                    "z ~ N(0, s² I) of noise_dims {n} per sample, s = noise_scale {}; pose \
+                     encoder {} units, decoder layers start at its state + z",
+                    self.noise_scale.unwrap_or(1.0),
+                    config.hidden.saturating_sub(n)
+                ),
+            ),
+            (
+                "sizes",
+                format!(
+                    "{} GRU layers x {} units (first layer input {} = pose {} + noise {n} + \
+                     intention features {fe}{conditioned})",
+                    config.layers,
+                    config.hidden,
+                    outputs + n + fe + config.actions.len(),
+                    outputs
+                ),
+            ),
+        ]
+    }
+
+    fn tensor_shapes(&self, config: &ModelConfig, shapes: &mut Vec<(String, Vec<usize>)>) {
+        let c = IntentionConfig::of(config);
+        let (l, n, o) = (c.label_hidden, c.intentions, c.outputs);
+        shapes.push(("labels.centroids".into(), vec![c.clusters, o]));
+        shapes.push(("labels.merge".into(), vec![c.clusters]));
+        gru_shapes(shapes, "label_encoder", c.label_input_dims(), l);
+        gru_shapes(shapes, "label_decoder", c.label_decoder_dims(), l);
+        shapes.push(("label_out.weight".into(), vec![n, l]));
+        shapes.push(("label_out.bias".into(), vec![n]));
+        gru_shapes(shapes, "pose_encoder", o, c.pose_hidden());
+        shapes.push((
+            "intent_conv.weight".into(),
+            vec![c.features, n, c.lookahead],
+        ));
+        shapes.push(("intent_conv.bias".into(), vec![c.features]));
+        for k in 0..config.layers {
+            let inputs = if k == 0 { c.rnn_input_dims() } else { c.hidden };
+            gru_shapes(shapes, &format!("rnn.{k}"), inputs, c.hidden);
+        }
+    }
+
+    /// The merge table maps cluster `k` to intention `k mod intentions`.
+    fn random_values(&self, _config: &ModelConfig, name: &str, n: usize) -> Option<Vec<f32>> {
+        let c = self.intentions.max(1);
+        (name == "labels.merge").then(|| (0..n).map(|k| (k % c) as f32).collect())
+    }
+
+    fn load(
+        &self,
+        store: &WeightStore,
+        config: &ModelConfig,
+    ) -> Result<Arc<dyn Net>, WeightsError> {
+        Ok(Arc::new(Intention::load(store, config)?))
+    }
+}
 
 /// The sizes of an intention model, read from its config.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -4,7 +4,8 @@
 //! - [`weights`]: safetensors tensors by state-dict name, [`WeightsError`].
 //! - [`config`]: the `config` / `provenance` metadata of the schema in `weights/README.md`.
 //! - [`MotionModel`]: a loaded predictor (shared, immutable); [`vgru`], [`grud`], [`dae_lstm`]
-//!   and [`intention`] its networks.
+//!   and [`intention`] its networks, each file an architecture (its network and its config
+//!   fields, [`arch::ArchFields`]), registered once below.
 //! - [`Generator`] (one character) and [`BatchGenerator`] (many in lockstep): closed-loop frames;
 //!   [`Character`] and [`Crowd`] turn them into engine poses.
 //! - [`ActionClassifier`]: the action classifier of Ghosh et al. 2017 (section 4.5), the long-horizon
@@ -27,6 +28,7 @@
 //! # Ok(())
 //! # }
 //! ```
+pub mod arch;
 pub mod batch;
 pub mod builtin;
 pub mod character;
@@ -51,14 +53,31 @@ pub use crate::weights;
 pub use batch::{BatchGenerator, FrameScalar, Noise};
 pub use character::{Character, CharacterError};
 pub use classifier::{ActionClassifier, ClassifierConfig, ClassifyError, CLASSIFIER_ARCHITECTURE};
-pub use config::{
-    ArchConfig, Architecture, DaeLstmFields, GruDFields, IntentionFields, ModelConfig, Provenance,
-    VgruDFields,
-};
+pub use config::{ModelConfig, Provenance};
 pub use crowd::{Crowd, MemberId};
+pub use dae_lstm::DaeLstmFields;
 pub use generate_error::GenerateError;
 pub use generator::Generator;
+pub use grud::GruDFields;
+pub use intention::IntentionFields;
 pub use pose_stream::PoseStream;
 pub use predictor::{MotionModel, Network};
 pub use samples::generate_samples;
+pub use vgru::VgruDFields;
 pub use weights::{WeightStore, WeightsError};
+
+// The architectures, one line each: the schema name and the file's config fields. Adding an
+// architecture is its file (network + `ArchFields`) and a line here.
+arch::register_architectures! {
+    /// VTLN-RNN with derivative inputs: plan GRU + body GRU + decoder (Gopalakrishnan et al.
+    /// 2019, 3.2).
+    VgruD("vgru-d", vgru::VgruDFields),
+    /// Stacked GRU layers with derivative inputs + decoder (Gopalakrishnan et al. 2019, GRU-d).
+    GruD("gru-d", grud::GruDFields),
+    /// Stacked LSTM layers + decoder whose every output is filtered by a dropout autoencoder
+    /// before it is fed back (Ghosh et al. 2017, section 3).
+    DaeLstm("dae-lstm", dae_lstm::DaeLstmFields),
+    /// Intention forecaster + noise-conditioned stacked GRU pose generator reading the
+    /// intentions forecast ahead (Tanke et al. 2021, section 3).
+    Intention("intention", intention::IntentionFields),
+}

@@ -3,7 +3,7 @@
 //! from derivative features to the decoder's input, optionally filters the decoded output, and
 //! switches a row's action. [`BatchGenerator`](super::BatchGenerator) calls nothing else of a
 //! network; each architecture's file implements the trait for its network, and
-//! [`Network::net`](super::Network::net) is the one place the architectures are listed.
+//! Each architecture's [`ArchFields::load`](super::arch::ArchFields::load) makes its net.
 use std::any::Any;
 
 use super::config::ModelConfig;
@@ -69,7 +69,7 @@ pub struct Begin<'a> {
 }
 
 /// A network the generators can drive (see the module docs).
-pub trait Net: std::fmt::Debug + Send + Sync {
+pub trait Net: std::any::Any + std::fmt::Debug + Send + Sync {
     /// Trainable parameters of the network (the decoder and normalization excluded), as
     /// PyTorch counts them.
     fn parameter_count(&self) -> usize;

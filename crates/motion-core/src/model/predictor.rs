@@ -6,29 +6,18 @@
 //! Aksan, Hilliges, "Learning Human Motion Models for Long-term Predictions", 3DV 2017 — paper
 //! 002, section 3 (DAE-LSTM); Tanke, Zaveri, Gall, "Intention-based Long-Term Human Motion
 //! Anticipation", 3DV 2021 — Tanke et al. 2021, section 3 (intention).
-use super::config::{check_format, parse_provenance, Architecture, ModelConfig, Provenance};
-use super::dae_lstm::DaeLstm;
-use super::grud::GruD;
-use super::intention::Intention;
+use super::config::{check_format, parse_provenance, ModelConfig, Provenance};
 use super::net::Net;
 use super::norm::Normalization;
-use super::vgru::VgruD;
 use super::weights::{WeightStore, WeightsError};
 use crate::nn::{Linear, LinearConfig};
+use std::any::Any;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
-/// The recurrent part of a predictor.
+/// The recurrent part of a predictor: the architecture's [`Net`] (shared by clones).
 #[derive(Debug, Clone)]
-pub enum Network {
-    /// VGRU-d: plan GRU + body GRU.
-    Vgru(Box<VgruD>),
-    /// GRU-d: stacked GRU layers.
-    Grud(GruD),
-    /// DAE-LSTM: stacked LSTM layers and the dropout autoencoder that filters each output.
-    DaeLstm(Box<DaeLstm>),
-    /// Intention forecaster and noise-conditioned stacked GRU pose generator.
-    Intention(Box<Intention>),
-}
+pub struct Network(Arc<dyn Net>);
 
 /// Immutable predictor weights; share one across characters and threads with `Arc`.
 #[derive(Debug, Clone)]
@@ -59,14 +48,7 @@ impl MotionModel {
             None => Provenance::new(),
         };
         let norm = Normalization::load(store, config.frame_dims, &config.dims_used)?;
-        let network = match config.architecture() {
-            Architecture::VgruD => Network::Vgru(Box::new(VgruD::load(store, &config)?)),
-            Architecture::GruD => Network::Grud(GruD::load(store, &config)?),
-            Architecture::DaeLstm => Network::DaeLstm(Box::new(DaeLstm::load(store, &config)?)),
-            Architecture::Intention => {
-                Network::Intention(Box::new(Intention::load(store, &config)?))
-            }
-        };
+        let network = Network(config.arch.load(store, &config)?);
         let decoder = Linear::load(
             store,
             "decoder",
@@ -136,13 +118,14 @@ impl MotionModel {
 }
 
 impl Network {
-    /// The network as the generators drive it: the one list of architectures.
+    /// The network as the generators drive it.
     pub fn net(&self) -> &dyn Net {
-        match self {
-            Network::Vgru(n) => n.as_ref(),
-            Network::Grud(n) => n,
-            Network::DaeLstm(n) => n.as_ref(),
-            Network::Intention(n) => n.as_ref(),
-        }
+        self.0.as_ref()
+    }
+
+    /// The network as its concrete type (`VgruD`, `GruD`, `DaeLstm`, `Intention`), if it is one.
+    pub fn downcast_ref<T: Net>(&self) -> Option<&T> {
+        let any: &dyn Any = self.0.as_ref();
+        any.downcast_ref()
     }
 }

@@ -23,12 +23,99 @@
 //! the seed of the current block, into a second guide buffer that becomes the current one when
 //! the block starts: no step pays for a whole block (a stall of `T` plan steps), and the guides
 //! are bit-identical to planning the block at once.
-use super::config::{ArchConfig, ModelConfig};
+use std::sync::Arc;
+
+use serde::{Deserialize, Serialize};
+
+use super::arch::{gru_shapes, ArchFields};
+use super::config::{limits, ModelConfig};
 use super::generate_error::GenerateError;
 use super::net::{own, Begin, Net, NetState, NoiseSource};
 use super::weights::{WeightStore, WeightsError};
 use crate::nn::activation::softplus;
-use crate::nn::{BodyGruCell, BodyGruConfig, GruCell, GruConfig, GruScratch};
+use crate::nn::{BodyGruCell, BodyGruConfig, GruCell, GruConfig, GruConvention, GruScratch};
+
+/// The config fields only `vgru-d` has.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct VgruDFields {
+    /// Plan GRU units `P`.
+    pub plan_hidden: usize,
+}
+
+impl ArchFields for VgruDFields {
+    const STOCHASTIC: bool = true;
+
+    /// Gopalakrishnan et al. 2019, section 4: derivative order 3, a body GRU of 512 units
+    /// and a plan GRU of 512 in the paper's candidate convention, the 15 H3.6M actions.
+    fn paper() -> ModelConfig {
+        ModelConfig {
+            gru_convention: GruConvention::Paper,
+            derivative_order: 3,
+            actions: ModelConfig::h36m_actions(),
+            ..ModelConfig::h36m(VgruDFields { plan_hidden: 512 }.into(), 512, 1)
+        }
+    }
+
+    /// A plan, actions to feed it and a horizon to plan over.
+    fn validate(&self, config: &ModelConfig) -> Result<(), String> {
+        if self.plan_hidden == 0 {
+            return Err("vgru-d needs plan_hidden > 0".into());
+        }
+        if self.plan_hidden > limits::UNITS {
+            return Err(format!(
+                "plan_hidden {} is over the limit of {}",
+                self.plan_hidden,
+                limits::UNITS
+            ));
+        }
+        if config.actions.is_empty() {
+            return Err("vgru-d needs at least one action label".into());
+        }
+        if config.horizon == 0 {
+            return Err("vgru-d needs horizon > 0".into());
+        }
+        Ok(())
+    }
+
+    /// `motion-cli info`'s lines: what the architecture is, then its sizes (last).
+    fn describe(&self, config: &ModelConfig) -> Vec<(&'static str, String)> {
+        vec![
+            (
+                "architecture",
+                "vgru-d (VTLN-RNN: plan GRU + body GRU + linear decoder, Gopalakrishnan et al. 2019)"
+                    .into(),
+            ),
+            (
+                "sizes",
+                format!(
+                    "body GRU {} units, plan GRU {} units",
+                    config.hidden, self.plan_hidden
+                ),
+            ),
+        ]
+    }
+
+    fn tensor_shapes(&self, config: &ModelConfig, shapes: &mut Vec<(String, Vec<usize>)>) {
+        let (p, h) = (self.plan_hidden, config.hidden);
+        gru_shapes(shapes, "plan.cell", config.actions.len(), p);
+        gru_shapes(shapes, "body", config.input_dims(), h);
+        shapes.push(("plan.mu".into(), vec![p]));
+        shapes.push(("plan.sigma".into(), vec![p]));
+        shapes.push(("body.weight_ph".into(), vec![3 * h, p]));
+    }
+
+    fn random_values(&self, _config: &ModelConfig, name: &str, n: usize) -> Option<Vec<f32>> {
+        matches!(name, "plan.mu" | "plan.sigma").then(|| vec![0.0; n])
+    }
+
+    fn load(
+        &self,
+        store: &WeightStore,
+        config: &ModelConfig,
+    ) -> Result<Arc<dyn Net>, WeightsError> {
+        Ok(Arc::new(VgruD::load(store, config, self)?))
+    }
+}
 
 /// VGRU-d recurrent weights (immutable, shareable).
 #[derive(Debug, Clone)]
@@ -72,11 +159,12 @@ pub struct VgruState {
 
 impl VgruD {
     /// Reads `plan.cell.*`, `plan.mu`, `plan.sigma` and `body.*`.
-    pub fn load(store: &WeightStore, config: &ModelConfig) -> Result<Self, WeightsError> {
-        let p = match &config.arch {
-            ArchConfig::VgruD(f) => f.plan_hidden,
-            _ => 0,
-        };
+    pub fn load(
+        store: &WeightStore,
+        config: &ModelConfig,
+        fields: &VgruDFields,
+    ) -> Result<Self, WeightsError> {
+        let p = fields.plan_hidden;
         let actions = config.actions.len();
         let plan = GruCell::load(
             store,

@@ -36,7 +36,7 @@ use motion_core::formats::expmap_bvh::ExpMapTarget;
 use motion_core::formats::npy_stream::NpyStream;
 use motion_core::grounding::{ground_expmap_clip, ClipSpec, GroundingConfig, GroundingError};
 use motion_core::model::{
-    ActionClassifier, BatchGenerator, GenerateError, MotionModel, Network, Noise,
+    ActionClassifier, Architecture, BatchGenerator, GenerateError, MotionModel, Noise,
 };
 use motion_core::protocol::{
     load_action_windows_in, load_subject_sequences, WindowSet, ACTIONS, LONG_TERM_HORIZON,
@@ -707,7 +707,7 @@ fn full_report(
             actions: config.actions.clone(),
             actions_trained: selection::trained_actions(model),
             stochastic,
-            plan_horizon: matches!(model.network(), Network::Vgru(_)).then_some(config.horizon),
+            plan_horizon: (config.architecture() == Architecture::VgruD).then_some(config.horizon),
             stored_dtype: model.stored_dtype().to_string(),
             note: (!stochastic && options.samples > 1)
                 .then_some("deterministic model: the K samples are identical (APD is 0)"),

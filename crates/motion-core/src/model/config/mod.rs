@@ -1,11 +1,11 @@
 //! The `config` and `provenance` metadata of a motion-weights file (schema: weights/README.md).
 use crate::nn::GruConvention;
+use crate::skeleton::{H36M_ACTIONS, H36M_DIMS_USED, H36M_FRAME_DIMS};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
-pub mod fields;
 use super::weights::{WeightStore, WeightsError};
-pub use fields::{DaeLstmFields, GruDFields, IntentionFields, VgruDFields};
+use super::{ArchConfig, Architecture};
 
 /// The metadata `format` value of a motion-weights file.
 pub const FORMAT_NAME: &str = "motion-weights";
@@ -13,96 +13,6 @@ pub const FORMAT_NAME: &str = "motion-weights";
 pub const FORMAT_VERSION: u32 = 1;
 /// The only derivative padding defined by the schema.
 pub const DERIVATIVE_PADDING: &str = "repeat-first";
-
-/// Which predictor a weights file holds.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-pub enum Architecture {
-    /// VTLN-RNN with derivative inputs: plan GRU + body GRU + decoder (Gopalakrishnan et al. 2019, 3.2).
-    #[serde(rename = "vgru-d")]
-    VgruD,
-    /// Stacked GRU layers with derivative inputs + decoder (Gopalakrishnan et al. 2019, GRU-d).
-    #[serde(rename = "gru-d")]
-    GruD,
-    /// Stacked LSTM layers + decoder whose every output is filtered by a dropout autoencoder
-    /// before it is fed back (Ghosh et al. 2017, section 3).
-    #[serde(rename = "dae-lstm")]
-    DaeLstm,
-    /// Intention forecaster + noise-conditioned stacked GRU pose generator reading the
-    /// intentions forecast ahead (Tanke et al. 2021, section 3).
-    #[serde(rename = "intention")]
-    Intention,
-}
-
-impl Architecture {
-    /// The schema name (`vgru-d`, `gru-d`, `dae-lstm` or `intention`).
-    pub fn name(self) -> &'static str {
-        match self {
-            Architecture::VgruD => "vgru-d",
-            Architecture::GruD => "gru-d",
-            Architecture::DaeLstm => "dae-lstm",
-            Architecture::Intention => "intention",
-        }
-    }
-
-    /// Whether the model draws noise, so that samples of one seed differ (`vgru-d`: its plan
-    /// noise; `intention`: its `z`); `gru-d` and `dae-lstm` are deterministic.
-    pub fn is_stochastic(self) -> bool {
-        matches!(self, Architecture::VgruD | Architecture::Intention)
-    }
-}
-
-/// The fields of a config that belong to one architecture, tagged by the `architecture` key.
-/// Each architecture's file defines its fields and their checks; this enum is the one place the
-/// architectures are registered for configs (and [`Network`](super::Network) for weights).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "architecture")]
-pub enum ArchConfig {
-    /// `vgru-d`.
-    #[serde(rename = "vgru-d")]
-    VgruD(VgruDFields),
-    /// `gru-d`.
-    #[serde(rename = "gru-d")]
-    GruD(GruDFields),
-    /// `dae-lstm`.
-    #[serde(rename = "dae-lstm")]
-    DaeLstm(DaeLstmFields),
-    /// `intention`.
-    #[serde(rename = "intention")]
-    Intention(IntentionFields),
-}
-
-impl ArchConfig {
-    /// Which architecture.
-    pub fn architecture(&self) -> Architecture {
-        match self {
-            ArchConfig::VgruD(_) => Architecture::VgruD,
-            ArchConfig::GruD(_) => Architecture::GruD,
-            ArchConfig::DaeLstm(_) => Architecture::DaeLstm,
-            ArchConfig::Intention(_) => Architecture::Intention,
-        }
-    }
-
-    /// The architecture's own checks of its fields against the shared ones.
-    fn validate(&self, config: &ModelConfig) -> Result<(), String> {
-        match self {
-            ArchConfig::VgruD(f) => f.validate(config),
-            ArchConfig::GruD(f) => f.validate(config),
-            ArchConfig::DaeLstm(f) => f.validate(config),
-            ArchConfig::Intention(f) => f.validate(config),
-        }
-    }
-
-    /// What the architecture is and its own sizes in words, as `(key, value)` lines (`motion-cli
-    /// info`; the last is `sizes`).
-    pub fn describe(&self, config: &ModelConfig) -> Vec<(&'static str, String)> {
-        match self {
-            ArchConfig::VgruD(f) => f.describe(config),
-            ArchConfig::GruD(f) => f.describe(config),
-            ArchConfig::DaeLstm(f) => f.describe(config),
-            ArchConfig::Intention(f) => f.describe(config),
-        }
-    }
-}
 
 /// The `config` JSON object: everything an engine needs to build and drive the model.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -188,12 +98,12 @@ impl ModelConfig {
         // as such rather than by the first field it lacks.
         let value: serde_json::Value =
             serde_json::from_str(json).map_err(|e| bad(e.to_string()))?;
-        const KNOWN: [&str; 4] = ["vgru-d", "gru-d", "dae-lstm", "intention"];
         match value.get("architecture") {
-            Some(serde_json::Value::String(name)) if !KNOWN.contains(&name.as_str()) => {
+            Some(serde_json::Value::String(name)) if Architecture::from_name(name).is_none() => {
+                let known: Vec<&str> = Architecture::ALL.iter().map(|a| a.name()).collect();
                 return Err(bad(format!(
                     "unknown architecture `{name}`, expected one of `{}`",
-                    KNOWN.join("`, `")
+                    known.join("`, `")
                 )));
             }
             None => return Err(bad("missing field `architecture`".into())),
@@ -274,13 +184,63 @@ impl ModelConfig {
         self.output_dims() * (1 + self.derivative_order)
     }
 
-    /// Width of the first recurrent layer's input: the features, plus the action one-hot for a
-    /// DAE-LSTM with actions.
+    /// Width of the first recurrent layer's input: the features, plus what the architecture
+    /// appends (a DAE-LSTM with actions: the action one-hot).
     pub fn rnn_input_dims(&self) -> usize {
-        match self.arch {
-            ArchConfig::DaeLstm(_) => self.input_dims() + self.actions.len(),
-            _ => self.input_dims(),
+        self.arch.rnn_input_dims(self)
+    }
+
+    /// A configuration over H3.6M frames at 25 Hz (99 values, the 54 varying ones used; 50 seed
+    /// and 100 predicted frames), with `hidden` units in `layers` layers, standard
+    /// normalization, PyTorch GRUs, no residual, plain poses and no actions: the base the
+    /// architectures' paper configurations change.
+    pub fn h36m(arch: ArchConfig, hidden: usize, layers: usize) -> Self {
+        ModelConfig {
+            arch,
+            frame_dims: H36M_FRAME_DIMS,
+            dims_used: H36M_DIMS_USED.to_vec(),
+            hidden,
+            layers,
+            gru_convention: GruConvention::PyTorch,
+            normalization: standard_normalization(),
+            residual: false,
+            derivative_order: 0,
+            derivative_padding: DERIVATIVE_PADDING.into(),
+            fps: 25.0,
+            skeleton: "h36m-32".into(),
+            actions: Vec::new(),
+            seed_frames: 50,
+            horizon: 100,
         }
+    }
+
+    /// The H3.6M action labels in one-hot order (the multi-action models' `actions`).
+    pub fn h36m_actions() -> Vec<String> {
+        H36M_ACTIONS.iter().map(|a| a.to_string()).collect()
+    }
+
+    /// The configuration of `architecture`'s paper ([`ArchFields::paper`]).
+    ///
+    /// [`ArchFields::paper`]: super::arch::ArchFields::paper
+    pub fn paper(architecture: Architecture) -> Self {
+        architecture.paper_config()
+    }
+
+    /// Every tensor name and shape this configuration implies (schema order: norm, network,
+    /// decoder).
+    pub fn tensor_shapes(&self) -> Vec<(String, Vec<usize>)> {
+        let f = self.frame_dims;
+        let mut shapes = vec![
+            ("norm.mean".to_string(), vec![f]),
+            ("norm.std".to_string(), vec![f]),
+        ];
+        self.arch.tensor_shapes(self, &mut shapes);
+        shapes.push((
+            "decoder.weight".into(),
+            vec![self.output_dims(), self.hidden],
+        ));
+        shapes.push(("decoder.bias".into(), vec![self.output_dims()]));
+        shapes
     }
 
     /// Which architecture (the `architecture` key).
@@ -388,6 +348,7 @@ pub fn validate_derivatives(order: usize, padding: &str) -> Result<(), String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::{IntentionFields, VgruDFields};
 
     fn vgru() -> ModelConfig {
         ModelConfig {
