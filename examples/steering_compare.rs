@@ -1,5 +1,6 @@
 //! Steering responsiveness (`motion_metrics::responsiveness`) of the shipped models, steered by
-//! root-motion warping (`Character::set_goal`, `motion_core::steering`), beside a motion-matching
+//! root-motion warping (`Character::set_goal`, `motion_core::steering`) or, for the `goal-gru`
+//! model, by the control it reads (`motion_core::model::goal_gru`), beside a motion-matching
 //! baseline (`motion_core::matching`) built from the same training data: every frame of the
 //! H3.6M training subjects' (S1, S6, S7, S8, S9, S11) walking, walkingdog and walkingtogether takes
 //! at 25 Hz. Body speed is against real S5 walking (the test subject).
@@ -71,8 +72,16 @@ fn main() -> Result<(), BoxError> {
     println!("real S5 walking body speed: {real:.3} m/s\n");
 
     let mut reports = Vec::new();
-    for file in ["vgru_d_multi", "intention_actions"] {
+    for (file, how) in [
+        ("vgru_d_multi", "warping"),
+        ("intention_actions", "warping"),
+        ("goal_gru_h36m", "control"),
+    ] {
         let path = repo.join(format!("weights/{file}.safetensors"));
+        if !path.exists() {
+            println!("{} not found: its row is left out", path.display());
+            continue;
+        }
         let bytes = std::fs::metadata(&path)?.len() as usize;
         let model = Arc::new(MotionModel::load(&path)?);
         let seed = load_seed(
@@ -87,7 +96,7 @@ fn main() -> Result<(), BoxError> {
             character.start_from_clip(seed.frames.view(), Some("walking"), Noise::Seed(3))?;
             Ok(character)
         };
-        reports.push(measure(&format!("{file} (warping)"), make, real, bytes)?);
+        reports.push(measure(&format!("{file} ({how})"), make, real, bytes)?);
     }
     let make = || -> Result<Matcher, BoxError> { Ok(Matcher::new(database.clone())) };
     reports.push(measure("motion matching", make, real, database.bytes())?);

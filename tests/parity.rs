@@ -239,6 +239,52 @@ fn vgru_d() {
     check_model("vgru_d");
 }
 
+/// `goal-gru` under a control that is constant over the seed and changes every step after it:
+/// `set_control` before `start` and before each step reproduces `GoalGRU`'s closed loop.
+#[test]
+fn goal_gru_follows_its_control_step_by_step() {
+    let model = Arc::new(MotionModel::load(fixture("goal_gru.safetensors")).unwrap());
+    let expected = WeightStore::open(fixture("goal_gru.expected.safetensors")).unwrap();
+    let (ss, seed) = get(&expected, "seed");
+    let (_, teacher) = get(&expected, "teacher_forced");
+    let (cs, closed) = get(&expected, "closed_loop");
+    let (ks, control) = get(&expected, "control");
+    let (width, s, c) = (ss[1], ss[0], ks[1]);
+    let seed = ArrayView2::from_shape((s, width), &seed).unwrap();
+    let mut generator = Generator::new(model);
+    assert_eq!(generator.control_dims(), c);
+    generator.set_control(&control[(s - 1) * c..s * c]).unwrap();
+    let mut tf = vec![0.0f32; teacher.len()];
+    generator
+        .start_with(seed, None, Noise::Seed(0), |t, frame| {
+            tf[t * width..(t + 1) * width].copy_from_slice(frame)
+        })
+        .unwrap();
+    assert_close("goal_gru teacher_forced", &tf, &teacher);
+    for k in 0..cs[0] {
+        if k > 0 {
+            let t = s + k - 1;
+            generator.set_control(&control[t * c..(t + 1) * c]).unwrap();
+        }
+        let frame = generator.step().unwrap();
+        assert_close(
+            &format!("goal_gru closed_loop[{k}]"),
+            frame,
+            &closed[k * width..(k + 1) * width],
+        );
+    }
+    // A control of the wrong length, or on a model without one, is a typed error.
+    assert!(matches!(
+        generator.set_control(&[0.0; 2]),
+        Err(GenerateError::BadControl { expected: 3, .. })
+    ));
+    let grud = Arc::new(MotionModel::load(fixture("gru_d.safetensors")).unwrap());
+    assert_eq!(
+        Generator::new(grud).set_control(&[0.0; 3]),
+        Err(GenerateError::NotControlled)
+    );
+}
+
 /// Past its plan horizon the VGRU-d streams plan blocks (`model/vgru.rs`, "Streaming beyond the
 /// planned horizon"); `training/models.py` (`VGRUD.plan_guides`) follows the same rule, so a closed
 /// loop through three blocks matches PyTorch's.

@@ -371,6 +371,35 @@ def classifier_fixture(gen: torch.Generator) -> tuple[Fixture, Fixture]:
     return (tensors, metadata), (expected, {"weights": "action_classifier.safetensors"})
 
 
+# The goal-gru fixture (drawn after every other file): its sizes; its control is constant over the seed (as the
+# engine starts a character) and then changes every step.
+GOAL_SIZES = {"hidden": 24, "layers": 2}
+
+
+def goal_fixture(stem: str, gen: torch.Generator) -> tuple[Fixture, Fixture]:
+    """``goal_gru.safetensors`` and its expected closed loop under a per-step control (``control [S + H, 3]``)."""
+    config = make_config("goal-gru", H36M_DIMS_USED, seed_frames=SEED_FRAMES, horizon=HORIZON, **GOAL_SIZES)
+    model = build_model(config)
+    hidden = config["hidden"]
+    _randomize(model, gen, {"decoder.weight": 0.3 * hidden**-0.5, "decoder.bias": 0.02})
+    mean, std = _random_norm(model, gen)
+    tensors = weights_tensors(model, torch.float32)
+    weights = (tensors, weights_metadata(model, PROVENANCE))
+    seed = _seed_frames(gen, mean, std, config["dims_used"])
+    steps = SEED_FRAMES + HORIZON
+    control = _uniform(gen, (steps, config["control_dims"]), 1.0)
+    control[:SEED_FRAMES] = control[SEED_FRAMES - 1]
+    ref = build_model(config).double().eval()
+    ref.load_state_dict({k: v.to(torch.float64) for k, v in tensors.items()})
+    teacher_forced, closed_loop = ref.predict(
+        seed.double(), action=control.double().unsqueeze(0), horizon=HORIZON, with_seed_outputs=True
+    )
+    expected = {"seed": seed, "control": control, "teacher_forced": _f32(teacher_forced),
+                "closed_loop": _f32(closed_loop)}
+    meta = {"horizon": str(HORIZON), "seed_frames": str(SEED_FRAMES), "weights": f"{stem}.safetensors"}
+    return weights, (expected, meta)
+
+
 def build_all() -> dict[str, Fixture]:
     """Every fixture file's tensors and metadata, keyed by file name."""
     gen = torch.Generator().manual_seed(SEED)
@@ -392,6 +421,9 @@ def build_all() -> dict[str, Fixture]:
         weights, expected = intention_fixture(stem, gen)
         files[f"{stem}.safetensors"] = weights
         files[f"{stem}.expected.safetensors"] = expected
+    weights, expected = goal_fixture("goal_gru", gen)
+    files["goal_gru.safetensors"] = weights
+    files["goal_gru.expected.safetensors"] = expected
     return files
 
 

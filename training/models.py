@@ -8,6 +8,8 @@ section 3 (DAE-LSTM: three stacked LSTM layers whose every predicted pose is fil
 autoencoder before it is fed back).
 Tanke, Zaveri, Gall. Intention-based Long-Term Human Motion Anticipation (3DV 2021), section 3 (intention
 labels, intention forecaster, pose generator conditioned on noise and on intentions forecast ahead).
+``goal-gru`` (this project's, for steering; ``training/locomotion.py``): stacked GRU layers over plain poses
+whose first layer also reads a control vector, where the root goes over the next second.
 
 State-dict names are the tensor names of the weights schema (weights/README.md), which the Rust
 engine reads. Models work on normalized used dims ``[B, T, O]``; ``predict`` wraps that with
@@ -31,7 +33,7 @@ from .layers import BIAS_INIT, MLP, BodyGRUCell, GRUCell, LSTMCell, orthogonal_b
 # The one-hot order of multi-action models: the action list of the data pipeline.
 H36M_ACTIONS = list(ACTIONS)
 
-ARCHITECTURES = ("vgru-d", "gru-d", "dae-lstm", "intention")
+ARCHITECTURES = ("vgru-d", "gru-d", "dae-lstm", "intention", "goal-gru")
 MAX_NOISE_SCALE = 100.0  # the intention model's noise_scale: 0 ..= this (motion_core::model::config::limits)
 
 
@@ -44,7 +46,7 @@ def make_config(architecture: str, dims_used: list[int], **overrides) -> dict:
         "frame_dims": 99,
         "dims_used": [int(d) for d in dims_used],
         "hidden": 512,
-        "layers": {"vgru-d": 1, "gru-d": 2, "dae-lstm": 3, "intention": 3}[architecture],
+        "layers": {"vgru-d": 1, "gru-d": 2, "dae-lstm": 3, "intention": 3, "goal-gru": 2}[architecture],
         "gru_convention": "paper" if architecture == "vgru-d" else "pytorch",
         "residual": False,
         "derivative_order": 3,
@@ -66,6 +68,11 @@ def make_config(architecture: str, dims_used: list[int], **overrides) -> dict:
         # 8 intentions, look-ahead gamma = 10; the other sizes are this project's (weights/README.md).
         config.update(derivative_order=0, residual=True, hidden=256, noise_dims=32, label_hidden=128,
                       intentions=8, clusters=32, lookahead=10, intention_features=32)
+    if architecture == "goal-gru":
+        # Stage two of steering (training/locomotion.py): plain poses, residual output, 2 x 256 units, the
+        # first layer also reads the control (root velocity forward / sideways in m/s and heading change in
+        # radians over the next `control_frames`).
+        config.update(derivative_order=0, residual=True, hidden=256, control_dims=3, control_frames=25)
     unknown = set(overrides) - set(config) - {"plan_hidden"}
     if unknown:
         raise ValueError(f"unknown config fields {sorted(unknown)}")
@@ -666,6 +673,52 @@ class IntentionModel(MotionModel):
         return out[0] if unbatched else out
 
 
+class GoalGRU(MotionModel):
+    """``goal-gru``: stacked GRU cells (``rnn.{k}``) over plain poses + decoder (residual); the first layer
+    reads the frame followed by its control vector ``[control_dims]`` (``training/locomotion.py`` says what
+    it holds). The control sequence ``[B, T, C]`` is passed where other models take the action (``action``
+    of ``open_loop`` / ``closed_loop`` / ``predict``); step ``t`` reads control ``t``. Without one every
+    control is 0."""
+
+    def __init__(self, config: dict, dropout: float = 0.0):
+        super().__init__(config, dropout)
+        if config["architecture"] != "goal-gru":
+            raise ValueError(f"GoalGRU needs architecture 'goal-gru', got {config['architecture']!r}")
+        self.control_dims = int(config["control_dims"])
+        layers = int(config["layers"])
+        sizes = [self.input_size + self.control_dims] + [self.hidden_size] * layers
+        self.rnn = nn.ModuleList(GRUCell(a, self.hidden_size, self.convention) for a in sizes[:-1])
+
+    def action_indices(self, action, batch, device):
+        return None
+
+    def _begin(self, batch, steps, action, eps, like, seed_len=None):
+        h = [torch.zeros(batch, self.hidden_size, dtype=like.dtype, device=like.device) for _ in self.rnn]
+        control = action if isinstance(action, torch.Tensor) else None
+        if control is not None and (control.dim() != 3 or control.shape[0] != batch or
+                                    control.shape[2] != self.control_dims or control.shape[1] < steps):
+            raise ValueError(f"control must be [{batch}, >= {steps}, {self.control_dims}], got {tuple(control.shape)}")
+        if control is None:
+            control = like.new_zeros(batch, steps, self.control_dims)
+        return {"h": h, "control": control.to(like.dtype)}
+
+    def _run(self, ctx, features, t0):
+        steps = features.shape[1]
+        x0 = torch.cat([features, ctx["control"][:, t0 : t0 + steps]], dim=-1)
+        gi0 = self.rnn[0].input_gates(x0).unbind(1)
+        hs = list(ctx["h"])
+        outputs = []
+        for t in range(steps):
+            x = None
+            for k, cell in enumerate(self.rnn):
+                gi = gi0[t] if k == 0 else cell.input_gates(x)
+                hs[k] = cell.step(gi, hs[k])
+                x = hs[k]
+            outputs.append(x)
+        ctx["h"] = hs
+        return torch.stack(outputs, dim=1)
+
+
 def build_model(config: dict, dropout: float = 0.3) -> MotionModel:
     """The model class named by ``config['architecture']``."""
     architecture = config.get("architecture")
@@ -677,6 +730,8 @@ def build_model(config: dict, dropout: float = 0.3) -> MotionModel:
         return DAELSTM(config, 0.0)
     if architecture == "intention":
         return IntentionModel(config)
+    if architecture == "goal-gru":
+        return GoalGRU(config, 0.0)
     raise ValueError(f"unknown architecture {architecture!r}; expected one of {ARCHITECTURES}")
 
 

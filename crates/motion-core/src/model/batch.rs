@@ -24,6 +24,7 @@
 //!
 //! The fed-back frame is the model's normalized output itself (as in `training/models.py`), not
 //! a re-normalized copy of the full frame it returns.
+use super::auto_control::AutoControl;
 use super::config::ModelConfig;
 use super::generate_error::GenerateError;
 use super::net::NoiseSource;
@@ -99,6 +100,8 @@ pub struct BatchGenerator {
     frame: Vec<f32>,
     out_full: Vec<f32>,
     body_steps: usize,
+    /// The controls of a model that reads one, for rows nobody steers ([`super::auto_control`]).
+    auto: Option<AutoControl>,
     phase: Phase,
 }
 
@@ -199,6 +202,7 @@ impl BatchGenerator {
             out_full: vec![0.0; batch * cfg.frame_dims],
             body_steps: 0,
             phase: Phase::Idle,
+            auto: AutoControl::for_model(&model, batch),
             model,
         }
     }
@@ -289,6 +293,7 @@ impl BatchGenerator {
         }
         debug_assert_eq!(width, cfg.frame_dims);
         let action_indices = self.action_indices(cfg, actions)?;
+        self.begin_auto_controls(&seeds);
         let net = model.network().net();
         let mut sources = match net.noise_dims() {
             0 => Vec::new(),
@@ -337,6 +342,84 @@ impl BatchGenerator {
         }
         self.phase = Phase::Fresh;
         Ok(())
+    }
+
+    /// The width of the control vector the model reads (0: none; a `goal-gru` model: 3, see
+    /// [`goal_gru`](super::goal_gru)).
+    pub fn control_dims(&self) -> usize {
+        self.model.network().net().control_dims()
+    }
+
+    /// Sets character `row`'s control vector, read by every step from the next on (before
+    /// [`start`](Self::start): by the seed too; a character starts with zeros). No allocation.
+    ///
+    /// # Errors
+    /// A model that takes no control, a row outside the batch, or a vector of the wrong length
+    /// or with a value that is not finite.
+    pub fn set_control(&mut self, row: usize, control: &[f32]) -> Result<(), GenerateError> {
+        let model = Arc::clone(&self.model);
+        let net = model.network().net();
+        let expected = net.control_dims();
+        if expected == 0 {
+            return Err(GenerateError::NotControlled);
+        }
+        if row >= self.batch {
+            return Err(GenerateError::NoSuchRow {
+                row,
+                batch: self.batch,
+            });
+        }
+        if control.len() != expected || !control.iter().all(|v| v.is_finite()) {
+            return Err(GenerateError::BadControl {
+                expected,
+                got: control.to_vec(),
+            });
+        }
+        let (k, local) = (row / self.shard_rows, row % self.shard_rows);
+        net.set_control(self.shards[k].state.as_mut(), local, control)?;
+        if let Some(auto) = &mut self.auto {
+            auto.set_manual(row);
+        }
+        Ok(())
+    }
+
+    /// Feeds the seeds to the automatic controls and sets each automatic row's first control.
+    fn begin_auto_controls<T: FrameScalar>(&mut self, seeds: &ArrayView3<'_, T>) {
+        let Some(auto) = &mut self.auto else { return };
+        let net = self.model.network().net();
+        for b in 0..self.batch {
+            if auto.begin(b).is_none() {
+                continue;
+            }
+            for t in 0..seeds.dim().1 {
+                for (dst, &src) in self
+                    .frame
+                    .iter_mut()
+                    .zip(seeds.slice(ndarray::s![b, t, ..]))
+                {
+                    *dst = src.to_f32();
+                }
+                auto.observe_seed(b, &self.frame);
+            }
+            if let Some(control) = auto.control(b) {
+                let (k, local) = (b / self.shard_rows, b % self.shard_rows);
+                // The width is the net's own (3): this cannot fail.
+                let _ = net.set_control(self.shards[k].state.as_mut(), local, &control);
+            }
+        }
+    }
+
+    /// Hands each automatic row's newest frame to its control and sets the next step's.
+    fn update_auto_controls(&mut self) {
+        let Some(auto) = &mut self.auto else { return };
+        let net = self.model.network().net();
+        let f = self.model.config().frame_dims;
+        for b in 0..self.batch {
+            if let Some(control) = auto.frame(b, &self.out_full[b * f..(b + 1) * f]) {
+                let (k, local) = (b / self.shard_rows, b % self.shard_rows);
+                let _ = net.set_control(self.shards[k].state.as_mut(), local, &control);
+            }
+        }
     }
 
     /// Conditions character `row` on `action` from its next step on, without re-seeding (the
@@ -409,6 +492,7 @@ impl BatchGenerator {
             }
         }
         self.phase = Phase::Running;
+        self.update_auto_controls();
         Ok(self.frames())
     }
 

@@ -73,7 +73,8 @@ impl Character {
         }
         // H3.6M root deltas are per 50 Hz source frame: a 25 Hz model frame spans 2.
         let step = ((H36M_SOURCE_FPS / config.fps).round() as usize).max(1);
-        let stream = PoseStream::new(Arc::new(Skeleton::h36m()), config.fps, step, grounding)?;
+        let mut stream = PoseStream::new(Arc::new(Skeleton::h36m()), config.fps, step, grounding)?;
+        stream.use_control_of(config);
         Ok(Character {
             stream,
             generator: Generator::new(model),
@@ -111,7 +112,14 @@ impl Character {
         noise: Noise<'_>,
     ) -> Result<&Pose, CharacterError> {
         self.generator.start(seed, action, noise)?;
-        Ok(self.stream.start(seed, action)?)
+        self.stream.start(seed, action)?;
+        if let Some(control) = self.stream.control_vector() {
+            // A model told where to go reads its first control over the seed too (as in
+            // training): seeded again with the control the seed and the goal give.
+            self.generator.set_control(&control)?;
+            self.generator.start(seed, action, noise)?;
+        }
+        Ok(self.stream.current())
     }
 
     /// [`start`](Self::start) from the last `seed_frames` frames of a longer clip (a loaded seed
@@ -153,7 +161,8 @@ impl Character {
 
     /// Steers the character toward `goal` (a velocity on the floor and a facing; `None`: the
     /// model's own root motion) from the next model frame on, by root-motion warping
-    /// ([`crate::steering`]); kept across [`start`](Self::start)s.
+    /// ([`crate::steering`]), or for a model told where to go (`goal-gru`) by its control
+    /// vector; kept across [`start`](Self::start)s.
     pub fn set_goal(&mut self, goal: Option<Goal>) {
         self.stream.set_goal(goal);
     }

@@ -196,6 +196,7 @@ impl Crowd {
         let action = check_action(&self.model, action)?;
         let mut stream =
             PoseStream::new(self.skeleton.clone(), config.fps, self.root_step, grounding)?;
+        stream.use_control_of(config);
         stream.start(history.view(), action.as_deref())?;
         let id = MemberId(self.next_id);
         self.next_id += 1;
@@ -329,6 +330,7 @@ impl Crowd {
             .map(|m| Noise::Seed(m.rng_seed))
             .collect();
         let mut batch = BatchGenerator::new(Arc::clone(&self.model), rows);
+        set_controls(&self.members, &mut batch)?;
         batch.start(seeds.view(), &actions, &noise)?;
         self.batch = Some(batch);
         self.dirty = false;
@@ -346,6 +348,7 @@ impl Crowd {
             if !starving {
                 break;
             }
+            set_controls(&self.members, batch)?;
             let frames = batch.step()?;
             for (m, frame) in self.members.iter_mut().zip(frames.rows()) {
                 let frame = frame.to_slice().expect("contiguous rows");
@@ -358,6 +361,17 @@ impl Crowd {
         }
         Ok(())
     }
+}
+
+/// Each member's control (a model that reads one) from its goal and the frames its stream has
+/// taken, into its batch row.
+fn set_controls(members: &[Member], batch: &mut BatchGenerator) -> Result<(), GenerateError> {
+    for (i, m) in members.iter().enumerate() {
+        if let Some(control) = m.stream.control_vector() {
+            batch.set_control(i, &control)?;
+        }
+    }
+    Ok(())
 }
 
 /// `action` checked against the model's labels (`None` for a model without actions).

@@ -102,6 +102,17 @@ pub enum GenerateError {
     /// An action was set on a model that is not action-conditioned.
     #[error("this model is not action-conditioned: it has no action to change")]
     NotConditioned,
+    /// A control was set on a model that takes none (only `goal-gru` does).
+    #[error("this model takes no control vector (a goal-gru model does): steer it with Character::set_goal's root warping instead")]
+    NotControlled,
+    /// A control vector of the wrong length or with a value that is not finite.
+    #[error("control vector {got:?}: the model needs {expected} finite values")]
+    BadControl {
+        /// The model's control width.
+        expected: usize,
+        /// The values given.
+        got: Vec<f32>,
+    },
     /// `step` was called before `start`.
     #[error("step() or set_action() called before start(): seed the generator first")]
     NotStarted,

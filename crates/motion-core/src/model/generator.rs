@@ -69,6 +69,18 @@ impl Generator {
         )
     }
 
+    /// The width of the control vector the model reads (0: none); see
+    /// [`BatchGenerator::control_dims`].
+    pub fn control_dims(&self) -> usize {
+        self.inner.control_dims()
+    }
+
+    /// Sets the control vector read from the next step on; see
+    /// [`BatchGenerator::set_control`].
+    pub fn set_control(&mut self, control: &[f32]) -> Result<(), GenerateError> {
+        self.inner.set_control(0, control)
+    }
+
     /// Conditions the character on `action` from its next frame on, without re-seeding; see
     /// [`BatchGenerator::set_action`] for when each architecture shows it and `crossfade`.
     pub fn set_action(&mut self, action: &str, crossfade: usize) -> Result<(), GenerateError> {

@@ -29,6 +29,7 @@
 //! # }
 //! ```
 pub mod arch;
+mod auto_control;
 pub mod batch;
 pub mod builtin;
 pub mod character;
@@ -38,6 +39,7 @@ pub mod crowd;
 pub mod dae_lstm;
 pub mod generate_error;
 pub mod generator;
+pub mod goal_gru;
 pub mod grud;
 pub mod intention;
 pub mod net;
@@ -58,6 +60,7 @@ pub use crowd::{Crowd, MemberId};
 pub use dae_lstm::DaeLstmFields;
 pub use generate_error::GenerateError;
 pub use generator::Generator;
+pub use goal_gru::GoalGruFields;
 pub use grud::GruDFields;
 pub use intention::IntentionFields;
 pub use pose_stream::PoseStream;
@@ -80,4 +83,7 @@ arch::register_architectures! {
     /// Intention forecaster + noise-conditioned stacked GRU pose generator reading the
     /// intentions forecast ahead (Tanke et al. 2021, section 3).
     Intention("intention", intention::IntentionFields),
+    /// Stacked GRU layers over plain poses + decoder, the first layer also reading where the
+    /// root goes over the next second (steerable locomotion; `training/locomotion.py`).
+    GoalGru("goal-gru", goal_gru::GoalGruFields),
 }

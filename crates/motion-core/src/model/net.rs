@@ -2,8 +2,8 @@
 //! per-batch [`NetState`], begins a sequence (actions, noise, seed length), runs one body step
 //! from derivative features to the decoder's input, optionally filters the decoded output, and
 //! switches a row's action. [`BatchGenerator`](super::BatchGenerator) calls nothing else of a
-//! network; each architecture's file implements the trait for its network, and
-//! Each architecture's [`ArchFields::load`](super::arch::ArchFields::load) makes its net.
+//! network; each architecture's file implements the trait for its network, which its
+//! [`ArchFields::load`](super::arch::ArchFields::load) makes.
 use std::any::Any;
 
 use super::config::ModelConfig;
@@ -102,6 +102,24 @@ pub trait Net: std::any::Any + std::fmt::Debug + Send + Sync {
     /// Filters the decoded, normalized outputs in place before they are fed back (DAE-LSTM's
     /// autoencoder); nothing by default.
     fn filter(&self, _state: &mut dyn NetState, _out_norm: &mut [f32], _rows: usize) {}
+    /// Width of each row's control vector (0: the net takes none; `goal-gru`: where the root
+    /// goes over the next second, [`super::goal_gru`]).
+    fn control_dims(&self) -> usize {
+        0
+    }
+    /// Sets `row`'s control vector (`control_dims` values, checked by the caller), read by
+    /// every step from the next on; a state starts with zeros.
+    ///
+    /// # Errors
+    /// [`GenerateError::NotControlled`] for nets that take no control.
+    fn set_control(
+        &self,
+        _state: &mut dyn NetState,
+        _row: usize,
+        _control: &[f32],
+    ) -> Result<(), GenerateError> {
+        Err(GenerateError::NotControlled)
+    }
     /// Conditions `row` on `action` from body step `body_step` on.
     ///
     /// # Errors

@@ -15,8 +15,10 @@ use crate::resample::{PoseResampler, ResampleError};
 use crate::skeleton::Skeleton;
 use crate::steering::{Goal, Steering};
 
+use super::config::ModelConfig;
 use super::generate_error::GenerateError;
 use super::generator::Generator;
+use super::ArchConfig;
 
 /// Decoder, steering, grounding and resampler of one character (see the module docs).
 #[derive(Debug)]
@@ -77,6 +79,7 @@ impl PoseStream {
         self.decoder.reset();
         self.resampler.reset();
         self.grounder.reset(action);
+        self.steering.clear_seed();
         for row in seed.rows() {
             let pose = match row.as_slice() {
                 Some(frame) => self.decoder.push(frame),
@@ -86,6 +89,7 @@ impl PoseStream {
                 }
             };
             self.grounder.observe_seed(pose);
+            self.steering.observe_seed(pose);
         }
         self.steering.reset(self.decoder.pose());
         self.resampler
@@ -133,6 +137,9 @@ impl PoseStream {
         let (decoder, steering, grounder) =
             (&mut self.decoder, &mut self.steering, &mut self.grounder);
         self.resampler.advance_pulling(dt, |resampler| {
+            if let Some(control) = steering.control_vector() {
+                generator.set_control(&control)?;
+            }
             let frame = generator.step()?;
             resampler.push(grounder.ground(steering.steer(decoder.push(frame))))?;
             Ok(())
@@ -162,6 +169,21 @@ impl PoseStream {
     /// Steers toward `goal` from the next frame ([`Steering::set_goal`]).
     pub fn set_goal(&mut self, goal: Option<Goal>) {
         self.steering.set_goal(goal);
+    }
+
+    /// Steers a model that reads a control vector (`goal-gru` with 3 control values) by that
+    /// control instead of warping ([`Steering::use_control`]); other models stay warped.
+    pub fn use_control_of(&mut self, config: &ModelConfig) {
+        if let ArchConfig::GoalGru(fields) = &config.arch {
+            if fields.control_dims == 3 {
+                self.steering.use_control(fields.control_frames);
+            }
+        }
+    }
+
+    /// The control vector for the model's next step (`None`: the model reads none).
+    pub fn control_vector(&self) -> Option<[f32; 3]> {
+        self.steering.control_vector()
     }
 
     /// The goal in force.

@@ -11,6 +11,12 @@
 //!
 //! Without a goal the poses pass through unchanged; a goal set later warps from the pose the
 //! character is in. No allocation per frame.
+//!
+//! A model that is told where to go (`goal-gru`, [`crate::model::goal_gru`]) is not warped: its
+//! [`control`] vector comes from the goal ([`Steering::control_vector`]) and the model moves.
+pub mod control;
+
+pub use control::GoalControl;
 pub use glam::Vec2;
 use glam::{Quat, Vec3};
 
@@ -107,6 +113,8 @@ pub struct Steering {
     heading: f32,
     /// Whether the poses have been warped since the last reset (otherwise they pass through).
     warping: bool,
+    /// The control of a model that reads one (then nothing is warped).
+    control: Option<GoalControl>,
     out: Pose,
 }
 
@@ -143,8 +151,39 @@ impl Steering {
             root: Vec2::ZERO,
             heading: 0.0,
             warping: false,
+            control: None,
             out: Pose::rest(skeleton.len()),
         })
+    }
+
+    /// Steers by a control vector over `frames` frames (a model that reads one,
+    /// [`GoalControl`]) instead of warping.
+    pub fn use_control(&mut self, frames: usize) {
+        self.control = Some(GoalControl::new(frames, self.frame_time));
+    }
+
+    /// The control vector for the model's next step (`None`: the model reads none).
+    pub fn control_vector(&self) -> Option<[f32; 3]> {
+        self.control.as_ref().map(|c| c.control(self.goal))
+    }
+
+    /// A seed frame's pose, where the control's past second starts (call before
+    /// [`reset`](Self::reset) with the seed's poses, oldest first; nothing without a control).
+    pub fn observe_seed(&mut self, pose: &Pose) {
+        let heading = self.heading_of(pose);
+        if let Some(control) = &mut self.control {
+            control.record(
+                Vec2::new(pose.root_translation.x, pose.root_translation.z),
+                heading,
+            );
+        }
+    }
+
+    /// Forgets the seed frames observed so far (a new seed follows).
+    pub fn clear_seed(&mut self) {
+        if let Some(control) = &mut self.control {
+            control.clear();
+        }
     }
 
     /// The goal in force.
@@ -182,6 +221,14 @@ impl Steering {
     /// The next model frame `pose` (raw, from the decoder) warped toward the goal.
     pub fn steer<'a>(&'a mut self, pose: &'a Pose) -> &'a Pose {
         let raw_heading = self.heading_of(pose);
+        if let Some(control) = &mut self.control {
+            // The model moves as its control says: nothing to warp.
+            let root = Vec2::new(pose.root_translation.x, pose.root_translation.z);
+            control.record(root, raw_heading);
+            (self.raw_root, self.raw_heading) = (pose.root_translation, raw_heading);
+            (self.root, self.heading) = (root, raw_heading);
+            return pose;
+        }
         let raw_step = pose.root_translation - self.raw_root;
         let raw_turn = wrap_angle(raw_heading - self.raw_heading);
         // The raw step in the previous raw heading's frame (forward = +z).

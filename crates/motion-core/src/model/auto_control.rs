@@ -1,0 +1,96 @@
+//! The control a model that reads one (`goal-gru`, [`super::goal_gru`]) gets when nobody steers
+//! it: what its own root did over the last second ([`GoalControl`] without a goal), from the
+//! seed and then from every frame it makes. So a `goal-gru` model left alone keeps walking as
+//! its seed walked, in every front end that drives a [`BatchGenerator`](super::BatchGenerator)
+//! (`predict`, `eval`, Python, the C ABI); a row given a control of its own
+//! ([`BatchGenerator::set_control`](super::BatchGenerator::set_control)) keeps that one.
+use std::sync::Arc;
+
+use super::predictor::MotionModel;
+use super::ArchConfig;
+use crate::motion::{FrameScalar, RootEncoding};
+use crate::pose::PoseDecoder;
+use crate::skeleton::{Skeleton, H36M_SOURCE_FPS};
+use crate::steering::Steering;
+
+/// One row's decoder and control.
+#[derive(Debug)]
+struct Row {
+    decoder: PoseDecoder,
+    steering: Steering,
+    /// Given a control of its own: not driven from here.
+    manual: bool,
+}
+
+/// The automatic controls of a batch (see the module docs). No allocation per frame.
+#[derive(Debug)]
+pub(crate) struct AutoControl {
+    rows: Vec<Row>,
+}
+
+impl AutoControl {
+    /// Controls for `batch` rows of `model`, or `None` when it reads no control this crate can
+    /// make (3 values on the H3.6M skeleton).
+    pub(crate) fn for_model(model: &MotionModel, batch: usize) -> Option<AutoControl> {
+        let config = model.config();
+        let ArchConfig::GoalGru(fields) = &config.arch else {
+            return None;
+        };
+        if fields.control_dims != 3 || config.skeleton != "h36m-32" {
+            return None;
+        }
+        let skeleton = Arc::new(Skeleton::h36m());
+        let step = ((H36M_SOURCE_FPS / config.fps).round() as usize).max(1);
+        let frame_time = (1.0 / config.fps) as f32;
+        let rows = (0..batch)
+            .map(|_| {
+                let mut steering = Steering::new(&skeleton, frame_time).ok()?;
+                steering.use_control(fields.control_frames);
+                Some(Row {
+                    decoder: PoseDecoder::new(Arc::clone(&skeleton), RootEncoding::Deltas, step),
+                    steering,
+                    manual: false,
+                })
+            })
+            .collect::<Option<Vec<_>>>()?;
+        Some(AutoControl { rows })
+    }
+
+    /// Row `row` has a control of its own from now on.
+    pub(crate) fn set_manual(&mut self, row: usize) {
+        if let Some(r) = self.rows.get_mut(row) {
+            r.manual = true;
+        }
+    }
+
+    /// Starts row `row` over: forgets its motion; `None` when it is manual.
+    pub(crate) fn begin(&mut self, row: usize) -> Option<()> {
+        let r = self.rows.get_mut(row).filter(|r| !r.manual)?;
+        r.decoder.reset();
+        r.steering.clear_seed();
+        Some(())
+    }
+
+    /// A seed frame of row `row` (after [`begin`](Self::begin)).
+    pub(crate) fn observe_seed<T: FrameScalar>(&mut self, row: usize, frame: &[T]) {
+        if let Some(r) = self.rows.get_mut(row).filter(|r| !r.manual) {
+            let pose = r.decoder.push(frame);
+            r.steering.observe_seed(pose);
+        }
+    }
+
+    /// A frame row `row` made (handed out): recorded; returns the control of its next step,
+    /// `None` when it is manual.
+    pub(crate) fn frame(&mut self, row: usize, frame: &[f32]) -> Option<[f32; 3]> {
+        let r = self.rows.get_mut(row).filter(|r| !r.manual)?;
+        let pose = r.decoder.push(frame);
+        r.steering.steer(pose);
+        r.steering.control_vector()
+    }
+
+    /// The control of row `row`'s next step from what it has seen (`None` when manual).
+    pub(crate) fn control(&self, row: usize) -> Option<[f32; 3]> {
+        let r = self.rows.get(row).filter(|r| !r.manual)?;
+        r.steering.control_vector()
+    }
+}
