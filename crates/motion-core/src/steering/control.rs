@@ -5,7 +5,7 @@
 //! `control_of`, with the future displacement replaced by the goal's.
 use glam::Vec2;
 
-use super::{wrap_angle, Goal, STOP_SPEED};
+use super::{direction_of, facing_of, wrap_angle, Goal, STOP_SPEED};
 
 /// The largest heading change a control asks for over its horizon (radians): H3.6M walking
 /// turns at most 2.8 rad in a second (`training/locomotion.py`'s controls of the training
@@ -76,7 +76,10 @@ impl GoalControl {
                 };
                 let turn =
                     wrap_angle(goal.facing - heading).clamp(-MAX_CONTROL_TURN, MAX_CONTROL_TURN);
-                let [forward, side] = in_heading_frame(velocity, heading);
+                // The travel direction relative to the goal's facing, from the mid-turn heading.
+                let relative = wrap_angle(facing_of(velocity) - goal.facing);
+                let travel = direction_of(heading + 0.5 * turn + relative) * velocity.length();
+                let [forward, side] = in_heading_frame(travel, heading);
                 [forward, side, turn]
             }
             None => {
@@ -115,14 +118,20 @@ mod tests {
         };
         let [f, s, t] = control.control(Some(goal));
         assert!((f - 1.0).abs() < 1e-6 && s.abs() < 1e-6 && t.abs() < 1e-6);
-        // Going +z while facing +x: across the heading, negative.
+        // Walking toward +z while facing +x: a quarter turn (negative: +x to +z), and the second's
+        // travel along the mid-turn heading, 45 degrees, to the -side.
+        let goal = Goal::towards(Vec2::new(0.0, 1.0), 0.0);
+        let [f, s, t] = control.control(Some(goal));
+        let h = std::f32::consts::FRAC_1_SQRT_2;
+        assert!((f - h).abs() < 1e-6 && (s + h).abs() < 1e-6, "{f} {s}");
+        assert!((t + std::f32::consts::FRAC_PI_2).abs() < 1e-6, "{t}");
+        // Side-stepping with the facing held: all side.
         let goal = Goal {
             velocity: Vec2::new(0.0, 1.0),
-            facing: std::f32::consts::PI,
+            facing: std::f32::consts::FRAC_PI_2,
         };
         let [f, s, t] = control.control(Some(goal));
-        assert!(f.abs() < 1e-6 && (s + 1.0).abs() < 1e-6, "{f} {s}");
-        assert!((t - std::f32::consts::FRAC_PI_2).abs() < 1e-6);
+        assert!(f.abs() < 1e-6 && (s + 1.0).abs() < 1e-6 && t.abs() < 1e-6, "{f} {s} {t}");
         // A goal behind is asked for at most MAX_CONTROL_TURN at a time.
         let back = Goal {
             velocity: Vec2::ZERO,
