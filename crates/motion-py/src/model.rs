@@ -256,4 +256,12 @@ impl Generator {
     fn set_action(&mut self, action: &str, crossfade: usize) -> PyResult<()> {
         self.inner.set_action(action, crossfade).map_err(value)
     }
+
+    /// Tells a `goal-gru` model where its root goes over the next second from the next step
+    /// on (before `start`: the seed too): `[forward, side, turn]`, m/s along and across the
+    /// pelvis heading and radians. Without it the model keeps doing what its last second did.
+    /// ValueError for another model or a bad vector.
+    fn set_control(&mut self, control: Vec<f32>) -> PyResult<()> {
+        self.inner.set_control(&control).map_err(value)
+    }
 }

@@ -42,6 +42,13 @@ def test_a_generator_streams_what_predict_returns():
     assert model.predict(doubled, action="eating", frames=3, input_fps=50).shape == (1, 3, 99)
 
 
+def test_a_control_needs_a_goal_gru_model():
+    # The default model reads no control: a ValueError saying so.
+    g = motion.Model.default().generator(rng_seed=1)
+    with pytest.raises(ValueError, match="no control"):
+        g.set_control([0.5, 0.0, 0.0])
+
+
 def test_info_and_load(tmp_path):
     model = motion.Model.default()
     info = model.info()
