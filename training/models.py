@@ -347,12 +347,16 @@ class VGRUD(MotionModel):
 class GRUD(MotionModel):
     """GRU-d: stacked GRU cells (``rnn.{k}``) over derivative features + decoder; unconditioned."""
 
-    def __init__(self, config: dict, dropout: float = 0.3):
+    ARCHITECTURE = "gru-d"
+
+    def __init__(self, config: dict, dropout: float = 0.3, extra_inputs: int = 0):
         super().__init__(config, dropout)
-        if config["architecture"] != "gru-d":
-            raise ValueError(f"GRUD needs architecture 'gru-d', got {config['architecture']!r}")
+        if config["architecture"] != self.ARCHITECTURE:
+            raise ValueError(
+                f"{type(self).__name__} needs architecture {self.ARCHITECTURE!r}, got {config['architecture']!r}"
+            )
         layers = int(config["layers"])
-        sizes = [self.input_size] + [self.hidden_size] * layers
+        sizes = [self.input_size + extra_inputs] + [self.hidden_size] * layers
         self.rnn = nn.ModuleList(GRUCell(a, self.hidden_size, self.convention) for a in sizes[:-1])
 
     def action_indices(self, action, batch, device):
@@ -363,8 +367,13 @@ class GRUD(MotionModel):
         return {"h": h}
 
     def _run(self, ctx, features, t0):
-        steps = features.shape[1]
-        gi0 = self.rnn[0].input_gates(features).unbind(1)  # per-step views (see VGRUD._begin)
+        return self._stack(ctx, features)
+
+    def _stack(self, ctx, inputs):
+        """The stacked cells over the first layer's ``inputs [B, T, in]`` from ``ctx["h"]``; returns the top
+        hidden ``[B, T, H]``."""
+        steps = inputs.shape[1]
+        gi0 = self.rnn[0].input_gates(inputs).unbind(1)  # per-step views (see VGRUD._begin)
         hs = list(ctx["h"])
         outputs = []
         for t in range(steps):
@@ -673,50 +682,32 @@ class IntentionModel(MotionModel):
         return out[0] if unbatched else out
 
 
-class GoalGRU(MotionModel):
-    """``goal-gru``: stacked GRU cells (``rnn.{k}``) over plain poses + decoder (residual); the first layer
-    reads the frame followed by its control vector ``[control_dims]`` (``training/locomotion.py`` says what
-    it holds). The control sequence ``[B, T, C]`` is passed where other models take the action (``action``
-    of ``open_loop`` / ``closed_loop`` / ``predict``); step ``t`` reads control ``t``. Without one every
-    control is 0."""
+class GoalGRU(GRUD):
+    """``goal-gru``: GRU-d's stacked cells (``rnn.{k}``) over plain poses + decoder (residual); the first layer
+    reads the frame followed by its control vector ``[control_dims]`` (``training/locomotion.py`` says what it
+    holds). The control sequence ``[B, T, C]`` is passed where other models take the action (``action`` of
+    ``open_loop`` / ``closed_loop`` / ``predict``); step ``t`` reads control ``t``. Without one every control is
+    0."""
+
+    ARCHITECTURE = "goal-gru"
 
     def __init__(self, config: dict, dropout: float = 0.0):
-        super().__init__(config, dropout)
-        if config["architecture"] != "goal-gru":
-            raise ValueError(f"GoalGRU needs architecture 'goal-gru', got {config['architecture']!r}")
+        super().__init__(config, dropout, extra_inputs=int(config["control_dims"]))
         self.control_dims = int(config["control_dims"])
-        layers = int(config["layers"])
-        sizes = [self.input_size + self.control_dims] + [self.hidden_size] * layers
-        self.rnn = nn.ModuleList(GRUCell(a, self.hidden_size, self.convention) for a in sizes[:-1])
-
-    def action_indices(self, action, batch, device):
-        return None
 
     def _begin(self, batch, steps, action, eps, like, seed_len=None):
-        h = [torch.zeros(batch, self.hidden_size, dtype=like.dtype, device=like.device) for _ in self.rnn]
+        ctx = super()._begin(batch, steps, action, eps, like, seed_len)
         control = action if isinstance(action, torch.Tensor) else None
         if control is not None and (control.dim() != 3 or control.shape[0] != batch or
                                     control.shape[2] != self.control_dims or control.shape[1] < steps):
             raise ValueError(f"control must be [{batch}, >= {steps}, {self.control_dims}], got {tuple(control.shape)}")
         if control is None:
             control = like.new_zeros(batch, steps, self.control_dims)
-        return {"h": h, "control": control.to(like.dtype)}
+        ctx["control"] = control.to(like.dtype)
+        return ctx
 
     def _run(self, ctx, features, t0):
-        steps = features.shape[1]
-        x0 = torch.cat([features, ctx["control"][:, t0 : t0 + steps]], dim=-1)
-        gi0 = self.rnn[0].input_gates(x0).unbind(1)
-        hs = list(ctx["h"])
-        outputs = []
-        for t in range(steps):
-            x = None
-            for k, cell in enumerate(self.rnn):
-                gi = gi0[t] if k == 0 else cell.input_gates(x)
-                hs[k] = cell.step(gi, hs[k])
-                x = hs[k]
-            outputs.append(x)
-        ctx["h"] = hs
-        return torch.stack(outputs, dim=1)
+        return self._stack(ctx, torch.cat([features, ctx["control"][:, t0 : t0 + features.shape[1]]], dim=-1))
 
 
 def build_model(config: dict, dropout: float = 0.3) -> MotionModel:

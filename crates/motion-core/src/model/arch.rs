@@ -74,6 +74,21 @@ pub fn gru_shapes(
     shapes.push((format!("{prefix}.bias_hh"), vec![3 * hidden]));
 }
 
+/// Appends the GRU cells `{prefix}.{k}` of `layers` stacked layers of `hidden` units, the first
+/// reading `inputs` values (GRU-d, `goal-gru`, the intention model's pose decoder).
+pub fn stacked_gru_shapes(
+    shapes: &mut Vec<(String, Vec<usize>)>,
+    prefix: &str,
+    layers: usize,
+    inputs: usize,
+    hidden: usize,
+) {
+    for k in 0..layers {
+        let width = if k == 0 { inputs } else { hidden };
+        gru_shapes(shapes, &format!("{prefix}.{k}"), width, hidden);
+    }
+}
+
 /// Registers the architectures: one line each, `Variant("schema-name", path::to::Fields)` with
 /// its doc comment. Generates `Architecture` (a plain tag), `ArchConfig` (the tag with its
 /// fields, `#[serde(tag = "architecture")]`) and their dispatch to [`ArchFields`].

@@ -16,7 +16,7 @@ use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 
-use super::arch::{gru_shapes, ArchFields};
+use super::arch::{stacked_gru_shapes, ArchFields};
 use super::config::{limits, ModelConfig};
 use super::generate_error::GenerateError;
 use super::net::{own, Begin, Net, NetState};
@@ -106,11 +106,13 @@ impl ArchFields for GoalGruFields {
     }
 
     fn tensor_shapes(&self, config: &ModelConfig, shapes: &mut Vec<(String, Vec<usize>)>) {
-        let h = config.hidden;
-        for k in 0..config.layers {
-            let inputs = if k == 0 { config.rnn_input_dims() } else { h };
-            gru_shapes(shapes, &format!("rnn.{k}"), inputs, h);
-        }
+        stacked_gru_shapes(
+            shapes,
+            "rnn",
+            config.layers,
+            config.rnn_input_dims(),
+            config.hidden,
+        );
     }
 
     fn load(

@@ -7,7 +7,7 @@ use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 
-use super::arch::{gru_shapes, ArchFields};
+use super::arch::{stacked_gru_shapes, ArchFields};
 use super::config::ModelConfig;
 use super::net::{own, Begin, Net, NetState};
 use super::weights::{WeightStore, WeightsError};
@@ -52,11 +52,13 @@ impl ArchFields for GruDFields {
     }
 
     fn tensor_shapes(&self, config: &ModelConfig, shapes: &mut Vec<(String, Vec<usize>)>) {
-        let h = config.hidden;
-        for k in 0..config.layers {
-            let inputs = if k == 0 { config.input_dims() } else { h };
-            gru_shapes(shapes, &format!("rnn.{k}"), inputs, h);
-        }
+        stacked_gru_shapes(
+            shapes,
+            "rnn",
+            config.layers,
+            config.input_dims(),
+            config.hidden,
+        );
     }
 
     fn load(

@@ -42,7 +42,7 @@ use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 
-use super::arch::{gru_shapes, ArchFields};
+use super::arch::{gru_shapes, stacked_gru_shapes, ArchFields};
 use super::config::{limits, ModelConfig};
 use super::generate_error::GenerateError;
 use super::net::NoiseSource;
@@ -231,10 +231,7 @@ impl ArchFields for IntentionFields {
             vec![c.features, n, c.lookahead],
         ));
         shapes.push(("intent_conv.bias".into(), vec![c.features]));
-        for k in 0..config.layers {
-            let inputs = if k == 0 { c.rnn_input_dims() } else { c.hidden };
-            gru_shapes(shapes, &format!("rnn.{k}"), inputs, c.hidden);
-        }
+        stacked_gru_shapes(shapes, "rnn", config.layers, c.rnn_input_dims(), c.hidden);
     }
 
     /// The merge table maps cluster `k` to intention `k mod intentions`.

@@ -131,7 +131,10 @@ mod tests {
             facing: std::f32::consts::FRAC_PI_2,
         };
         let [f, s, t] = control.control(Some(goal));
-        assert!(f.abs() < 1e-6 && (s + 1.0).abs() < 1e-6 && t.abs() < 1e-6, "{f} {s} {t}");
+        assert!(
+            f.abs() < 1e-6 && (s + 1.0).abs() < 1e-6 && t.abs() < 1e-6,
+            "{f} {s} {t}"
+        );
         // A goal behind is asked for at most MAX_CONTROL_TURN at a time.
         let back = Goal {
             velocity: Vec2::ZERO,
