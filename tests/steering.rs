@@ -34,8 +34,14 @@ fn walker() -> (Character, Pose) {
 
 /// The shipped model walking after the example seed, noise seed `noise`.
 fn walker_with_noise(noise: u64) -> (Character, Pose) {
+    walker_of("vgru_d_multi", noise)
+}
+
+/// The shipped weights `weights/{file}.safetensors` walking after the example seed, noise seed
+/// `noise`.
+fn walker_of(file: &str, noise: u64) -> (Character, Pose) {
     let model = Arc::new(
-        MotionModel::load(repo().join("weights/vgru_d_multi.safetensors"))
+        MotionModel::load(repo().join(format!("weights/{file}.safetensors")))
             .expect("shipped weights"),
     );
     let config = model.config().clone();
@@ -188,27 +194,26 @@ fn a_steered_character_turns_to_its_goal_and_stops_on_request() {
     assert!(furthest < 0.25, "a stopped character moved {furthest} m");
 }
 
-#[test]
-fn the_shipped_model_walks_a_square_of_waypoints_with_its_feet_planted() {
-    // VGRU-d after the example seed, four noise seeds, driven by `Waypoints` around a 4 m square
-    // (left turns from its heading) at 0.4 m/s: every corner within 1 m by the ideal time plus
-    // 2 s, and foot skating over the whole course no worse than real S5 walking's (0.39).
-    for noise in 0..4 {
-        let (mut character, first) = walker_with_noise(noise);
+/// Drives `weights/{file}.safetensors` after the example seed, noise seeds `0..seeds`, with
+/// `Waypoints` around a square of `side` metres (left turns from its heading, or right turns
+/// with `right`) at `speed` m/s: every corner within 1 m by the ideal time plus `slack` seconds,
+/// and foot skating over the whole course no worse than real S5 walking's (0.39).
+fn walks_a_square(file: &str, seeds: u64, side: f32, speed: f32, right: bool, slack: f64) {
+    for noise in 0..seeds {
+        let (mut character, first) = walker_of(file, noise);
         let heading = character.heading_of(&first);
         let start = floor_xz(first.root_translation);
-        let (ahead, left) = (
-            direction_of(heading),
-            direction_of(heading - std::f32::consts::FRAC_PI_2),
-        );
-        let corners: Vec<Vec2> = [(4.0, 0.0), (4.0, 4.0), (0.0, 4.0), (0.0, 0.0)]
+        let turn = if right { 1.0 } else { -1.0 } * std::f32::consts::FRAC_PI_2;
+        let (ahead, left) = (direction_of(heading), direction_of(heading + turn));
+        let corners: Vec<Vec2> = [(1.0, 0.0), (1.0, 1.0), (0.0, 1.0), (0.0, 0.0)]
             .iter()
-            .map(|&(a, b)| start + ahead * a + left * b)
+            .map(|&(a, b)| start + (ahead * a + left * b) * side)
             .collect();
-        let mut path = Waypoints::new(corners.clone(), 0.4, 0.3, false);
+        let leg = f64::from(side / speed);
+        let mut path = Waypoints::new(corners.clone(), speed, 0.3, false);
         let mut skating = Skating::new(&character);
         let (mut reached, mut time, mut here, mut facing) = ([None; 4], 0.0, start, heading);
-        while path.target().is_some() && time < 60.0 {
+        while path.target().is_some() && time < 4.0 * leg + slack + 10.0 {
             for (k, corner) in corners.iter().enumerate() {
                 if (*corner - here).length() < 1.0 && k <= path.next_index() {
                     reached[k].get_or_insert(time);
@@ -222,23 +227,64 @@ fn the_shipped_model_walks_a_square_of_waypoints_with_its_feet_planted() {
             time += TICK;
         }
         eprintln!(
-            "noise {noise}: corners reached at {reached:?} s (ideal 10, 20, 30, 40), skating {:.3}",
+            "{file} noise {noise} {}: corners reached at {reached:?} s (ideal {:.1} s apart), skating {:.3}",
+            if right { "right" } else { "left" },
+            leg,
             skating.fraction()
         );
         for (k, at) in reached.iter().enumerate() {
-            let ideal = 10.0 * (k + 1) as f64;
-            let at = at.unwrap_or_else(|| panic!("noise {noise}: corner {k} not reached"));
+            let ideal = leg * (k + 1) as f64;
+            let at = at.unwrap_or_else(|| panic!("{file} noise {noise}: corner {k} not reached"));
             assert!(
-                at <= ideal + 2.0,
-                "noise {noise}: corner {k} at {at} s, ideal {ideal} s"
+                at <= ideal + slack,
+                "{file} noise {noise}: corner {k} at {at} s, ideal {ideal} s"
             );
         }
         assert!(
             skating.fraction() <= 0.39,
-            "noise {noise}: skating {}",
+            "{file} noise {noise}: skating {}",
             skating.fraction()
         );
     }
+}
+
+#[test]
+fn the_shipped_model_walks_a_square_of_waypoints_with_its_feet_planted() {
+    // VGRU-d, root-motion warping: a 4 m square at 0.4 m/s (its own walk averages about 0.5 m/s).
+    walks_a_square("vgru_d_multi", 4, 4.0, 0.4, false, 2.0);
+}
+
+#[test]
+fn the_locomotion_model_walks_a_square_of_waypoints_by_its_control() {
+    // goal-gru, told where to go (no warping), deterministic: the same 4 m square at 0.4 m/s
+    // with left turns and with right turns.
+    walks_a_square("goal_gru_h36m", 1, 4.0, 0.6, false, 10.0);
+    walks_a_square("goal_gru_h36m", 1, 4.0, 0.6, true, 10.0);
+}
+
+#[test]
+fn a_character_steered_by_its_control_allocates_nothing_per_tick() {
+    // goal-gru: the goal's control each model frame, and a generator's own control (no goal).
+    let (mut character, _) = walker_of("goal_gru_h36m", 0);
+    character.set_goal(Some(Goal::towards(Vec2::new(0.6, 0.0), 0.0)));
+    for _ in 0..30 {
+        character.advance(TICK).unwrap();
+    }
+    let mut generator =
+        motion::core::model::Generator::new(character.generator_mut().model().clone());
+    let seed = ndarray::Array2::<f32>::zeros((50, 99));
+    generator.start(seed.view(), None, Noise::Seed(0)).unwrap();
+    generator.step().unwrap();
+    let before = allocations();
+    for k in 0..240 {
+        if k % 60 == 0 {
+            let turn = direction_of(k as f32 * 0.5);
+            character.set_goal(Some(Goal::towards(turn * 0.6, 0.0)));
+        }
+        character.advance(TICK).unwrap();
+        generator.step().unwrap();
+    }
+    assert_eq!(allocations() - before, 0);
 }
 
 #[test]
@@ -393,4 +439,65 @@ fn a_crowd_allocates_nothing_per_advance() {
         crowd.advance(TICK).unwrap();
     }
     assert_eq!(allocations() - before, 0);
+}
+
+/// The control a `goal-gru` model reads, as the engine computes it from decoded poses
+/// (`GoalControl` over `Steering`'s heading), equals `training/locomotion.py`'s definition
+/// computed straight from the integrated root (rotation row 2 as the forward, y up) on real S5
+/// walking: the past second at frame `t + 25` is the future second at frame `t`.
+#[test]
+fn the_engine_control_matches_the_training_definition_on_real_walking() {
+    use motion::core::formats::h36m_text::{downsample_protocol, read_expmap_text};
+    use motion::core::motion::RootEncoding;
+    use motion::core::pose::PoseDecoder;
+    use motion::core::root::integrate_root;
+    use motion::core::skeleton::Skeleton;
+    use motion::core::steering::{GoalControl, Steering};
+
+    let path = common::data_root().join("h3.6m/dataset/S5/walking_1.txt.gz");
+    if !path.exists() {
+        eprintln!(
+            "SKIPPED: {} not found (set MOTION_DATA_DIR)",
+            path.display()
+        );
+        return;
+    }
+    let frames = downsample_protocol(read_expmap_text(&path).unwrap().view());
+    let k = 25;
+    let roots = integrate_root(frames.view(), 2);
+    let heading = |t: usize| {
+        let r = &roots[t].rotation;
+        r[2][0].atan2(r[2][2])
+    };
+    let skeleton = Arc::new(Skeleton::h36m());
+    let mut decoder = PoseDecoder::new(Arc::clone(&skeleton), RootEncoding::Deltas, 2);
+    let steering = Steering::new(&skeleton, 0.04).unwrap();
+    let mut control = GoalControl::new(k, 0.04);
+    let mut worst = [0.0f64; 3];
+    for (t, row) in frames.rows().into_iter().enumerate() {
+        let pose = decoder.push(row.as_slice().unwrap());
+        let root = Vec2::new(pose.root_translation.x, pose.root_translation.z);
+        control.record(root, steering.heading_of(pose));
+        if t < k {
+            continue;
+        }
+        let got = control.control(None);
+        let s = t - k;
+        let (h0, h1) = (heading(s), heading(t));
+        let d: Vec<f64> = (0..3)
+            .map(|i| (roots[t].translation[i] - roots[s].translation[i]) / 1000.0)
+            .collect();
+        let forward = d[0] * h0.sin() + d[2] * h0.cos();
+        let side = d[0] * h0.cos() - d[2] * h0.sin();
+        let turn = (h1 - h0 + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU)
+            - std::f64::consts::PI;
+        for (w, (g, e)) in worst.iter_mut().zip(got.iter().zip([forward, side, turn])) {
+            *w = w.max((f64::from(*g) - e).abs());
+        }
+    }
+    println!(
+        "worst |engine - definition|: forward {:.2e} side {:.2e} turn {:.2e}",
+        worst[0], worst[1], worst[2]
+    );
+    assert!(worst.iter().all(|&w| w < 1e-3), "{worst:?}");
 }

@@ -1,9 +1,14 @@
 //! The control a model that reads one (`goal-gru`, [`super::goal_gru`]) gets when nobody steers
-//! it: what its own root did over the last second ([`GoalControl`] without a goal), from the
-//! seed and then from every frame it makes. So a `goal-gru` model left alone keeps walking as
-//! its seed walked, in every front end that drives a [`BatchGenerator`](super::BatchGenerator)
+//! it: what its seed's root did over its last second (speed along and across the heading, turn;
+//! a [`GoalControl`] without a goal), held from then on with the speed feedback of a goal's
+//! control ([`GoalControl::holding`]: the model lags its control, so its own last second fed
+//! back would slow it down to a stand). So a `goal-gru` model left alone keeps walking as its
+//! seed walked, in every front end that drives a [`BatchGenerator`](super::BatchGenerator)
 //! (`predict`, `eval`, Python, the C ABI); a row given a control of its own
 //! ([`BatchGenerator::set_control`](super::BatchGenerator::set_control)) keeps that one.
+//!
+//! [`GoalControl`]: crate::steering::GoalControl
+//! [`GoalControl::holding`]: crate::steering::GoalControl::holding
 use std::sync::Arc;
 
 use super::predictor::MotionModel;
@@ -20,6 +25,8 @@ struct Row {
     steering: Steering,
     /// Given a control of its own: not driven from here.
     manual: bool,
+    /// The seed's control, held.
+    held: [f32; 3],
 }
 
 /// The automatic controls of a batch (see the module docs). No allocation per frame.
@@ -50,6 +57,7 @@ impl AutoControl {
                     decoder: PoseDecoder::new(Arc::clone(&skeleton), RootEncoding::Deltas, step),
                     steering,
                     manual: false,
+                    held: [0.0; 3],
                 })
             })
             .collect::<Option<Vec<_>>>()?;
@@ -85,12 +93,14 @@ impl AutoControl {
         let r = self.rows.get_mut(row).filter(|r| !r.manual)?;
         let pose = r.decoder.push(frame);
         r.steering.steer(pose);
-        r.steering.control_vector()
+        r.steering.holding(r.held)
     }
 
-    /// The control of row `row`'s next step from what it has seen (`None` when manual).
-    pub(crate) fn control(&self, row: usize) -> Option<[f32; 3]> {
-        let r = self.rows.get(row).filter(|r| !r.manual)?;
-        r.steering.control_vector()
+    /// Row `row`'s first control, after its seed (`None` when manual): the seed's last second,
+    /// held from now on.
+    pub(crate) fn seed_control(&mut self, row: usize) -> Option<[f32; 3]> {
+        let r = self.rows.get_mut(row).filter(|r| !r.manual)?;
+        r.held = r.steering.control_vector()?;
+        Some(r.held)
     }
 }

@@ -401,7 +401,7 @@ impl BatchGenerator {
                 }
                 auto.observe_seed(b, &self.frame);
             }
-            if let Some(control) = auto.control(b) {
+            if let Some(control) = auto.seed_control(b) {
                 let (k, local) = (b / self.shard_rows, b % self.shard_rows);
                 // The width is the net's own (3): this cannot fail.
                 let _ = net.set_control(self.shards[k].state.as_mut(), local, &control);

@@ -161,7 +161,7 @@ impl Character {
 
     /// Steers the character toward `goal` (a velocity on the floor and a facing; `None`: the
     /// model's own root motion) from the next model frame on, by root-motion warping
-    /// ([`crate::steering`]), or for a model told where to go (`goal-gru`) by its control
+    /// ([`crate::steering`]), and a model told where to go (`goal-gru`) also by its control
     /// vector; kept across [`start`](Self::start)s.
     pub fn set_goal(&mut self, goal: Option<Goal>) {
         self.stream.set_goal(goal);

@@ -172,7 +172,7 @@ impl PoseStream {
     }
 
     /// Steers a model that reads a control vector (`goal-gru` with 3 control values) by that
-    /// control instead of warping ([`Steering::use_control`]); other models stay warped.
+    /// control too ([`Steering::use_control`]).
     pub fn use_control_of(&mut self, config: &ModelConfig) {
         if let ArchConfig::GoalGru(fields) = &config.arch {
             if fields.control_dims == 3 {

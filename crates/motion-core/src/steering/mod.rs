@@ -12,8 +12,9 @@
 //! Without a goal the poses pass through unchanged; a goal set later warps from the pose the
 //! character is in. No allocation per frame.
 //!
-//! A model that is told where to go (`goal-gru`, [`crate::model::goal_gru`]) is not warped: its
-//! [`control`] vector comes from the goal ([`Steering::control_vector`]) and the model moves.
+//! A model that is told where to go (`goal-gru`, [`crate::model::goal_gru`]) also reads a
+//! [`control`] vector made from the goal and from where it is shown ([`Steering::control_vector`]):
+//! its body walks where the goal asks, and the warping corrects what is left of its path.
 pub mod control;
 
 pub use control::GoalControl;
@@ -156,8 +157,8 @@ impl Steering {
         })
     }
 
-    /// Steers by a control vector over `frames` frames (a model that reads one,
-    /// [`GoalControl`]) instead of warping.
+    /// Also makes a control vector over `frames` frames for a model that reads one
+    /// ([`GoalControl`]), from the goal and the shown root and heading.
     pub fn use_control(&mut self, frames: usize) {
         self.control = Some(GoalControl::new(frames, self.frame_time));
     }
@@ -165,6 +166,12 @@ impl Steering {
     /// The control vector for the model's next step (`None`: the model reads none).
     pub fn control_vector(&self) -> Option<[f32; 3]> {
         self.control.as_ref().map(|c| c.control(self.goal))
+    }
+
+    /// `control` held, with the speed feedback of a goal's control ([`GoalControl::holding`];
+    /// `None`: the model reads none).
+    pub fn holding(&self, control: [f32; 3]) -> Option<[f32; 3]> {
+        self.control.as_ref().map(|c| c.holding(control))
     }
 
     /// A seed frame's pose, where the control's past second starts (call before
@@ -220,15 +227,22 @@ impl Steering {
 
     /// The next model frame `pose` (raw, from the decoder) warped toward the goal.
     pub fn steer<'a>(&'a mut self, pose: &'a Pose) -> &'a Pose {
-        let raw_heading = self.heading_of(pose);
+        let warped = self.warp(pose);
         if let Some(control) = &mut self.control {
-            // The model moves as its control says: nothing to warp.
-            let root = Vec2::new(pose.root_translation.x, pose.root_translation.z);
-            control.record(root, raw_heading);
-            (self.raw_root, self.raw_heading) = (pose.root_translation, raw_heading);
-            (self.root, self.heading) = (root, raw_heading);
-            return pose;
+            // A model told where to go is told it from where it is shown.
+            control.record(self.root, self.heading);
         }
+        if warped {
+            &self.out
+        } else {
+            pose
+        }
+    }
+
+    /// Warps `pose` into `self.out` (`true`) or leaves it as it is (`false`); the shown root and
+    /// heading are updated either way.
+    fn warp(&mut self, pose: &Pose) -> bool {
+        let raw_heading = self.heading_of(pose);
         let raw_step = pose.root_translation - self.raw_root;
         let raw_turn = wrap_angle(raw_heading - self.raw_heading);
         // The raw step in the previous raw heading's frame (forward = +z).
@@ -239,12 +253,13 @@ impl Steering {
             if !self.warping {
                 self.root = Vec2::new(pose.root_translation.x, pose.root_translation.z);
                 self.heading = raw_heading;
-                return pose;
+                return false;
             }
             // After a goal: the model's own motion, carried on from the warped frame.
             self.heading = wrap_angle(self.heading + raw_turn);
             self.root += rotate(local, self.heading - raw_turn);
-            return self.write(pose, raw_heading);
+            self.write(pose, raw_heading);
+            return true;
         };
         self.warping = true;
         let dt = self.frame_time;
@@ -268,11 +283,13 @@ impl Steering {
             Vec2::ZERO
         };
         self.root += step;
-        self.write(pose, raw_heading)
+        self.write(pose, raw_heading);
+        true
     }
 
-    /// `pose` moved to the warped root and turned by the warped minus the raw heading.
-    fn write(&mut self, pose: &Pose, raw_heading: f32) -> &Pose {
+    /// `pose` moved to the warped root and turned by the warped minus the raw heading, into
+    /// `self.out`.
+    fn write(&mut self, pose: &Pose, raw_heading: f32) {
         let turn = Quat::from_rotation_y(wrap_angle(self.heading - raw_heading));
         let out = &mut self.out;
         out.local_rotations.copy_from_slice(&pose.local_rotations);
@@ -283,7 +300,6 @@ impl Steering {
             out.local_rotations[0].as_dquat(),
             Some(pose.root_motion),
         );
-        out
     }
 }
 
