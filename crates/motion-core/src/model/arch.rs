@@ -3,7 +3,7 @@
 //! An architecture is one file of this module's parent: its network (a [`Net`]) and the config
 //! fields only it has, a type implementing [`ArchFields`] (its checks, `motion-cli info`'s lines,
 //! the tensors it reads, its paper configuration and its loader). The parent registers every
-//! architecture in one [`register_architectures!`] list, which generates the [`Architecture`]
+//! architecture in one `register_architectures!` list, which generates the [`Architecture`]
 //! and [`ArchConfig`] enums (tagged by the config's `architecture` key) and every dispatch over
 //! them; nothing else lists the architectures.
 //!
