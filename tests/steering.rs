@@ -258,8 +258,8 @@ fn the_shipped_model_walks_a_square_of_waypoints_with_its_feet_planted() {
 fn the_locomotion_model_walks_a_square_of_waypoints_by_its_control() {
     // goal-gru, told where to go (no warping), deterministic: the same 4 m square at 0.4 m/s
     // with left turns and with right turns.
-    walks_a_square("goal_gru_h36m", 1, 4.0, 0.6, false, 10.0);
-    walks_a_square("goal_gru_h36m", 1, 4.0, 0.6, true, 10.0);
+    walks_a_square("goal_gru_h36m", 1, 4.0, 0.6, false, 8.0);
+    walks_a_square("goal_gru_h36m", 1, 4.0, 0.6, true, 8.0);
 }
 
 #[test]
