@@ -11,8 +11,8 @@
 //! [`GoalControl::holding`]: crate::steering::GoalControl::holding
 use std::sync::Arc;
 
+use super::goal_gru::steerable_control_frames;
 use super::predictor::MotionModel;
-use super::ArchConfig;
 use crate::motion::{FrameScalar, RootEncoding};
 use crate::pose::PoseDecoder;
 use crate::skeleton::{Skeleton, H36M_SOURCE_FPS};
@@ -40,19 +40,14 @@ impl AutoControl {
     /// make (3 values on the H3.6M skeleton).
     pub(crate) fn for_model(model: &MotionModel, batch: usize) -> Option<AutoControl> {
         let config = model.config();
-        let ArchConfig::GoalGru(fields) = &config.arch else {
-            return None;
-        };
-        if fields.control_dims != 3 || config.skeleton != "h36m-32" {
-            return None;
-        }
+        let control_frames = steerable_control_frames(config)?;
         let skeleton = Arc::new(Skeleton::h36m());
         let step = ((H36M_SOURCE_FPS / config.fps).round() as usize).max(1);
         let frame_time = (1.0 / config.fps) as f32;
         let rows = (0..batch)
             .map(|_| {
                 let mut steering = Steering::new(&skeleton, frame_time).ok()?;
-                steering.use_control(fields.control_frames);
+                steering.use_control(control_frames);
                 Some(Row {
                     decoder: PoseDecoder::new(Arc::clone(&skeleton), RootEncoding::Deltas, step),
                     steering,

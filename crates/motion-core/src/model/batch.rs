@@ -375,12 +375,18 @@ impl BatchGenerator {
                 got: control.to_vec(),
             });
         }
-        let (k, local) = (row / self.shard_rows, row % self.shard_rows);
-        net.set_control(self.shards[k].state.as_mut(), local, control)?;
+        let (state, local) = self.row_state(row);
+        net.set_control(state, local, control)?;
         if let Some(auto) = &mut self.auto {
             auto.set_manual(row);
         }
         Ok(())
+    }
+
+    /// Row `row`'s shard state and its row within it.
+    fn row_state(&mut self, row: usize) -> (&mut dyn NetState, usize) {
+        let (k, local) = (row / self.shard_rows, row % self.shard_rows);
+        (self.shards[k].state.as_mut(), local)
     }
 
     /// Feeds the seeds to the automatic controls and sets each automatic row's first control.
@@ -464,16 +470,12 @@ impl BatchGenerator {
         // The next advance runs body step `body_steps` (the first step after start hands out
         // the prediction already made, and the same holds then).
         let t = self.body_steps;
-        let (k, local) = (row / self.shard_rows, row % self.shard_rows);
-        let shard = &mut self.shards[k];
-        model.network().net().set_action(
-            shard.state.as_mut(),
-            shard.rows,
-            local,
-            index,
-            crossfade,
-            t,
-        )
+        let rows = self.shards[row / self.shard_rows].rows;
+        let (state, local) = self.row_state(row);
+        model
+            .network()
+            .net()
+            .set_action(state, rows, local, index, crossfade, t)
     }
 
     /// The next full frame of every character, `[batch, frame_dims]`: the first call after

@@ -21,6 +21,7 @@ use super::config::{limits, ModelConfig};
 use super::generate_error::GenerateError;
 use super::net::{own, Begin, Net, NetState};
 use super::weights::{WeightStore, WeightsError};
+use super::ArchConfig;
 use crate::nn::{GruCell, GruScratch, Stack, StackState};
 
 /// The config fields only `goal-gru` has.
@@ -121,6 +122,18 @@ impl ArchFields for GoalGruFields {
         config: &ModelConfig,
     ) -> Result<Arc<dyn Net>, WeightsError> {
         Ok(Arc::new(GoalGru::load(store, config, self)?))
+    }
+}
+
+/// The control horizon (frames) of a model whose control this crate makes: a `goal-gru` of 3
+/// control values on the H3.6M skeleton (the steering's `[forward, side, turn]`); `None` for
+/// any other model.
+pub fn steerable_control_frames(config: &ModelConfig) -> Option<usize> {
+    match &config.arch {
+        ArchConfig::GoalGru(f) if f.control_dims == 3 && config.skeleton == "h36m-32" => {
+            Some(f.control_frames)
+        }
+        _ => None,
     }
 }
 

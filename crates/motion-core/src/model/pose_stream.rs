@@ -18,7 +18,7 @@ use crate::steering::{Goal, Steering};
 use super::config::ModelConfig;
 use super::generate_error::GenerateError;
 use super::generator::Generator;
-use super::ArchConfig;
+use super::goal_gru::steerable_control_frames;
 
 /// Decoder, steering, grounding and resampler of one character (see the module docs).
 #[derive(Debug)]
@@ -174,10 +174,8 @@ impl PoseStream {
     /// Steers a model that reads a control vector (`goal-gru` with 3 control values) by that
     /// control too ([`Steering::use_control`]).
     pub fn use_control_of(&mut self, config: &ModelConfig) {
-        if let ArchConfig::GoalGru(fields) = &config.arch {
-            if fields.control_dims == 3 {
-                self.steering.use_control(fields.control_frames);
-            }
+        if let Some(frames) = steerable_control_frames(config) {
+            self.steering.use_control(frames);
         }
     }
 
