@@ -13,8 +13,9 @@ const STEP_MIN_M: f32 = 0.05;
 /// held there, with the rotation it was drawn with (metres).
 const LANDING_M: f32 = STEP_MIN_M;
 /// The fastest the hip-height hold moves the body over a lone held foot, and back (m/s).
-const BALANCE_SPEED_M_S: f32 = 1.0;
-/// The time constant over which that balance offset returns to zero when not needed (s).
+const BALANCE_SPEED_M_S: f32 = 1.5;
+/// The time constant over which that balance offset returns to zero once the body no longer
+/// stands on one held foot (s).
 const BALANCE_RETURN_S: f32 = 1.0;
 /// A foot stepping in towards under its hip stops at this share of the horizontal distance a
 /// straight leg allows.
@@ -83,8 +84,10 @@ impl Grounder {
     /// have held the body back so far, and the balance offset, first returned towards zero by
     /// a frame of `dt` seconds.
     pub(super) fn carried(&mut self, dt: f32) -> Vec3 {
-        let back = self.balance * (dt / BALANCE_RETURN_S).min(1.0);
-        self.balance -= back.clamp_length_max(BALANCE_SPEED_M_S * dt);
+        if !self.balancing {
+            let back = self.balance * (dt / BALANCE_RETURN_S).min(1.0);
+            self.balance -= back.clamp_length_max(BALANCE_SPEED_M_S * dt);
+        }
         self.held_offset + self.balance
     }
 
@@ -196,6 +199,7 @@ impl Grounder {
             [false, true] => Some(1),
             _ => None,
         };
+        self.balancing = lone.is_some();
         if let Some((lock, hip, reach)) = lone.and_then(|side| self.held(side)) {
             let d = Vec3::new(lock.x - hip.x, 0.0, lock.z - hip.z);
             let h = d.length();

@@ -19,7 +19,8 @@
 //!    to keep the feet on the floor (a held foot too far away to stand over steps, one foot at a
 //!    time and only while the body stands on the other: to where the model has it when that is
 //!    near enough, else in towards under its hip; a body on one held foot it cannot rise over
-//!    moves over it, at most 1 m/s, the offset returning over about a second when not needed;
+//!    moves over it, at most 1.5 m/s, the offset kept while it stands on that foot and returning
+//!    over about a second after;
 //!    a straight leg that cannot reach brings the body down again in step 5): a model that
 //!    sinks into a crouch stands as tall as real people do.
 //! 4. **Foot locking** (then the lowest foot point is put on the floor once more): a foot is in contact while its lowest point is below
@@ -235,6 +236,9 @@ pub struct Grounder {
     /// The horizontal offset the hip-height hold has added to put the body over a lone held
     /// foot (it returns to zero over [`BALANCE_RETURN_S`] when not needed).
     balance: Vec3,
+    /// Whether the body stood on one held foot on the last frame (the balance offset does not
+    /// return meanwhile).
+    balancing: bool,
 }
 
 /// Seed frames kept for the floor fit (the last ones).
@@ -276,6 +280,7 @@ impl Grounder {
             feet: [FootState::default(); 2],
             held_offset: Vec3::ZERO,
             balance: Vec3::ZERO,
+            balancing: false,
         })
     }
 
@@ -296,6 +301,7 @@ impl Grounder {
         self.feet = [FootState::default(); 2];
         self.held_offset = Vec3::ZERO;
         self.balance = Vec3::ZERO;
+        self.balancing = false;
     }
 
     /// Sets the lean limit ([`lean_limit_deg`]) and the hip-height hold

@@ -423,3 +423,16 @@ fn a_lunge_too_long_to_stand_up_in_steps_the_feet_in_under_the_hips() {
         "the root at {root_y} m, the hold {hold} m"
     );
 }
+
+#[test]
+fn the_balance_offset_stays_while_the_body_stands_on_one_foot() {
+    // The offset that put the body over a lone held foot returns towards zero only on frames
+    // after which the body does not stand on one held foot.
+    let mut g = grounder();
+    g.balance = Vec3::new(0.3, 0.0, 0.0);
+    g.balancing = true;
+    assert_eq!(g.carried(DT), Vec3::new(0.3, 0.0, 0.0));
+    g.balancing = false;
+    let back = g.carried(DT);
+    assert!(back.x < 0.3 && back.x > 0.3 - 0.04 * 0.3 - 1e-6, "{back}");
+}
