@@ -17,6 +17,13 @@ const BALANCE_SPEED_M_S: f32 = 1.5;
 /// The time constant over which that balance offset returns to zero once the body no longer
 /// stands on one held foot (s).
 const BALANCE_RETURN_S: f32 = 1.0;
+/// The balance offset is kept (not returned) once the body has stood on one held foot this
+/// long (s): longer than a walking step's single support.
+const BALANCE_HOLD_S: f32 = 0.5;
+/// The body is moved over a lone held foot only while the model's root travels slower than
+/// this (m/s): a walking body passes over its stance foot by itself, and pulling it back over
+/// the foot would slow its walk.
+const BALANCE_MAX_TRAVEL_M_S: f32 = 0.6;
 /// A foot stepping in towards under its hip stops at this share of the horizontal distance a
 /// straight leg allows.
 const STANCE_REACH: f32 = 0.9;
@@ -84,7 +91,8 @@ impl Grounder {
     /// have held the body back so far, and the balance offset, first returned towards zero by
     /// a frame of `dt` seconds.
     pub(super) fn carried(&mut self, dt: f32) -> Vec3 {
-        if !self.balancing {
+        let standing = self.one_foot.is_some_and(|(_, s)| s >= BALANCE_HOLD_S);
+        if !standing {
             let back = self.balance * (dt / BALANCE_RETURN_S).min(1.0);
             self.balance -= back.clamp_length_max(BALANCE_SPEED_M_S * dt);
         }
@@ -199,13 +207,17 @@ impl Grounder {
             [false, true] => Some(1),
             _ => None,
         };
-        self.balancing = lone.is_some();
+        self.one_foot = lone.map(|side| match self.one_foot {
+            Some((held, s)) if held == side => (side, s + dt),
+            _ => (side, dt),
+        });
         if let Some((lock, hip, reach)) = lone.and_then(|side| self.held(side)) {
             let d = Vec3::new(lock.x - hip.x, 0.0, lock.z - hip.z);
             let h = d.length();
             let rise = wanted + hip.y - lock.y;
             let over = h - (reach * reach - rise * rise).max(0.0).sqrt();
-            if room < wanted && over > 0.0 && h > 1e-6 {
+            if room < wanted && over > 0.0 && h > 1e-6 && self.model_speed < BALANCE_MAX_TRAVEL_M_S
+            {
                 let shift = over.min(BALANCE_SPEED_M_S * dt);
                 let h = h - shift;
                 let room = lock.y + (reach * reach - h * h).max(0.0).sqrt() - hip.y;

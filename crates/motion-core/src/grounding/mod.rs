@@ -19,8 +19,9 @@
 //!    to keep the feet on the floor (a held foot too far away to stand over steps, one foot at a
 //!    time and only while the body stands on the other: to where the model has it when that is
 //!    near enough, else in towards under its hip; a body on one held foot it cannot rise over
-//!    moves over it, at most 1.5 m/s, the offset kept while it stands on that foot and returning
-//!    over about a second after;
+//!    moves over it, at most 1.5 m/s and only while the model's root travels slower than 0.6 m/s
+//!    (a walker passes over its stance foot by itself), the offset kept once it has stood on that
+//!    foot for 0.5 s and returning over about a second otherwise;
 //!    a straight leg that cannot reach brings the body down again in step 5): a model that
 //!    sinks into a crouch stands as tall as real people do.
 //! 4. **Foot locking** (then the lowest foot point is put on the floor once more): a foot is in contact while its lowest point is below
@@ -236,9 +237,14 @@ pub struct Grounder {
     /// The horizontal offset the hip-height hold has added to put the body over a lone held
     /// foot (it returns to zero over [`BALANCE_RETURN_S`] when not needed).
     balance: Vec3,
-    /// Whether the body stood on one held foot on the last frame (the balance offset does not
-    /// return meanwhile).
-    balancing: bool,
+    /// The leg whose foot alone was held on the last frame, and for how long it has been
+    /// (seconds): the balance offset does not return while the body stands on one foot for
+    /// longer than a step does.
+    one_foot: Option<(usize, f32)>,
+    /// The model's root on the last frame (floor frame, before grounding's offsets).
+    model_root: Option<Vec3>,
+    /// How fast the model's root moved over the floor into this frame (m/s).
+    model_speed: f32,
 }
 
 /// Seed frames kept for the floor fit (the last ones).
@@ -280,7 +286,9 @@ impl Grounder {
             feet: [FootState::default(); 2],
             held_offset: Vec3::ZERO,
             balance: Vec3::ZERO,
-            balancing: false,
+            one_foot: None,
+            model_root: None,
+            model_speed: 0.0,
         })
     }
 
@@ -301,7 +309,9 @@ impl Grounder {
         self.feet = [FootState::default(); 2];
         self.held_offset = Vec3::ZERO;
         self.balance = Vec3::ZERO;
-        self.balancing = false;
+        self.one_foot = None;
+        self.model_root = None;
+        self.model_speed = 0.0;
     }
 
     /// Sets the lean limit ([`lean_limit_deg`]) and the hip-height hold
@@ -402,6 +412,11 @@ impl Grounder {
         } else {
             1.0 / 25.0
         };
+        self.model_speed = self.model_root.map_or(0.0, |p| {
+            let d = *root - p;
+            (d.x * d.x + d.z * d.z).sqrt() / dt
+        });
+        self.model_root = Some(*root);
         let carried = self.carried(dt);
         *root += carried;
         // 2. Lean.

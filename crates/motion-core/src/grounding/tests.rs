@@ -426,13 +426,16 @@ fn a_lunge_too_long_to_stand_up_in_steps_the_feet_in_under_the_hips() {
 
 #[test]
 fn the_balance_offset_stays_while_the_body_stands_on_one_foot() {
-    // The offset that put the body over a lone held foot returns towards zero only on frames
-    // after which the body does not stand on one held foot.
+    // The offset that put the body over a lone held foot returns towards zero unless the body
+    // has stood on that one foot for longer than a step's single support.
     let mut g = grounder();
     g.balance = Vec3::new(0.3, 0.0, 0.0);
-    g.balancing = true;
+    g.one_foot = Some((0, 1.0));
     assert_eq!(g.carried(DT), Vec3::new(0.3, 0.0, 0.0));
-    g.balancing = false;
+    g.one_foot = Some((0, 0.2));
     let back = g.carried(DT);
     assert!(back.x < 0.3 && back.x > 0.3 - 0.04 * 0.3 - 1e-6, "{back}");
+    g.balance = Vec3::new(0.3, 0.0, 0.0);
+    g.one_foot = None;
+    assert!(g.carried(DT).x < 0.3);
 }

@@ -114,7 +114,7 @@ pub struct Steering {
     heading: f32,
     /// Whether the poses have been warped since the last reset (otherwise they pass through).
     warping: bool,
-    /// The control of a model that reads one (then nothing is warped).
+    /// The control of a model that reads one (its poses are warped as well).
     control: Option<GoalControl>,
     out: Pose,
 }
