@@ -170,8 +170,9 @@ impl Grounder {
     /// body down steps, one foot at a time, the one held lowest first, while the body has
     /// something to stand on ([`Self::stands_without`]): to where the model has it when that is
     /// near enough, else, while the other foot is held, in towards under its hip
-    /// ([`Self::stance_point`]).
-    pub(super) fn hip_raise(&mut self, root_y: f32, dt: f32) -> Vec3 {
+    /// ([`Self::stance_point`]). `model_speed`: how fast the model's root moves over the floor
+    /// (m/s; the balance over a lone held foot acts only below [`BALANCE_MAX_TRAVEL_M_S`]).
+    pub(super) fn hip_raise(&mut self, root_y: f32, model_speed: f32, dt: f32) -> Vec3 {
         let limit = self.min_hip_height();
         let softness = HIP_SOFTNESS * self.standing_height;
         let wanted = (-soft_limit(-root_y, -limit, softness) - root_y).max(0.0);
@@ -216,8 +217,7 @@ impl Grounder {
             let h = d.length();
             let rise = wanted + hip.y - lock.y;
             let over = h - (reach * reach - rise * rise).max(0.0).sqrt();
-            if room < wanted && over > 0.0 && h > 1e-6 && self.model_speed < BALANCE_MAX_TRAVEL_M_S
-            {
+            if room < wanted && over > 0.0 && h > 1e-6 && model_speed < BALANCE_MAX_TRAVEL_M_S {
                 let shift = over.min(BALANCE_SPEED_M_S * dt);
                 let h = h - shift;
                 let room = lock.y + (reach * reach - h * h).max(0.0).sqrt() - hip.y;

@@ -243,8 +243,6 @@ pub struct Grounder {
     one_foot: Option<(usize, f32)>,
     /// The model's root on the last frame (floor frame, before grounding's offsets).
     model_root: Option<Vec3>,
-    /// How fast the model's root moved over the floor into this frame (m/s).
-    model_speed: f32,
 }
 
 /// Seed frames kept for the floor fit (the last ones).
@@ -288,7 +286,6 @@ impl Grounder {
             balance: Vec3::ZERO,
             one_foot: None,
             model_root: None,
-            model_speed: 0.0,
         })
     }
 
@@ -311,7 +308,6 @@ impl Grounder {
         self.balance = Vec3::ZERO;
         self.one_foot = None;
         self.model_root = None;
-        self.model_speed = 0.0;
     }
 
     /// Sets the lean limit ([`lean_limit_deg`]) and the hip-height hold
@@ -412,7 +408,8 @@ impl Grounder {
         } else {
             1.0 / 25.0
         };
-        self.model_speed = self.model_root.map_or(0.0, |p| {
+        // How fast the model's root moved over the floor into this frame (m/s).
+        let model_speed = self.model_root.map_or(0.0, |p| {
             let d = *root - p;
             (d.x * d.x + d.z * d.z).sqrt() / dt
         });
@@ -484,7 +481,7 @@ impl Grounder {
             }
         }
         let raise = if self.config.foot_locking {
-            self.hip_raise(root.y, dt)
+            self.hip_raise(root.y, model_speed, dt)
         } else {
             Vec3::ZERO
         };
