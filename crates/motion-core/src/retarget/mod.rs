@@ -426,6 +426,23 @@ fn rest_positions(skeleton: &Skeleton) -> Vec<DVec3> {
 
 /// The rotation whose columns are the orthonormal frame of `up` and `side` (side made
 /// perpendicular).
+/// The world axis (±x, ±y or ±z) nearest to `v`: a skeleton's up axis from its rest spine, which
+/// leans a few degrees in many rigs (Mixamo's head sits forward of its hips).
+fn nearest_axis(v: DVec3) -> DVec3 {
+    let length = v.length_squared();
+    if length.is_nan() || length <= 0.0 {
+        return v; // no direction: `frame` refuses it
+    }
+    let a = v.abs();
+    if a.x >= a.y && a.x >= a.z {
+        DVec3::X * v.x.signum()
+    } else if a.y >= a.z {
+        DVec3::Y * v.y.signum()
+    } else {
+        DVec3::Z * v.z.signum()
+    }
+}
+
 fn frame(up: DVec3, side: DVec3) -> Option<DMat3> {
     let e1 = up.try_normalize()?;
     let e2 = (side - e1 * side.dot(e1)).try_normalize()?;
@@ -475,8 +492,12 @@ impl Retargeter {
             )
         };
         map_check::check_map(rig, &model, &model_index, &map.user, &pu)?;
+        // World axes: up is the world axis nearest each rest spine (hips to head), so that the
+        // world's vertical maps onto the model's and a rest spine that leans does not tilt the
+        // floor (a tilted map sinks or lifts the body as it travels); the side axis is the hips'.
         let (mu, ms) = span(&pm, &model_index);
         let (uu, us) = span(&pu, &map.user);
+        let (mu, uu) = (nearest_axis(mu), nearest_axis(uu));
         let fm = frame(mu, ms).expect("the H3.6M rest pose has a frame");
         let fu = frame(uu, us).ok_or_else(|| RetargetError::Degenerate("Hips".into()))?;
         let g = DQuat::from_mat3(&(fm * fu.transpose())).normalize();
@@ -1039,6 +1060,46 @@ mod tests {
             ("foot_r", "calf_r", [0.0, 0.0, -42.0], "ZXY"),
             ("ball_r", "foot_r", [12.0, 0.0, -8.0], "ZXY"),
         ])
+    }
+
+    #[test]
+    fn a_rig_whose_rest_spine_leans_keeps_the_floor_level_as_it_travels() {
+        let rig = demo_mixamo_rig();
+        let rest = rest_positions(&rig);
+        let (hips, head) = (
+            find(&rig, "mixamorig:Hips").unwrap(),
+            find(&rig, "mixamorig:Head").unwrap(),
+        );
+        let spine = rest[head] - rest[hips];
+        assert!(
+            spine.z.abs() > 0.01 * spine.y,
+            "the demo spine leans: {spine}"
+        );
+        let r = Retargeter::new(&rig, JointMap::detect(&rig).unwrap()).unwrap();
+        let still = Array2::zeros((1, rig.channel_count()));
+        let one = r.to_model(still.view(), 1.0 / 30.0);
+        // The model's hips walk 4 m forward and 3 m sideways at one height.
+        let mut model = one.clone();
+        model.frames = Array2::from_shape_fn((41, one.frames.ncols()), |(t, c)| match c {
+            0 => 75.0 * t as f64,
+            2 => 100.0 * t as f64,
+            _ => one.frames[[0, c]],
+        });
+        let back = r.to_rig(&model, still.view());
+        let p = channel_positions(&rig, back.frames.view()).unwrap();
+        for t in 0..41 {
+            let dy = p[[t, hips, 1]] - p[[0, hips, 1]];
+            assert!(
+                dy.abs() < 1e-6,
+                "frame {t}: the hips moved {dy} units vertically"
+            );
+        }
+        let (dx, dz) = (
+            p[[40, hips, 0]] - p[[0, hips, 0]],
+            p[[40, hips, 2]] - p[[0, hips, 2]],
+        );
+        let travelled = dx.hypot(dz) / r.scale();
+        assert!((travelled - 5000.0).abs() < 1e-6, "{travelled} mm");
     }
 
     #[test]
