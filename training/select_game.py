@@ -12,6 +12,12 @@ The rule (written before any candidate of the action-conditioned intention runs 
 3. The most actions alive wins; ties go to the highest mean over actions of the smallest fraction of frames whose
    lowest foot is within 0.1 m of the floor (grounded, over the windows).
 
+`--rule targets` (written before any candidate of the crouch-penalty runs, `train_intention.py --crouch-weight`,
+was scored): conditioned files only; the most actions meeting all five targets of the table (alive, on-floor
+fraction >= 0.95, skating within the real S5 continuation's + 0.05, lean p95 within the real p95, hip p5 at or above
+the real p5) wins; ties go to the smallest hip shortfall under the real p5 summed over the actions (mm), then to the
+report listed first (list the incumbent first).
+
 Validation windows only (8 per action, disjoint from every test window); the test windows are scored once, for the
 chosen file, afterwards. Besides the rule, the table shows the issue's other targets per action (grounded): lean p95
 against the real p95, hip height within the real p5-p95, on-floor fraction >= 0.95, skating within the real S5
@@ -55,6 +61,10 @@ def action_rows(report: dict) -> list[dict]:
             "hip_high": max(w["hip_height_p95_mm"] for w in wins),
             "real_hip": (real["hip_height_p5_mm"], real["hip_height_p95_mm"]),
         })
+        r = rows[-1]
+        r["hip_short"] = max(0.0, r["real_hip"][0] - r["hip_low"])
+        r["all_targets"] = (r["alive"] and r["on_floor"] >= ON_FLOOR and r["skating"] <= r["real_skating"] + SKATING_MARGIN
+                            and r["lean"] <= r["real_lean"] and r["hip_short"] == 0.0)
     return rows
 
 
@@ -68,18 +78,26 @@ def verdict(report: dict) -> dict:
         "alive": sum(r["alive"] for r in rows),
         "actions": len(rows),
         "floor": sum(r["on_floor"] for r in rows) / max(1, len(rows)),
+        "targets": sum(r["all_targets"] for r in rows),
+        "hip_short": sum(r["hip_short"] for r in rows),
         "rows": rows,
     }
 
 
 def key(v: dict) -> tuple:
-    """Sort key of the rule (smaller is better)."""
+    """Sort key of the default rule (smaller is better)."""
     return (not v["conditioned"], -v["alive"], -v["floor"])
+
+
+def key_targets(v: dict) -> tuple:
+    """Sort key of `--rule targets` (smaller is better; `min` keeps the first of equals)."""
+    return (not v["conditioned"], -v["targets"], round(v["hip_short"], 1))
 
 
 def table(v: dict) -> str:
     out = [f"`{v['source']}` ({v['windows']} windows): alive on {v['alive']} of {v['actions']}, mean smallest on-floor "
-           f"fraction {v['floor']:.3f}{'' if v['conditioned'] else ' (not action-conditioned: not eligible)'}",
+           f"fraction {v['floor']:.3f}, all five targets on {v['targets']}, hip shortfall {v['hip_short']:.1f} mm"
+           f"{'' if v['conditioned'] else ' (not action-conditioned: not eligible)'}",
            "",
            "| action | speed raw / grounded (min over windows) | on floor | penetrating | skating (real S5) | "
            "lean p95 (real) | hip p5-p95 mm (real) |",
@@ -98,6 +116,9 @@ def main(argv: list[str] | None = None) -> int:
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("reports", nargs="+", type=Path, help="motion-cli eval --json outputs, one per candidate")
     p.add_argument("--allow-test", action="store_true", help="accept test-window reports (for the final table only)")
+    p.add_argument("--rule", choices=("alive", "targets"), default="alive",
+                   help="alive: the game default's rule (alive, then on floor); targets: all five targets, then the hip "
+                        "shortfall (module doc)")
     args = p.parse_args(argv)
     verdicts = []
     for path in args.reports:
@@ -117,8 +138,9 @@ def main(argv: list[str] | None = None) -> int:
         print()
     eligible = [v for v in verdicts if v["conditioned"]]
     if eligible and not args.allow_test:
-        best = min(eligible, key=key)
-        print(f"chosen: {best['source']} (alive on {best['alive']} of {best['actions']}, floor {best['floor']:.3f})")
+        best = min(eligible, key=key if args.rule == "alive" else key_targets)
+        print(f"chosen: {best['source']} (alive on {best['alive']} of {best['actions']}, floor {best['floor']:.3f}, "
+              f"all five targets on {best['targets']}, hip shortfall {best['hip_short']:.1f} mm)")
     return 0
 
 

@@ -85,6 +85,7 @@ from . import intention_labels
 from .export import load_weights, save_weights
 from .layers import MLP
 from . import long_horizon
+from .crouch import CrouchFloor, crouch_loss
 from .kinematics import roughness_loss
 from .long_horizon import LONG_HORIZON, accel_loss, root_speed_loss, speed_loss, speed_ratios
 from .models import IntentionModel, joint_groups, make_config, parameter_count
@@ -156,6 +157,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="adds W x the root-drift penalty (root_drift.drift_penalty: hip height and lean of the "
                         "integrated root held within 100 mm and 10 degrees of the last seed frame's) of the generated "
                         "frames with gradient (the 4 s and, with --long-weight, the long frames)")
+    g.add_argument("--crouch-weight", type=float, default=0.0, metavar="W",
+                   help="adds W x the crouch penalty (crouch.crouch_loss: the root's height over the lowest foot "
+                        "point held at or above the action's real 5th percentile) of the generated frames with "
+                        "gradient")
     g.add_argument("--init-weights", type=Path, metavar="FILE.safetensors",
                    help="a new run whose model (and clustering) starts from an exported intention file; fresh "
                         "discriminators and optimizers; the model size flags do not apply")
@@ -172,6 +177,9 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--clip", type=float, default=5.0, help="gradient-norm clipping")
     g.add_argument("--seed", type=int, default=1)
     add_run_arguments(p, log_every=25)
+    p.add_argument("--choice", metavar="TEXT",
+                   help="with --export: how the checkpoint was chosen, stored as provenance checkpoint_choice (default: "
+                        "this module's validation rule)")
     p.add_argument("--noise-scale", type=float, default=None, metavar="S",
                    help="with --export: store noise_scale S in the file: its drawn z ~ N(0, S² I) at inference "
                         "(training always draws N(0, I); absent = 1, the paper's)")
@@ -398,6 +406,11 @@ def train(args, argv: list[str]) -> None:
         t0 = time.time()
         bank = WordBank(labelled.seqs, model.norm.unnormalize)
         log(f"word bank: {len(bank):,} words of the training subjects' motion in {time.time() - t0:.0f} s")
+    crouch_floor = None
+    if args.crouch_weight > 0:
+        crouch_floor = CrouchFloor(labelled.seqs, model.norm.unnormalize)
+        log("crouch limits (mm, hip over the feet, real p5): " + ", ".join(
+            f"{a} {v:.0f}" for a, v in zip(h36m.ACTIONS, crouch_floor.limits.tolist())))
     d_pose = PoseDiscriminator(args.pose_window, model.output_size, args.d_hidden, args.pose_context)
     d_label = LabelDiscriminator(args.label_window, model.intentions, max(8, args.d_hidden // 4))
     model.to(device).train()
@@ -548,6 +561,10 @@ def train(args, argv: list[str]) -> None:
             word = sum(word_realism_loss(model, m, a, bank) for m, a in zip(moved, (acts, long_acts)))
             lg = lg + args.word_weight * word
             terms["word"] = word.item()
+        if crouch_floor is not None:
+            crouch = sum(crouch_loss(model, m, a, crouch_floor) for m, a in zip(moved, (acts, long_acts)))
+            lg = lg + args.crouch_weight * crouch
+            terms["crouch"] = crouch.item()
         if args.drift_weight > 0:
             drift = drift_penalty(model, seed, drift_parts).to(lg.dtype)
             lg = lg + args.drift_weight * drift
@@ -602,7 +619,8 @@ def train(args, argv: list[str]) -> None:
     log.close()
 
 
-def export(out: Path, ckpt: Path, dtype: str, argv: list[str], noise_scale: float | None = None) -> None:
+def export(out: Path, ckpt: Path, dtype: str, argv: list[str], noise_scale: float | None = None,
+           choice: str | None = None) -> None:
     state = load_checkpoint(ckpt)
     config = dict(state["config"])
     if noise_scale is not None:
@@ -617,9 +635,10 @@ def export(out: Path, ckpt: Path, dtype: str, argv: list[str], noise_scale: floa
         "date": state["date"],
         "command": state["command"],
         "export_command": "python -m training.train_intention " + shlex.join(argv),
-        "checkpoint_choice": "train_intention module doc (S5 validation windows, 12 s speed ratios, then NPSS)",
-        "validation": {k: best[k] for k in ("npss_ref", "euler_80", "iteration") if k in best},
+        "checkpoint_choice": choice or "train_intention module doc (S5 validation windows, 12 s speed ratios, then NPSS)",
     }
+    if best.get("iteration") == int(state["iteration"]):
+        provenance["validation"] = {k: best[k] for k in ("npss_ref", "euler_80", "iteration") if k in best}
     if noise_scale is not None:
         provenance["noise_scale"] = "chosen at export (weights/README.md): drawn z ~ N(0, s² I)"
     if averaged:
@@ -635,7 +654,7 @@ def main(argv: list[str] | None = None) -> int:
         if args.export is not None:
             if args.from_ is None:
                 raise SystemExit("error: --export needs --from CKPT")
-            export(args.export, args.from_, args.dtype, argv, args.noise_scale)
+            export(args.export, args.from_, args.dtype, argv, args.noise_scale, args.choice)
         else:
             train(args, argv)
     except ValueError as e:

@@ -1,0 +1,64 @@
+"""crouch: the hip height over the feet against the engine's rest-pose height, and the penalty's zero and gradient."""
+
+import math
+
+import numpy as np
+import torch
+
+from training.crouch import CROUCH_SCALE_MM, CrouchFloor, crouch_loss, hip_over_feet
+from training.kinematics import skeleton
+
+# motion_core::grounding::H36M_STANDING_HEIGHT_MM: the rest pose's root height over its lowest foot point.
+STANDING_MM = 897.1
+
+
+class Identity:
+    """A model whose normalized frames are the full frames."""
+
+    class norm:  # noqa: N801 (mirrors model.norm)
+        @staticmethod
+        def unnormalize(x):
+            return x
+
+
+def bent_knees(angle: float, frames: int = 1) -> torch.Tensor:
+    """Full frames [frames, 99] of the rest pose with both knees (RightLeg, LeftLeg) bent by `angle` radians about x."""
+    _, _, dims, _ = skeleton()
+    x = torch.zeros(frames, 99, dtype=torch.float64)
+    for knee in (2, 7):
+        x[:, dims[knee][0]] = angle
+    return x
+
+
+def test_the_rest_pose_stands_at_the_engines_standing_height():
+    h = hip_over_feet(torch.zeros(1, 99, dtype=torch.float64))
+    assert abs(h.item() - STANDING_MM) < 0.1
+
+
+def test_bent_knees_lower_the_hips():
+    heights = [hip_over_feet(bent_knees(a)).item() for a in (0.0, 0.3, 0.6, 0.9)]
+    assert all(a > b for a, b in zip(heights, heights[1:])), heights
+
+
+def test_the_floor_is_the_percentile_of_each_actions_frames():
+    angles = np.linspace(0.0, 1.0, 101)
+    seqs = [[bent_knees(float(a)).numpy() for a in angles]]
+    floor = CrouchFloor(seqs + [[]], lambda x: x)
+    expected = np.percentile([hip_over_feet(bent_knees(float(a))).item() for a in angles], 5.0)
+    assert abs(floor.limits[0].item() - expected) < 1e-3  # the frames pass through float32
+    assert math.isinf(floor.limits[1].item())
+
+
+def test_the_penalty_is_zero_over_the_limit_and_pulls_a_crouch_up():
+    floor = CrouchFloor([[bent_knees(0.3).numpy()]], lambda x: x)  # limit: the 0.3 rad crouch
+    actions = torch.zeros(1, dtype=torch.long)
+    tall = bent_knees(0.1, frames=4)[None]
+    assert crouch_loss(Identity, tall, actions, floor).item() == 0.0
+    low = bent_knees(0.9, frames=4)[None].requires_grad_(True)
+    loss = crouch_loss(Identity, low, actions, floor)
+    short = floor.limits[0].item() - hip_over_feet(bent_knees(0.9)).item()
+    assert abs(loss.item() - (short / CROUCH_SCALE_MM) ** 2) < 1e-9
+    loss.backward()
+    _, _, dims, _ = skeleton()
+    # Less knee bend raises the hips: the gradient on the knee angle is positive.
+    assert low.grad[0, 0, dims[2][0]].item() > 0.0

@@ -1,0 +1,62 @@
+"""select_game: the default rule and `--rule targets` on synthetic eval reports."""
+
+import json
+
+from training import select_game
+
+
+def report(source: str, hips: list[float], speed: float = 0.8, conditioned: bool = True, windows: str = "validation"):
+    """A minimal `motion-cli eval --json` report: one action per entry of `hips` (its lowest window hip p5, mm,
+    against a real p5 of 800)."""
+    actions = []
+    for k, hip in enumerate(hips):
+        ground = {
+            "real": {"s5_skating_fraction": 0.2, "lean_p95_deg": 40.0, "hip_height_p5_mm": 800.0,
+                     "hip_height_p95_mm": 950.0},
+            "windows": [{"on_floor_fraction": 1.0, "penetration_fraction": 0.0, "skating_fraction": 0.1,
+                         "lean_p95_deg": 30.0, "hip_height_p5_mm": hip, "hip_height_p95_mm": 900.0}],
+        }
+        speed_ratio = {"windows": [{"ratio": speed}]}
+        actions.append({"action": f"a{k}", "model": {"speed_ratio": speed_ratio},
+                        "model_grounded": {"speed_ratio": speed_ratio, "ground": ground}})
+    return {"model": {"source": source, "actions": ["a"] if conditioned else []},
+            "protocol": {"windows": windows}, "actions": actions}
+
+
+def choose(tmp_path, reports, *flags):
+    paths = []
+    for i, r in enumerate(reports):
+        p = tmp_path / f"r{i}.json"
+        p.write_text(json.dumps(r))
+        paths.append(str(p))
+    return select_game.main([*paths, *flags])
+
+
+def test_targets_counts_actions_meeting_all_five_then_the_hip_shortfall(tmp_path, capsys):
+    incumbent = report("old", [810.0, 790.0, 780.0])  # 1 of 3, 30 mm short
+    better = report("new", [805.0, 801.0, 700.0])  # 2 of 3, 100 mm short
+    assert choose(tmp_path, [incumbent, better], "--rule", "targets") == 0
+    assert "chosen: new" in capsys.readouterr().out
+    v = select_game.verdict(incumbent)
+    assert (v["targets"], round(v["hip_short"], 6)) == (1, 30.0)
+
+
+def test_targets_ties_go_to_the_smaller_shortfall_then_the_first_listed(tmp_path, capsys):
+    a = report("a", [810.0, 790.0])
+    b = report("b", [810.0, 795.0])
+    c = report("c", [810.0, 795.0])
+    assert choose(tmp_path, [a, b, c], "--rule", "targets") == 0
+    assert "chosen: b" in capsys.readouterr().out
+
+
+def test_a_frozen_action_fails_its_targets_and_the_default_rule_counts_alive(tmp_path, capsys):
+    frozen = report("frozen", [900.0, 900.0], speed=0.3)
+    v = select_game.verdict(frozen)
+    assert (v["alive"], v["targets"]) == (0, 0)
+    assert choose(tmp_path, [frozen, report("alive", [700.0, 700.0])]) == 0
+    assert "chosen: alive" in capsys.readouterr().out
+
+
+def test_test_windows_are_refused_without_allow_test(tmp_path, capsys):
+    assert choose(tmp_path, [report("t", [800.0], windows="test")], "--rule", "targets") == 2
+    assert "validation windows only" in capsys.readouterr().err
