@@ -11,6 +11,10 @@ ones) along the root's own up axis, from the body-frame joint positions (`kinema
 rotation left out). It needs no integration of the root and no floor; the limit it is held to is the 5th
 percentile of the same measure over the action's training frames (`CrouchFloor`), so real motion costs nothing
 beyond its own lowest 5 %.
+
+A model can also meet that limit by pointing its feet (the toes under the heel lift the root over the lowest foot
+point): `tiptoe_loss` holds the ankle's height over the lowest foot point (`ankle_over_sole`) at or under the 95th
+percentile of real motion of the action (`TiptoeCeiling`).
 """
 
 from __future__ import annotations
@@ -57,3 +61,42 @@ def crouch_loss(model, moved: torch.Tensor, actions: torch.Tensor, floor: Crouch
     h = hip_over_feet(model.norm.unnormalize(moved).double())
     limit = floor.limits.to(h.device)[actions][:, None]
     return ((torch.relu(limit - h) / CROUCH_SCALE_MM) ** 2).mean()
+
+
+ANKLES = [3, 8]  # RightFoot, LeftFoot (the ankle joints)
+TIPTOE_PERCENTILE = 95.0
+
+
+def ankle_over_sole(frames: torch.Tensor) -> torch.Tensor:
+    """Height (mm, along the root's up axis) of the lower ankle over the lowest foot point, ``[...]``, of full
+    un-normalized exp-map frames ``[..., 99]``: about 20-30 mm on average for real walking (the heel near the floor),
+    more while a foot stands on its toes. Differentiable."""
+    p = body_positions(frames, FOOT_JOINTS)[..., 1]
+    ankles = torch.minimum(p[..., FOOT_JOINTS.index(3)], p[..., FOOT_JOINTS.index(8)])
+    return ankles - p.min(dim=-1).values
+
+
+class TiptoeCeiling:
+    """Per action, the ``TIPTOE_PERCENTILE``-th percentile of ``ankle_over_sole`` over real sequences: ``limits
+    [A]`` (mm), as ``CrouchFloor`` (an action without frames: ``+inf``)."""
+
+    def __init__(self, sequences: list[list[np.ndarray]], unnormalize):
+        limits = []
+        with torch.no_grad():
+            for seqs in sequences:
+                heights = [ankle_over_sole(unnormalize(torch.from_numpy(np.ascontiguousarray(s)).float()).double())
+                           for s in seqs if s.shape[0] > 0]
+                if heights:
+                    limits.append(float(np.percentile(torch.cat(heights).numpy(), TIPTOE_PERCENTILE)))
+                else:
+                    limits.append(float("inf"))
+        self.limits = torch.tensor(limits, dtype=torch.float64)
+
+
+def tiptoe_loss(model, moved: torch.Tensor, actions: torch.Tensor, ceiling: TiptoeCeiling) -> torch.Tensor:
+    """Mean over sequences and frames of ``relu(a_t − limit_a)² / CROUCH_SCALE_MM²`` with ``a_t`` the
+    ``ankle_over_sole`` of ``model``'s normalized frames ``moved [B, T, O]``: feet that stand on their toes more than
+    real people's do cost, so that the crouch term is met by straight legs, not by pointed feet."""
+    a = ankle_over_sole(model.norm.unnormalize(moved).double())
+    limit = ceiling.limits.to(a.device)[actions][:, None]
+    return ((torch.relu(a - limit) / CROUCH_SCALE_MM) ** 2).mean()

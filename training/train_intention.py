@@ -85,7 +85,7 @@ from . import intention_labels
 from .export import load_weights, save_weights
 from .layers import MLP
 from . import long_horizon
-from .crouch import CrouchFloor, crouch_loss
+from .crouch import CrouchFloor, TiptoeCeiling, crouch_loss, tiptoe_loss
 from .kinematics import roughness_loss
 from .long_horizon import LONG_HORIZON, accel_loss, root_speed_loss, speed_loss, speed_ratios
 from .models import IntentionModel, joint_groups, make_config, parameter_count
@@ -161,6 +161,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="adds W x the crouch penalty (crouch.crouch_loss: the root's height over the lowest foot "
                         "point held at or above the action's real 5th percentile) of the generated frames with "
                         "gradient")
+    g.add_argument("--tiptoe-weight", type=float, default=0.0, metavar="W",
+                   help="adds W x the tiptoe penalty (crouch.tiptoe_loss: the ankle's height over the lowest foot point "
+                        "held at or below the action's real 95th percentile) of the generated frames with gradient")
     g.add_argument("--init-weights", type=Path, metavar="FILE.safetensors",
                    help="a new run whose model (and clustering) starts from an exported intention file; fresh "
                         "discriminators and optimizers; the model size flags do not apply")
@@ -411,6 +414,11 @@ def train(args, argv: list[str]) -> None:
         crouch_floor = CrouchFloor(labelled.seqs, model.norm.unnormalize)
         log("crouch limits (mm, hip over the feet, real p5): " + ", ".join(
             f"{a} {v:.0f}" for a, v in zip(h36m.ACTIONS, crouch_floor.limits.tolist())))
+    tiptoe_ceiling = None
+    if args.tiptoe_weight > 0:
+        tiptoe_ceiling = TiptoeCeiling(labelled.seqs, model.norm.unnormalize)
+        log("tiptoe limits (mm, ankle over the lowest foot point, real p95): " + ", ".join(
+            f"{a} {v:.0f}" for a, v in zip(h36m.ACTIONS, tiptoe_ceiling.limits.tolist())))
     d_pose = PoseDiscriminator(args.pose_window, model.output_size, args.d_hidden, args.pose_context)
     d_label = LabelDiscriminator(args.label_window, model.intentions, max(8, args.d_hidden // 4))
     model.to(device).train()
@@ -565,6 +573,10 @@ def train(args, argv: list[str]) -> None:
             crouch = sum(crouch_loss(model, m, a, crouch_floor) for m, a in zip(moved, (acts, long_acts)))
             lg = lg + args.crouch_weight * crouch
             terms["crouch"] = crouch.item()
+        if tiptoe_ceiling is not None:
+            tiptoe = sum(tiptoe_loss(model, m, a, tiptoe_ceiling) for m, a in zip(moved, (acts, long_acts)))
+            lg = lg + args.tiptoe_weight * tiptoe
+            terms["tiptoe"] = tiptoe.item()
         if args.drift_weight > 0:
             drift = drift_penalty(model, seed, drift_parts).to(lg.dtype)
             lg = lg + args.drift_weight * drift

@@ -5,7 +5,15 @@ import math
 import numpy as np
 import torch
 
-from training.crouch import CROUCH_SCALE_MM, CrouchFloor, crouch_loss, hip_over_feet
+from training.crouch import (
+    CROUCH_SCALE_MM,
+    CrouchFloor,
+    TiptoeCeiling,
+    ankle_over_sole,
+    crouch_loss,
+    hip_over_feet,
+    tiptoe_loss,
+)
 from training.kinematics import skeleton
 
 # motion_core::grounding::H36M_STANDING_HEIGHT_MM: the rest pose's root height over its lowest foot point.
@@ -62,3 +70,43 @@ def test_the_penalty_is_zero_over_the_limit_and_pulls_a_crouch_up():
     _, _, dims, _ = skeleton()
     # Less knee bend raises the hips: the gradient on the knee angle is positive.
     assert low.grad[0, 0, dims[2][0]].item() > 0.0
+
+
+def pointed_feet(angle: float, frames: int = 1) -> torch.Tensor:
+    """Full frames of the rest pose with both ankles (RightFoot, LeftFoot) turned by `angle` radians about x."""
+    _, _, dims, _ = skeleton()
+    x = torch.zeros(frames, 99, dtype=torch.float64)
+    for ankle in (3, 8):
+        x[:, dims[ankle][0]] = angle
+    return x
+
+
+def test_the_rest_feet_sit_their_ankles_over_the_sole_as_the_skeleton_says():
+    parents, offsets, _, _ = skeleton()
+
+    def rest_y(j):
+        return 0.0 if j < 0 else offsets[j, 1].item() + rest_y(parents[j])
+
+    sole = min(rest_y(j) for j in (3, 4, 5, 8, 9, 10))
+    expected = min(rest_y(3), rest_y(8)) - sole
+    assert abs(ankle_over_sole(torch.zeros(1, 99, dtype=torch.float64)).item() - expected) < 1e-9
+
+
+def test_pointed_feet_raise_the_ankle_and_the_tiptoe_penalty_pulls_them_flat():
+    heights = [ankle_over_sole(pointed_feet(a)).item() for a in (0.0, 0.4, 0.8)]
+    sign = 1.0 if heights[1] > heights[0] else -1.0  # the direction that points the toes down
+    heights = [ankle_over_sole(pointed_feet(sign * a)).item() for a in (0.0, 0.4, 0.8)]
+    assert heights[0] < heights[1] < heights[2], heights
+    ceiling = TiptoeCeiling([[pointed_feet(sign * 0.4).numpy()], []], lambda x: x)
+    assert math.isinf(ceiling.limits[1].item())
+    actions = torch.zeros(1, dtype=torch.long)
+    assert tiptoe_loss(Identity, pointed_feet(0.0, 3)[None], actions, ceiling).item() == 0.0
+    high = pointed_feet(sign * 0.8, 3)[None].requires_grad_(True)
+    loss = tiptoe_loss(Identity, high, actions, ceiling)
+    over = heights[2] - ceiling.limits[0].item()
+    assert abs(loss.item() - (over / CROUCH_SCALE_MM) ** 2) < 1e-6
+    loss.backward()
+    _, _, dims, _ = skeleton()
+    # Pointing the feet less lowers the ankles: the gradient on their angles has the pointing sign (it reaches
+    # whichever foot holds the minimum).
+    assert (high.grad[0, 0, dims[3][0]] + high.grad[0, 0, dims[8][0]]).item() * sign > 0.0

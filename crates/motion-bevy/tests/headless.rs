@@ -1,6 +1,9 @@
 //! The plugin in a headless Bevy app (no window, no renderer): 120 ticks at 60 Hz for two
 //! characters, every joint's GlobalTransform checked against motion-core's own forward
-//! kinematics of the same poses, and the poses against standalone `Character`s.
+//! kinematics of the same poses, and the poses against a motion-core `Crowd` of the same two
+//! members (the plugin batches its characters of one model in a `Crowd`; a batch computes to
+//! within float rounding of standalone `Character`s, and grounding's contact decisions can turn
+//! that rounding into a different step, so the reference is batched the same way).
 use std::path::Path;
 use std::sync::Arc;
 use std::time::Duration;
@@ -13,8 +16,9 @@ use motion_bevy::{
 };
 use motion_core::formats::bvh::parse_bvh;
 use motion_core::formats::expmap_bvh::ExpMapTarget;
+use motion_core::grounding::GroundingConfig;
 use motion_core::model::builtin::game_model;
-use motion_core::model::{Character, Noise};
+use motion_core::model::{Crowd, MemberId};
 use motion_core::pose::Pose;
 use motion_core::seed::seed_from_bvh;
 
@@ -37,7 +41,9 @@ fn app(assets: &str) -> App {
     app
 }
 
-fn standalone(action: &str, rng_seed: u64) -> Character {
+/// A motion-core `Crowd` of the built-in model with one grounded member per `(action, rng seed)`
+/// after the example seed, in that order, as the plugin starts its characters.
+fn reference_crowd(members: &[(&str, u64)]) -> (Crowd, Vec<MemberId>) {
     let model = Arc::new(game_model().expect("built-in weights").unwrap());
     let fps = model.config().fps;
     let bvh = parse_bvh(WALK_SEED, "walk_seed.bvh").unwrap();
@@ -49,11 +55,21 @@ fn standalone(action: &str, rng_seed: u64) -> Character {
         None,
     )
     .unwrap();
-    // Grounded, as the plugin's characters are.
-    let mut c = Character::new(model).unwrap();
-    c.start_from_clip(seed.frames.view(), Some(action), Noise::Seed(rng_seed))
-        .unwrap();
-    c
+    let mut crowd = Crowd::new(model).unwrap();
+    let ids = members
+        .iter()
+        .map(|&(action, rng_seed)| {
+            crowd
+                .add(
+                    seed.frames.view(),
+                    Some(action),
+                    rng_seed,
+                    GroundingConfig::default(),
+                )
+                .unwrap()
+        })
+        .collect();
+    (crowd, ids)
 }
 
 fn bevy_vec(v: [f32; 3]) -> Vec3 {
@@ -80,8 +96,9 @@ fn two_characters_for_120_ticks_match_forward_kinematics() {
         .world_mut()
         .spawn((MotionCharacter::new("eating", 9), Transform::default()))
         .id();
-    let mut reference = [(a, standalone("walking", 3)), (b, standalone("eating", 9))];
-    let skeleton = reference[0].1.skeleton().clone();
+    let (mut crowd, ids) = reference_crowd(&[("walking", 3), ("eating", 9)]);
+    let reference = [(a, ids[0]), (b, ids[1])];
+    let skeleton = crowd.skeleton().clone();
     let n = skeleton.len();
     let (mut positions, mut world) = (vec![Default::default(); n], vec![Default::default(); n]);
     let start_a = origin_a.translation;
@@ -89,21 +106,22 @@ fn two_characters_for_120_ticks_match_forward_kinematics() {
         if tick == 60 {
             let mut c = app.world_mut().get_mut::<MotionCharacter>(a).unwrap();
             c.action = "sitting".into();
-            reference[0].1.set_action("sitting", 0).unwrap();
+            crowd.set_action(ids[0], "sitting").unwrap();
         }
         app.update();
         let dt = app.world().resource::<Time>().delta_secs_f64();
-        for (entity, character) in &mut reference {
-            let expected = character.advance(dt).unwrap().clone();
+        crowd.advance(dt).unwrap();
+        for &(entity, id) in &reference {
+            let expected = crowd.pose(id).unwrap().clone();
             let world_ref = app.world();
-            assert!(world_ref.get::<MotionFailed>(*entity).is_none());
-            let pose = &world_ref.get::<MotionPose>(*entity).expect("started").0;
+            assert!(world_ref.get::<MotionFailed>(entity).is_none());
+            let pose = &world_ref.get::<MotionPose>(entity).expect("started").0;
             assert!(
                 same_pose(pose, &expected, 1e-3),
-                "tick {tick}: the plugin's pose left the standalone character's"
+                "tick {tick}: the plugin's pose left the reference crowd's"
             );
             // Bevy's propagated GlobalTransforms against motion-core's forward kinematics.
-            let rig = world_ref.get::<MotionRig>(*entity).unwrap();
+            let rig = world_ref.get::<MotionRig>(entity).unwrap();
             let origin = rig.origin();
             pose.world_positions_into(&skeleton, &mut positions, &mut world);
             for (j, &joint) in rig.joints().iter().enumerate() {
