@@ -36,22 +36,25 @@ def hip_over_feet(frames: torch.Tensor) -> torch.Tensor:
     return p[..., 0, 1] - p[..., 1:, 1].min(dim=-1).values
 
 
+def per_action_percentile(sequences: list[list[np.ndarray]], unnormalize, measure, q: float, empty: float) -> torch.Tensor:
+    """Per action, the ``q``-th percentile of ``measure`` (of full frames) over ``sequences[a]`` (normalized model
+    frames, ``unnormalize`` maps them to full frames), ``[A]`` f64; ``empty`` for an action without frames."""
+    limits = []
+    with torch.no_grad():
+        for seqs in sequences:
+            values = [measure(unnormalize(torch.from_numpy(np.ascontiguousarray(s)).float()).double())
+                      for s in seqs if s.shape[0] > 0]
+            limits.append(float(np.percentile(torch.cat(values).numpy(), q)) if values else empty)
+    return torch.tensor(limits, dtype=torch.float64)
+
+
 class CrouchFloor:
     """Per action, the ``PERCENTILE``-th percentile of ``hip_over_feet`` over real sequences: ``limits [A]`` (mm)
     from ``sequences[a]`` (normalized model frames, ``unnormalize`` maps them to full frames); an action without
     frames gets no limit (``-inf``)."""
 
     def __init__(self, sequences: list[list[np.ndarray]], unnormalize):
-        limits = []
-        with torch.no_grad():
-            for seqs in sequences:
-                heights = [hip_over_feet(unnormalize(torch.from_numpy(np.ascontiguousarray(s)).float()).double())
-                           for s in seqs if s.shape[0] > 0]
-                if heights:
-                    limits.append(float(np.percentile(torch.cat(heights).numpy(), PERCENTILE)))
-                else:
-                    limits.append(float("-inf"))
-        self.limits = torch.tensor(limits, dtype=torch.float64)
+        self.limits = per_action_percentile(sequences, unnormalize, hip_over_feet, PERCENTILE, float("-inf"))
 
 
 def crouch_loss(model, moved: torch.Tensor, actions: torch.Tensor, floor: CrouchFloor) -> torch.Tensor:
@@ -81,16 +84,7 @@ class TiptoeCeiling:
     [A]`` (mm), as ``CrouchFloor`` (an action without frames: ``+inf``)."""
 
     def __init__(self, sequences: list[list[np.ndarray]], unnormalize):
-        limits = []
-        with torch.no_grad():
-            for seqs in sequences:
-                heights = [ankle_over_sole(unnormalize(torch.from_numpy(np.ascontiguousarray(s)).float()).double())
-                           for s in seqs if s.shape[0] > 0]
-                if heights:
-                    limits.append(float(np.percentile(torch.cat(heights).numpy(), TIPTOE_PERCENTILE)))
-                else:
-                    limits.append(float("inf"))
-        self.limits = torch.tensor(limits, dtype=torch.float64)
+        self.limits = per_action_percentile(sequences, unnormalize, ankle_over_sole, TIPTOE_PERCENTILE, float("inf"))
 
 
 def tiptoe_loss(model, moved: torch.Tensor, actions: torch.Tensor, ceiling: TiptoeCeiling) -> torch.Tensor:

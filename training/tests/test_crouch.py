@@ -29,13 +29,18 @@ class Identity:
             return x
 
 
-def bent_knees(angle: float, frames: int = 1) -> torch.Tensor:
-    """Full frames [frames, 99] of the rest pose with both knees (RightLeg, LeftLeg) bent by `angle` radians about x."""
+def turned(joints: tuple[int, ...], angle: float, frames: int) -> torch.Tensor:
+    """Full frames [frames, 99] of the rest pose with `joints` turned by `angle` radians about x."""
     _, _, dims, _ = skeleton()
     x = torch.zeros(frames, 99, dtype=torch.float64)
-    for knee in (2, 7):
-        x[:, dims[knee][0]] = angle
+    for j in joints:
+        x[:, dims[j][0]] = angle
     return x
+
+
+def bent_knees(angle: float, frames: int = 1) -> torch.Tensor:
+    """The rest pose with both knees (RightLeg, LeftLeg) bent by `angle` radians."""
+    return turned((2, 7), angle, frames)
 
 
 def test_the_rest_pose_stands_at_the_engines_standing_height():
@@ -73,12 +78,8 @@ def test_the_penalty_is_zero_over_the_limit_and_pulls_a_crouch_up():
 
 
 def pointed_feet(angle: float, frames: int = 1) -> torch.Tensor:
-    """Full frames of the rest pose with both ankles (RightFoot, LeftFoot) turned by `angle` radians about x."""
-    _, _, dims, _ = skeleton()
-    x = torch.zeros(frames, 99, dtype=torch.float64)
-    for ankle in (3, 8):
-        x[:, dims[ankle][0]] = angle
-    return x
+    """The rest pose with both ankles (RightFoot, LeftFoot) turned by `angle` radians."""
+    return turned((3, 8), angle, frames)
 
 
 def test_the_rest_feet_sit_their_ankles_over_the_sole_as_the_skeleton_says():
