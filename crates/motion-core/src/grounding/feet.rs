@@ -33,6 +33,10 @@ const SWING_RISE_S: f32 = 0.06;
 const RELEASE_REACH: f32 = 1.3;
 /// The body is held back so that a held foot is at most this times its leg's reach away.
 const REACH_USED: f32 = 0.995;
+/// The most a planted foot that its straight leg cannot reach rises onto its toes (radians of
+/// heel rise about the toe tip; people roll 30-40 degrees onto the toes before a foot leaves
+/// the floor).
+const MAX_HEEL_RISE_RAD: f32 = 0.7;
 
 /// One foot's lock.
 #[derive(Debug, Clone, Copy, Default)]
@@ -337,6 +341,11 @@ impl Grounder {
             if height < wanted || (support && height > wanted) {
                 let target = ankle + Vec3::Y * (wanted - height);
                 let rotation = self.rotations[leg.ankle];
+                let (target, rotation) = if support {
+                    self.heel_rise(side, target, rotation, Quat::IDENTITY)
+                } else {
+                    (target, rotation)
+                };
                 self.solve_leg(side, rotations, target, rotation);
             }
             return;
@@ -370,11 +379,83 @@ impl Grounder {
             ankle.z + (lock.z - ankle.z) * wh,
         );
         let mut target = Vec3::new(target.x, target.y.max(-below_ankle), target.z);
-        if state.stepping || state.from.is_some() {
+        let (target, foot_rotation) = if state.stepping || state.from.is_some() {
             let lifted = -below_ankle + STEP_HEIGHT_M * (1.0 - (2.0 * w_step - 1.0).powi(2));
             target.y = target.y.max(lifted);
-        }
+            (target, foot_rotation)
+        } else if state.held() {
+            self.heel_rise(side, target, foot_rotation, turn)
+        } else {
+            (target, foot_rotation)
+        };
         self.solve_leg(side, rotations, target, foot_rotation);
+    }
+
+    /// A planted foot whose ankle `target` its leg cannot reach rolls onto its toes, as a foot
+    /// does behind a walker before it leaves the floor: the foot turns about its toe tip (the
+    /// foot point farthest from the ankle, held where it is) just enough for the ankle to come
+    /// within reach, at most [`MAX_HEEL_RISE_RAD`], and only for a foot whose toes point towards
+    /// the hip (a foot ahead of the body, toes away from it, stays flat). `turn`: the world
+    /// rotation from the model's foot to `foot_rotation`. Returns the ankle's target and the
+    /// foot's world rotation.
+    pub(super) fn heel_rise(
+        &self,
+        side: usize,
+        target: Vec3,
+        foot_rotation: Quat,
+        turn: Quat,
+    ) -> (Vec3, Quat) {
+        let leg = &self.parts.legs[side];
+        let (hip, knee, ankle) = (
+            self.positions[leg.hip],
+            self.positions[leg.knee],
+            self.positions[leg.ankle],
+        );
+        let reach = ((knee - hip).length() + (ankle - knee).length()) * REACH_USED;
+        if (target - hip).length() <= reach {
+            return (target, foot_rotation);
+        }
+        let toe = leg
+            .foot_points
+            .iter()
+            .map(|&j| turn * (self.positions[j] - ankle))
+            .fold(Vec3::ZERO, |a, b| {
+                if b.length_squared() > a.length_squared() {
+                    b
+                } else {
+                    a
+                }
+            });
+        let forward = Vec3::new(toe.x, 0.0, toe.z);
+        let to_hip = Vec3::new(hip.x - target.x, 0.0, hip.z - target.z);
+        if forward.length_squared() < 1e-8 || forward.dot(to_hip) <= 0.0 {
+            return (target, foot_rotation);
+        }
+        let axis = Vec3::Y.cross(forward).normalize();
+        let pivot = target + toe;
+        let ankle_at = |angle: f32| pivot + Quat::from_axis_angle(axis, angle) * -toe;
+        let distance = |angle: f32| (ankle_at(angle) - hip).length();
+        if distance(MAX_HEEL_RISE_RAD) >= (target - hip).length() {
+            return (target, foot_rotation);
+        }
+        let angle = if distance(MAX_HEEL_RISE_RAD) > reach {
+            MAX_HEEL_RISE_RAD
+        } else {
+            let (mut lo, mut hi) = (0.0, MAX_HEEL_RISE_RAD);
+            for _ in 0..16 {
+                let mid = 0.5 * (lo + hi);
+                if distance(mid) > reach {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            hi
+        };
+        (
+            ankle_at(angle),
+            (Quat::from_axis_angle(axis, angle) * foot_rotation).normalize(),
+        )
     }
 
     /// Two-bone IK of leg `side` bringing its ankle to `target` with the foot's world rotation

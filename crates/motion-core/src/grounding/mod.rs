@@ -28,7 +28,10 @@
 //!    [`GroundingConfig::contact_height_m`] and its ankle moves slower than
 //!    [`GroundingConfig::contact_speed_m_s`] horizontally; from the first frame of a contact its
 //!    ankle is held over where it was, the foot's lowest point on the floor, by two-bone IK of
-//!    hip and knee, and the foot keeps the world rotation it had then, released when the model lifts or speeds up the foot or the leg cannot reach,
+//!    hip and knee, and the foot keeps the world rotation it had then (a held foot behind the
+//!    body that its straight leg cannot reach rolls onto its toes instead, about its toe tip,
+//!    up to 40 degrees of heel rise, as a walker's rear foot does before it leaves the floor;
+//!    so does the supporting foot when the hip-height hold raised it out of reach), released when the model lifts or speeds up the foot or the leg cannot reach,
 //!    blending back to the model's foot over [`GroundingConfig::release_s`] (a foot held more
 //!    than `STEP_MIN_M` (5 cm) from where the model has it steps there, lifted up to
 //!    `STEP_HEIGHT_M` (8 cm), instead of sliding over the floor). A foot that lands within

@@ -439,3 +439,66 @@ fn the_balance_offset_stays_while_the_body_stands_on_one_foot() {
     g.one_foot = None;
     assert!(g.carried(DT).x < 0.3);
 }
+
+#[test]
+fn a_planted_foot_out_of_reach_behind_the_hip_rolls_onto_its_toes() {
+    // A straight standing leg asked to hold its ankle 0.25 m behind where it stands, at the same
+    // height: out of reach flat, so the foot turns about its toe tip (held where it is) until
+    // the ankle is within reach, heel up by less than the most allowed. The same foot asked to
+    // stand 0.25 m ahead (toes pointing away from the hip) stays flat.
+    let mut g = grounder();
+    let rest = vec![Quat::IDENTITY; Skeleton::h36m().len()];
+    g.forward_kinematics(Vec3::new(0.0, 0.9, 0.0), &rest);
+    let side = usize::from(g.parts.legs[1].ankle == 3);
+    let leg = g.parts.legs[side].clone();
+    let (hip, knee, ankle) = (
+        g.positions[leg.hip],
+        g.positions[leg.knee],
+        g.positions[leg.ankle],
+    );
+    let reach = (knee - hip).length() + (ankle - knee).length();
+    let tip = *leg
+        .foot_points
+        .iter()
+        .max_by(|&&a, &&b| {
+            (g.positions[a] - ankle)
+                .length()
+                .total_cmp(&(g.positions[b] - ankle).length())
+        })
+        .unwrap();
+    let toe = g.positions[tip] - ankle;
+    let forward = Vec3::new(toe.x, 0.0, toe.z).normalize();
+    let flat = Quat::IDENTITY;
+
+    let behind = ankle - forward * 0.25;
+    assert!((behind - hip).length() > reach);
+    let (target, rotation) = g.heel_rise(side, behind, flat, Quat::IDENTITY);
+    assert!(
+        (target - hip).length() <= reach + 1e-4,
+        "the ankle still {} m from the hip, reach {reach}",
+        (target - hip).length()
+    );
+    let tip_after = target + rotation * toe;
+    assert!(
+        (tip_after - (behind + toe)).length() < 1e-4,
+        "the toe tip moved {} m",
+        (tip_after - (behind + toe)).length()
+    );
+    let heel_up = (rotation * forward).y.asin();
+    assert!(
+        heel_up < -0.05 && heel_up > -0.7 - 1e-4,
+        "the foot pitched {heel_up} rad (toes down is negative)"
+    );
+    assert!(target.y > behind.y + 0.01, "the ankle did not rise");
+
+    let ahead = ankle + forward * 0.25;
+    assert_eq!(
+        g.heel_rise(side, ahead, flat, Quat::IDENTITY),
+        (ahead, flat)
+    );
+    // Within reach: unchanged.
+    assert_eq!(
+        g.heel_rise(side, ankle, flat, Quat::IDENTITY),
+        (ankle, flat)
+    );
+}
