@@ -262,11 +262,23 @@ impl Grounder {
     }
 
     /// How far the root must move horizontally so that every fully held foot is within its
-    /// leg's reach (the mean over the held feet that need it).
+    /// leg's reach (the mean over the held feet that need it): flat, or, while the root leads
+    /// ([`Grounder::set_root_leads`]), rolled onto its toes as far as [`Self::heel_rise`] allows.
     pub(super) fn held_back(&self) -> Vec3 {
         let (mut sum, mut n) = (Vec3::ZERO, 0.0);
-        for (lock, hip, reach) in (0..2).filter_map(|side| self.held(side)) {
-            let d = lock - hip;
+        for side in 0..2 {
+            let Some((lock, hip, reach)) = self.held(side) else {
+                continue;
+            };
+            let ankle = if self.root_leads {
+                let state = &self.feet[side];
+                let model = self.rotations[self.parts.legs[side].ankle];
+                let turn = state.lock_rotation * model.inverse();
+                self.heel_rise(side, lock, state.lock_rotation, turn).0
+            } else {
+                lock
+            };
+            let d = ankle - hip;
             let horizontal = Vec3::new(d.x, 0.0, d.z);
             let (h, v) = (horizontal.length(), d.y.abs());
             if d.length() > reach && v < reach && h > 1e-6 {

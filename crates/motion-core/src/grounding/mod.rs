@@ -31,7 +31,10 @@
 //!    hip and knee, and the foot keeps the world rotation it had then (a held foot behind the
 //!    body that its straight leg cannot reach rolls onto its toes instead, about its toe tip,
 //!    up to 40 degrees of heel rise, as a walker's rear foot does before it leaves the floor;
-//!    so does the supporting foot when the hip-height hold raised it out of reach), released when the model lifts or speeds up the foot or the leg cannot reach,
+//!    so does the supporting foot when the hip-height hold raised it out of reach); a body whose
+//!    held foot is out of reach is held back horizontally to where the flat foot reaches, or,
+//!    while the root leads ([`Grounder::set_root_leads`]: a steered character), to where the
+//!    foot rolled onto its toes reaches; released when the model lifts or speeds up the foot or the leg cannot reach,
 //!    blending back to the model's foot over [`GroundingConfig::release_s`] (a foot held more
 //!    than `STEP_MIN_M` (5 cm) from where the model has it steps there, lifted up to
 //!    `STEP_HEIGHT_M` (8 cm), instead of sliding over the floor). A foot that lands within
@@ -246,6 +249,8 @@ pub struct Grounder {
     one_foot: Option<(usize, f32)>,
     /// The model's root on the last frame (floor frame, before grounding's offsets).
     model_root: Option<Vec3>,
+    /// Whether the root leads (a steered character): see [`Grounder::set_root_leads`].
+    root_leads: bool,
 }
 
 /// Seed frames kept for the floor fit (the last ones).
@@ -289,6 +294,7 @@ impl Grounder {
             balance: Vec3::ZERO,
             one_foot: None,
             model_root: None,
+            root_leads: false,
         })
     }
 
@@ -324,6 +330,14 @@ impl Grounder {
             .config
             .min_hip_fraction
             .unwrap_or_else(|| hip_floor_fraction(action));
+    }
+
+    /// Whether the root leads the feet (off by default): a steered character's root goes where
+    /// its goal sends it, so a held foot behind the body rolls onto its toes (as far as the heel
+    /// rise allows) before it holds the body back; otherwise the body travels only as far as its
+    /// flat held feet reach, the model's legs setting the pace. Kept across [`Self::reset`].
+    pub fn set_root_leads(&mut self, leads: bool) {
+        self.root_leads = leads;
     }
 
     /// The lean limit in force (degrees).

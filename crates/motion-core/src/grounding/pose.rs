@@ -46,6 +46,11 @@ impl PoseGrounder {
         self.previous = None;
     }
 
+    /// Whether the root leads the feet ([`Grounder::set_root_leads`]: a steered character).
+    pub fn set_root_leads(&mut self, leads: bool) {
+        self.grounder.set_root_leads(leads);
+    }
+
     /// Sets the lean limit for `action`.
     pub fn set_action(&mut self, action: Option<&str>) {
         self.grounder.set_action(action);

@@ -79,6 +79,7 @@ impl PoseStream {
         self.decoder.reset();
         self.resampler.reset();
         self.grounder.reset(action);
+        self.grounder.set_root_leads(self.steering.goal().is_some());
         self.steering.clear_seed();
         for row in seed.rows() {
             let pose = match row.as_slice() {
@@ -166,9 +167,11 @@ impl PoseStream {
         self.grounder.set_action(action);
     }
 
-    /// Steers toward `goal` from the next frame ([`Steering::set_goal`]).
+    /// Steers toward `goal` from the next frame ([`Steering::set_goal`]); while a goal is set the
+    /// root leads the grounding's held feet ([`Grounder::set_root_leads`]).
     pub fn set_goal(&mut self, goal: Option<Goal>) {
         self.steering.set_goal(goal);
+        self.grounder.set_root_leads(goal.is_some());
     }
 
     /// Steers a model that reads a control vector (`goal-gru` with 3 control values) by that
