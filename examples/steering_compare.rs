@@ -3,7 +3,9 @@
 //! model, by the control it reads (`motion_core::model::goal_gru`), beside a motion-matching
 //! baseline (`motion_core::matching`) built from the same training data: every frame of the
 //! H3.6M training subjects' (S1, S6, S7, S8, S9, S11) walking, walkingdog and walkingtogether takes
-//! at 25 Hz. Body speed is against real S5 walking (the test subject).
+//! at 25 Hz. Body speed is against real S5 walking (the test subject); NDMS (Tanke et al. 2021)
+//! against the motion words of the same training takes (their poses decoded as the engine
+//! decodes a model's, positions in metres, words in the body frame), beside real S5 walking's own.
 //!
 //! ```text
 //! cargo run --release --example steering_compare -- [DATA_ROOT] [--json OUT.json]
@@ -26,7 +28,10 @@ use motion_core::root::RootEncoding;
 use motion_core::seed::load_seed;
 use motion_core::skeleton::Skeleton;
 use motion_core::steering::Steering;
-use motion_metrics::responsiveness::{body_speed, measure, ResponsivenessReport};
+use motion_metrics::ndms::{NdmsConfig, NdmsDatabase, NnMethod};
+use motion_metrics::responsiveness::{
+    body_speed, measure, positions_of, RealMotion, ResponsivenessReport,
+};
 
 type BoxError = Box<dyn Error + Send + Sync>;
 
@@ -68,8 +73,31 @@ fn main() -> Result<(), BoxError> {
         database.bytes() as f64 / 1e6,
         built.elapsed().as_secs_f64()
     );
-    let real = real_walking_body_speed(&dataset)?;
-    println!("real S5 walking body speed: {real:.3} m/s\n");
+    let real_speed = real_walking_body_speed(&dataset)?;
+    println!("real S5 walking body speed: {real_speed:.3} m/s");
+    let built = Instant::now();
+    let training: Vec<_> = clips.iter().map(|c| positions_of_clip(c.view())).collect();
+    let views: Vec<_> = training.iter().map(|p| p.view()).collect();
+    let words =
+        NdmsDatabase::from_sequences(NdmsConfig::h36m_body_frame(), &views, NnMethod::default())?;
+    let s5: Vec<_> = load_subject_sequences(&dataset, "S5", "walking")?
+        .iter()
+        .map(|c| positions_of_clip(c.view()))
+        .collect();
+    let real_ndms: Vec<f64> = s5
+        .iter()
+        .map(|p| words.score_forecasts(&[p.view()], None).map(|r| r.mean))
+        .collect::<Result<_, _>>()?;
+    println!(
+        "NDMS database: {} words of the same takes, built in {:.1} s; real S5 walking's NDMS against it: {:.3}\n",
+        words.len(),
+        built.elapsed().as_secs_f64(),
+        real_ndms.iter().sum::<f64>() / real_ndms.len().max(1) as f64
+    );
+    let real = RealMotion {
+        body_speed: real_speed,
+        ndms: Some(&words),
+    };
 
     let mut reports = Vec::new();
     for (file, how) in [
@@ -108,6 +136,18 @@ fn main() -> Result<(), BoxError> {
     Ok(())
 }
 
+/// World positions (metres) of a 25 Hz H3.6M take decoded into engine poses.
+fn positions_of_clip(take: ndarray::ArrayView2<'_, f64>) -> ndarray::Array3<f64> {
+    let skeleton = Arc::new(Skeleton::h36m());
+    let mut decoder = PoseDecoder::new(skeleton.clone(), RootEncoding::Deltas, 2);
+    let poses: Vec<Pose> = take
+        .rows()
+        .into_iter()
+        .map(|row| decoder.push(&row.to_vec()).clone())
+        .collect();
+    positions_of(&skeleton, &poses)
+}
+
 /// Body speed of real S5 walking (both takes, 25 Hz).
 fn real_walking_body_speed(dataset: &Path) -> Result<f64, BoxError> {
     let skeleton = Arc::new(Skeleton::h36m());
@@ -131,13 +171,13 @@ fn real_walking_body_speed(dataset: &Path) -> Result<f64, BoxError> {
 fn print_table(reports: &[ResponsivenessReport]) {
     let t = |v: Option<f64>| v.map_or("-".to_string(), |s| format!("{s:.2}"));
     println!(
-        "| controller | own speed m/s | turn 90: heading / speed s | turn 180: heading / speed s | stop: speed s | speed up: speed s | speed 2-4 s after: turn 90 / 180 / stop / speed up, m/s | skating turn 90 / 180 / stop / speed up | body speed / real | us per frame | memory MB |"
+        "| controller | own speed m/s | turn 90: heading / speed s | turn 180: heading / speed s | stop: speed s | speed up: speed s | speed 2-4 s after: turn 90 / 180 / stop / speed up, m/s | skating turn 90 / 180 / stop / speed up | body speed / real | NDMS | us per frame | memory MB |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     for r in reports {
         let s = &r.scenarios;
         println!(
-            "| {} | {:.2} | {} / {} | {} / {} | {} | {} | {:.2} / {:.2} / {:.2} / {:.2} | {:.2} / {:.2} / {:.2} / {:.2} | {:.2} | {:.0} | {:.2} |",
+            "| {} | {:.2} | {} / {} | {} / {} | {} | {} | {:.2} / {:.2} / {:.2} / {:.2} | {:.2} / {:.2} / {:.2} / {:.2} | {:.2} | {} | {:.0} | {:.2} |",
             r.controller,
             r.warm_up_speed_m_s,
             t(s[0].heading_s),
@@ -155,6 +195,7 @@ fn print_table(reports: &[ResponsivenessReport]) {
             s[2].skating,
             s[3].skating,
             r.body_speed_ratio,
+            r.ndms.map_or("-".to_string(), |v| format!("{v:.3}")),
             r.us_per_frame,
             r.memory_bytes as f64 / 1e6,
         );

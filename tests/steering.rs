@@ -13,10 +13,13 @@ use motion::core::grounding::find_body_parts;
 use motion::core::grounding::GroundingConfig;
 use motion::core::matching::{Matcher, MatchingDatabase};
 use motion::core::model::{Character, Crowd, MotionModel, Noise};
-use motion::core::pose::Pose;
+use motion::core::pose::{Pose, PoseDecoder};
+use motion::core::root::RootEncoding;
 use motion::core::seed::load_seed;
+use motion::core::skeleton::Skeleton;
 use motion::core::steering::{direction_of, facing_of, Goal, Waypoints};
-use motion::metrics::responsiveness::measure;
+use motion::metrics::ndms::{NdmsConfig, NdmsDatabase, NnMethod};
+use motion::metrics::responsiveness::{measure, positions_of, RealMotion};
 
 mod common;
 use common::allocations;
@@ -382,9 +385,32 @@ fn motion_matching_on_the_training_walks_answers_every_goal_change() {
     }
     let views: Vec<_> = clips.iter().map(|c| c.view()).collect();
     let database = Arc::new(MatchingDatabase::h36m(&views).unwrap());
-    let make =
-        || -> Result<Matcher, std::convert::Infallible> { Ok(Matcher::new(database.clone())) };
-    let report = measure("motion matching", make, 0.42, database.bytes()).unwrap();
+    let make = || -> Result<Matcher, Box<dyn std::error::Error + Send + Sync>> {
+        Ok(Matcher::new(database.clone()))
+    };
+    // NDMS against the motion words of the same takes, decoded as the engine decodes them.
+    let skeleton = Arc::new(Skeleton::h36m());
+    let takes: Vec<_> = clips
+        .iter()
+        .map(|clip| {
+            let mut decoder = PoseDecoder::new(skeleton.clone(), RootEncoding::Deltas, 2);
+            let poses: Vec<Pose> = clip
+                .rows()
+                .into_iter()
+                .map(|row| decoder.push(&row.to_vec()).clone())
+                .collect();
+            positions_of(&skeleton, &poses)
+        })
+        .collect();
+    let views: Vec<_> = takes.iter().map(|t| t.view()).collect();
+    let words =
+        NdmsDatabase::from_sequences(NdmsConfig::h36m_body_frame(), &views, NnMethod::default())
+            .unwrap();
+    let real = RealMotion {
+        body_speed: 0.42,
+        ndms: Some(&words),
+    };
+    let report = measure("motion matching", make, real, database.bytes()).unwrap();
     eprintln!("{report:?}");
     for s in &report.scenarios[..2] {
         let t = s.heading_s.unwrap_or(f64::INFINITY);
@@ -396,6 +422,9 @@ fn motion_matching_on_the_training_walks_answers_every_goal_change() {
         "body speed {} of real walking's",
         report.body_speed_ratio
     );
+    // Playing the takes the words come from, blended at its jumps and turned by the goals.
+    let ndms = report.ndms.expect("a database was given");
+    assert!((0.5..=1.0).contains(&ndms), "NDMS {ndms}");
 }
 
 #[test]

@@ -12,6 +12,10 @@
 //! - **Body speed**: the mean joint speed relative to the root in the heading frame (the body's
 //!   own motion, not its travel), over every scenario frame, against real motion's
 //!   ([`body_speed`] of real clips).
+//! - **NDMS** (optional): the mean NDMS (Tanke et al. 2021, [`crate::ndms`]) of the body's motion
+//!   words over every scenario (its last κ-1 warm-up frames before the change prepended) against
+//!   a database of real motion words ([`RealMotion::ndms`], built from [`positions_of`] real
+//!   clips): how much the steered body moves like real motion, 1 for a word real motion has.
 //! - **Cost**: microseconds per frame (wall clock of [`Steerable::advance`]) and the bytes the
 //!   caller says the controller holds.
 //!
@@ -21,6 +25,10 @@ use std::time::Instant;
 
 use glam::{Quat, Vec2, Vec3};
 use motion_core::grounding::find_body_parts;
+use ndarray::Array3;
+
+use crate::error::MetricError;
+use crate::ndms::NdmsDatabase;
 use motion_core::pose::Pose;
 use motion_core::skeleton::Skeleton;
 use motion_core::steering::{direction_of, wrap_angle, Goal, Steerable};
@@ -120,34 +128,51 @@ pub struct ResponsivenessReport {
     pub scenarios: Vec<ScenarioReport>,
     /// Mean body speed over every scenario frame against the real motion's.
     pub body_speed_ratio: f64,
+    /// Mean NDMS of the body's motion words over every scenario against the real motion's
+    /// database (`None`: no database given).
+    pub ndms: Option<f64>,
     /// Wall-clock microseconds per frame.
     pub us_per_frame: f64,
     /// Bytes the controller holds (as the caller counts them).
     pub memory_bytes: usize,
 }
 
-/// Measures a controller made fresh by `make` for every scenario (see the module docs);
-/// `real_body_speed` is [`body_speed`] of real motion of the kind asked for.
+/// The real motion a controller's body is compared with.
+#[derive(Debug, Clone, Copy)]
+pub struct RealMotion<'a> {
+    /// [`body_speed`] of real motion of the kind asked for (m/s).
+    pub body_speed: f64,
+    /// A database of its motion words for NDMS (positions from [`positions_of`], metres), in
+    /// words of a rigid body frame ([`crate::ndms::NdmsConfig::h36m_body_frame`] for H3.6M rigs:
+    /// real takes decoded from root deltas stand in the pelvis frame where integration started,
+    /// not on a level floor); `None`: no NDMS.
+    pub ndms: Option<&'a NdmsDatabase>,
+}
+
+/// Measures a controller made fresh by `make` for every scenario (see the module docs) against
+/// `real` motion.
 ///
 /// # Errors
-/// `make` or a frame failed.
+/// `make` or a frame failed, or the NDMS database does not fit the controller's skeleton.
 pub fn measure<S, E>(
     controller: &str,
     mut make: impl FnMut() -> Result<S, E>,
-    real_body_speed: f64,
+    real: RealMotion<'_>,
     memory_bytes: usize,
 ) -> Result<ResponsivenessReport, E>
 where
     S: Steerable,
-    E: From<S::Error>,
+    E: From<S::Error> + From<MetricError>,
 {
     let (mut time, mut frames) = (0.0f64, 0usize);
     let mut body = BodySpeed::default();
     let mut scenarios = Vec::new();
     let mut warm_up_speed = 0.0;
+    let (mut seeds, mut tracks) = (Vec::new(), Vec::new());
     for scenario in Scenario::ALL {
         let mut character = make()?;
         let mut probe = Probe::new(character.skeleton());
+        let (mut seed, mut track) = (Vec::new(), Vec::new());
         let mut pose = Pose::rest(character.skeleton().len());
         let warm_up = (WARM_UP_S / FRAME_S).round() as usize;
         let mut start = None;
@@ -161,6 +186,7 @@ where
             }
             probe.heading = character.heading_of(&pose);
             probe.observe(character.skeleton(), &pose);
+            probe.record(&mut seed);
         }
         let heading = character.heading_of(&pose);
         let speed = (floor(pose.root_translation) - start.expect("frames")).length()
@@ -182,6 +208,7 @@ where
             let now = f as f64 * FRAME_S;
             probe.heading = character.heading_of(&pose);
             let slides = probe.observe(character.skeleton(), &pose);
+            probe.record(&mut track);
             body.add(probe.body_speed);
             if now <= SKATING_S + 1e-9 {
                 skating += usize::from(slides);
@@ -210,15 +237,49 @@ where
             skating: skating as f64 / skating_frames.max(1) as f64,
             late_speed_m_s: late_speed(&roots),
         });
+        let joints = character.skeleton().len();
+        seeds.push(frames_of(seed, joints));
+        tracks.push(frames_of(track, joints));
     }
+    let ndms = match real.ndms {
+        Some(database) => {
+            let forecasts: Vec<_> = tracks.iter().map(|t| t.view()).collect();
+            let seeds: Vec<_> = seeds.iter().map(|t| t.view()).collect();
+            Some(database.score_forecasts(&forecasts, Some(&seeds))?.mean)
+        }
+        None => None,
+    };
     Ok(ResponsivenessReport {
         controller: controller.to_string(),
         warm_up_speed_m_s: warm_up_speed,
         scenarios,
-        body_speed_ratio: body.mean() / real_body_speed,
+        body_speed_ratio: body.mean() / real.body_speed,
+        ndms,
         us_per_frame: time / frames.max(1) as f64 * 1e6,
         memory_bytes,
     })
+}
+
+/// World positions (metres, `T x J x 3`) of `poses` on `skeleton`: the input of an NDMS database
+/// of real motion ([`RealMotion::ndms`]) or of its own score.
+pub fn positions_of<'a>(
+    skeleton: &Skeleton,
+    poses: impl IntoIterator<Item = &'a Pose>,
+) -> Array3<f64> {
+    let n = skeleton.len();
+    let (mut positions, mut world, mut out) =
+        (vec![Vec3::ZERO; n], vec![Quat::IDENTITY; n], Vec::new());
+    for pose in poses {
+        pose.world_positions_into(skeleton, &mut positions, &mut world);
+        out.extend(positions.iter().flat_map(|p| p.to_array().map(f64::from)));
+    }
+    frames_of(out, n)
+}
+
+/// `T x J x 3` frames from flat positions.
+fn frames_of(flat: Vec<f64>, joints: usize) -> Array3<f64> {
+    let frames = flat.len() / (joints * 3).max(1);
+    Array3::from_shape_vec((frames, joints, 3), flat).expect("whole frames")
 }
 
 /// The mean body speed (m/s: joint speed relative to the root in the heading frame, over every
@@ -340,6 +401,15 @@ impl Probe {
         self.started = true;
         slides
     }
+
+    /// Appends the positions of the last observed frame (metres, flat `x, y, z` per joint).
+    fn record(&self, out: &mut Vec<f64>) {
+        out.extend(
+            self.positions
+                .iter()
+                .flat_map(|p| p.to_array().map(f64::from)),
+        );
+    }
 }
 
 /// Ground speed over the last 2 s of root floor positions (25 Hz): the distance made good.
@@ -396,7 +466,7 @@ mod tests {
 
     #[test]
     fn an_ideal_controller_answers_at_once() {
-        let make = || -> Result<Ideal, std::convert::Infallible> {
+        let make = || -> Result<Ideal, Box<dyn std::error::Error + Send + Sync>> {
             let skeleton = Skeleton::h36m();
             let mut pose = Pose::rest(skeleton.len());
             pose.root_translation = Vec3::new(0.0, 1.0, 0.0);
@@ -409,7 +479,11 @@ mod tests {
                 skeleton,
             })
         };
-        let report = measure("ideal", make, 1.0, 0).unwrap();
+        let real = RealMotion {
+            body_speed: 1.0,
+            ndms: None,
+        };
+        let report = measure("ideal", make, real, 0).unwrap();
         assert!((report.warm_up_speed_m_s - 1.0).abs() < 1e-3);
         let window = SPEED_WINDOW_S + FRAME_S;
         for s in &report.scenarios {
