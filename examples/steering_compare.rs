@@ -22,7 +22,7 @@ use std::time::Instant;
 use motion_core::formats::expmap_bvh::ExpMapTarget;
 use motion_core::matching::{Matcher, MatchingDatabase};
 use motion_core::model::{Character, MotionModel, Noise};
-use motion_core::pose::{Pose, PoseDecoder};
+use motion_core::pose::PoseDecoder;
 use motion_core::protocol::{dataset_dir, load_subject_sequences};
 use motion_core::root::RootEncoding;
 use motion_core::seed::load_seed;
@@ -139,12 +139,7 @@ fn main() -> Result<(), BoxError> {
 /// World positions (metres) of a 25 Hz H3.6M take decoded into engine poses.
 fn positions_of_clip(take: ndarray::ArrayView2<'_, f64>) -> ndarray::Array3<f64> {
     let skeleton = Arc::new(Skeleton::h36m());
-    let mut decoder = PoseDecoder::new(skeleton.clone(), RootEncoding::Deltas, 2);
-    let poses: Vec<Pose> = take
-        .rows()
-        .into_iter()
-        .map(|row| decoder.push(&row.to_vec()).clone())
-        .collect();
+    let poses = PoseDecoder::new(skeleton.clone(), RootEncoding::Deltas, 2).decode_all(take);
     positions_of(&skeleton, &poses)
 }
 
@@ -154,12 +149,8 @@ fn real_walking_body_speed(dataset: &Path) -> Result<f64, BoxError> {
     let steering = Steering::new(&skeleton, 0.04)?;
     let mut speeds = Vec::new();
     for take in load_subject_sequences(dataset, "S5", "walking")? {
-        let mut decoder = PoseDecoder::new(skeleton.clone(), RootEncoding::Deltas, 2);
-        let poses: Vec<Pose> = take
-            .rows()
-            .into_iter()
-            .map(|row| decoder.push(&row.to_vec()).clone())
-            .collect();
+        let poses =
+            PoseDecoder::new(skeleton.clone(), RootEncoding::Deltas, 2).decode_all(take.view());
         speeds.push(body_speed(&skeleton, &poses, |p| steering.heading_of(p)));
     }
     if speeds.is_empty() {

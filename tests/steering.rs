@@ -394,12 +394,7 @@ fn motion_matching_on_the_training_walks_answers_every_goal_change() {
         .iter()
         .map(|clip| {
             let mut decoder = PoseDecoder::new(skeleton.clone(), RootEncoding::Deltas, 2);
-            let poses: Vec<Pose> = clip
-                .rows()
-                .into_iter()
-                .map(|row| decoder.push(&row.to_vec()).clone())
-                .collect();
-            positions_of(&skeleton, &poses)
+            positions_of(&skeleton, &decoder.decode_all(clip.view()))
         })
         .collect();
     let views: Vec<_> = takes.iter().map(|t| t.view()).collect();

@@ -230,6 +230,25 @@ impl PoseDecoder {
         &self.pose
     }
 
+    /// Every frame of `take` (rows of exp-map frames, oldest first) decoded from a fresh start
+    /// (the decoder is reset first): one pose per row. Allocates the poses (whole clips, not a
+    /// per-frame path).
+    ///
+    /// # Panics
+    /// If `take`'s rows have another width than the skeleton's exp-map frames.
+    pub fn decode_all<T: FrameScalar>(&mut self, take: ndarray::ArrayView2<'_, T>) -> Vec<Pose> {
+        self.reset();
+        let mut row = Vec::with_capacity(take.ncols());
+        take.rows()
+            .into_iter()
+            .map(|r| {
+                row.clear();
+                row.extend(r.iter().copied());
+                self.push(&row).clone()
+            })
+            .collect()
+    }
+
     /// The pose of the last pushed frame (the rest pose before any).
     pub fn pose(&self) -> &Pose {
         &self.pose
@@ -349,6 +368,22 @@ mod tests {
         eprintln!("worst: decoder {worst_exact} mm, rig FK from the f32 pose {worst_engine} mm");
         assert!(worst_exact < 1e-3, "{worst_exact}");
         assert!(worst_engine < 0.05, "{worst_engine} mm");
+    }
+
+    #[test]
+    fn a_whole_take_decodes_as_its_frames_pushed_one_by_one_from_a_fresh_start() {
+        let skeleton = Arc::new(Skeleton::h36m());
+        let f = frames(30);
+        let mut one_by_one = PoseDecoder::new(Arc::clone(&skeleton), RootEncoding::Deltas, 2);
+        let want: Vec<Pose> = f
+            .rows()
+            .into_iter()
+            .map(|row| one_by_one.push(row.as_slice().unwrap()).clone())
+            .collect();
+        let mut decoder = PoseDecoder::new(skeleton, RootEncoding::Deltas, 2);
+        decoder.push(f.row(5).as_slice().unwrap()); // history that must not carry over
+        assert_eq!(decoder.decode_all(f.view()), want);
+        assert_eq!(decoder.decode_all(f.view()), want);
     }
 
     #[test]
