@@ -21,7 +21,8 @@ report listed first (list the incumbent first).
 Validation windows only (8 per action, disjoint from every test window); the test windows are scored once, for the
 chosen file, afterwards. Besides the rule, the table shows the issue's other targets per action (grounded): lean p95
 against the real p95, hip height within the real p5-p95, on-floor fraction >= 0.95, skating within the real S5
-continuation's + 0.05. Standard library only.
+continuation's + 0.05, and the `drift` measure (the smallest share over the windows of sequences whose hip height and
+lean change from the seed stay within the real 95th percentile; no rule reads it). Standard library only.
 """
 
 from __future__ import annotations
@@ -62,10 +63,20 @@ def action_rows(report: dict) -> list[dict]:
             "real_hip": (real["hip_height_p5_mm"], real["hip_height_p95_mm"]),
         })
         r = rows[-1]
+        r["drift"] = drift_within(grounded.get("drift"))
         r["hip_short"] = max(0.0, r["real_hip"][0] - r["hip_low"])
         r["all_targets"] = (r["alive"] and r["on_floor"] >= ON_FLOOR and r["skating"] <= r["real_skating"] + SKATING_MARGIN
                             and r["lean"] <= r["real_lean"] and r["hip_short"] == 0.0)
     return rows
+
+
+def drift_within(drift: dict | None) -> tuple[float, float] | None:
+    """The smallest share over the windows of sequences whose hip height change and lean change from the seed stay
+    within the real 95th percentile (`motion-cli eval`'s `drift`), or None when the report has none."""
+    windows = [w for w in (drift or {}).get("windows", []) if w.get("hip_height_within_p95") is not None]
+    if not windows:
+        return None
+    return (min(w["hip_height_within_p95"] for w in windows), min(w["lean_within_p95"] for w in windows))
 
 
 def verdict(report: dict) -> dict:
@@ -100,14 +111,15 @@ def table(v: dict) -> str:
            f"{'' if v['conditioned'] else ' (not action-conditioned: not eligible)'}",
            "",
            "| action | speed raw / grounded (min over windows) | on floor | penetrating | skating (real S5) | "
-           "lean p95 (real) | hip p5-p95 mm (real) |",
-           "|---|---|---|---|---|---|---|"]
+           "lean p95 (real) | hip p5-p95 mm (real) | drift within real p95: hip / lean |",
+           "|---|---|---|---|---|---|---|---|"]
     for r in v["rows"]:
+        drift = "-" if r["drift"] is None else f"{r['drift'][0]:.2f} / {r['drift'][1]:.2f}"
         out.append(
             f"| {r['action']} | {r['speed_raw']:.2f} / {r['speed']:.2f}{'' if r['alive'] else ' (frozen)'} | "
             f"{r['on_floor']:.2f} | {r['penetrating']:.2f} | {r['skating']:.2f} ({r['real_skating']:.2f}) | "
             f"{r['lean']:.1f} ({r['real_lean']:.1f}) | {r['hip_low']:.0f}-{r['hip_high']:.0f} "
-            f"({r['real_hip'][0]:.0f}-{r['real_hip'][1]:.0f}) |")
+            f"({r['real_hip'][0]:.0f}-{r['real_hip'][1]:.0f}) | {drift} |")
     return "\n".join(out)
 
 

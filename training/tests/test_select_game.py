@@ -60,3 +60,17 @@ def test_a_frozen_action_fails_its_targets_and_the_default_rule_counts_alive(tmp
 def test_test_windows_are_refused_without_allow_test(tmp_path, capsys):
     assert choose(tmp_path, [report("t", [800.0], windows="test")], "--rule", "targets") == 2
     assert "validation windows only" in capsys.readouterr().err
+
+
+def test_the_table_shows_the_smallest_share_within_the_drift_band(tmp_path, capsys):
+    r = report("d", [810.0, 810.0])
+    r["actions"][0]["model_grounded"]["drift"] = {"windows": [
+        {"hip_height_within_p95": 1.0, "lean_within_p95": 0.875},
+        {"hip_height_within_p95": 0.375, "lean_within_p95": 1.0},
+        {"hip_height_within_p95": None, "lean_within_p95": None},
+    ]}
+    assert select_game.verdict(r)["rows"][0]["drift"] == (0.375, 0.875)
+    assert select_game.verdict(r)["rows"][1]["drift"] is None
+    assert choose(tmp_path, [r], "--rule", "targets") == 0
+    out = capsys.readouterr().out
+    assert "| 0.38 / 0.88 |" in out and "| - |" in out
