@@ -424,7 +424,8 @@ impl Grounder {
             self.positions[leg.ankle],
         );
         let reach = ((knee - hip).length() + (ankle - knee).length()) * REACH_USED;
-        if (target - hip).length() <= reach {
+        let flat = (target - hip).length();
+        if flat <= reach {
             return (target, foot_rotation);
         }
         let toe = leg
@@ -447,10 +448,11 @@ impl Grounder {
         let pivot = target + toe;
         let ankle_at = |angle: f32| pivot + Quat::from_axis_angle(axis, angle) * -toe;
         let distance = |angle: f32| (ankle_at(angle) - hip).length();
-        if distance(MAX_HEEL_RISE_RAD) >= (target - hip).length() {
+        let rolled = distance(MAX_HEEL_RISE_RAD);
+        if rolled >= flat {
             return (target, foot_rotation);
         }
-        let angle = if distance(MAX_HEEL_RISE_RAD) > reach {
+        let angle = if rolled > reach {
             MAX_HEEL_RISE_RAD
         } else {
             let (mut lo, mut hi) = (0.0, MAX_HEEL_RISE_RAD);
