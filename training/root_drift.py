@@ -95,28 +95,35 @@ def root_mm(model, x: torch.Tensor) -> torch.Tensor:
     return (x[..., :6] * model.norm.std[used] + model.norm.mean[used]).double()
 
 
-def drift_penalty(model, seed: torch.Tensor, parts: list[tuple[torch.Tensor, bool]]) -> torch.Tensor:
-    """``drift_loss`` of a closed loop: the root integrated from the first frame of ``seed [B, S, O]`` (normalized,
-    as the model reads it) through ``parts``, the generated frames after it in time order, each ``(frames [B, T,
-    O], scored)``. Hip height and lean are measured against the last seed frame's on the frames of the scored
-    parts (whose gradient flows back through the integration); unscored parts only carry the pose forward."""
+def scored_root_poses(model, seed: torch.Tensor, parts: list[tuple[torch.Tensor, bool]]):
+    """The integrated root of a closed loop: from the first frame of ``seed [B, S, O]`` (normalized, as the model
+    reads it) through ``parts``, the generated frames after it in time order, each ``(frames [B, T, O], scored)``.
+    Returns ``(last seed pose, [(rot [B, T, 3, 3], trans [B, T, 3], frames) per scored part])``: the scored parts'
+    poses keep the gradient through the integration; unscored parts only carry the pose forward."""
     with torch.no_grad():
         rot, trans = root_poses(root_mm(model, seed))
-        hip_s, lean_s = hip_and_lean(rot[:, -1], trans[:, -1])
-    start = (rot[:, -1], trans[:, -1])
-    hips, leans = [], []
-    for frames, scored in parts:
+    seed_pose = (rot[:, -1], trans[:, -1])
+    start = seed_pose
+    scored = []
+    for frames, keep in parts:
         if frames.shape[1] == 0:
             continue
-        if scored:
+        if keep:
             rot, trans = root_poses(root_mm(model, frames), start=start)
-            hip, lean = hip_and_lean(rot, trans)
-            hips.append(hip)
-            leans.append(lean)
+            scored.append((rot, trans, frames))
         else:
             with torch.no_grad():
                 rot, trans = root_poses(root_mm(model, frames), start=start)
         start = (rot[:, -1], trans[:, -1])
-    if not hips:
-        raise ValueError("drift_penalty needs at least one scored part")
+    if not scored:
+        raise ValueError("a closed loop's root needs at least one scored part")
+    return seed_pose, scored
+
+
+def drift_penalty(model, seed: torch.Tensor, parts: list[tuple[torch.Tensor, bool]]) -> torch.Tensor:
+    """``drift_loss`` of a closed loop (``scored_root_poses``' ``seed`` and ``parts``): hip height and lean are
+    measured against the last seed frame's on the frames of the scored parts."""
+    (rot_s, trans_s), scored = scored_root_poses(model, seed, parts)
+    hip_s, lean_s = hip_and_lean(rot_s, trans_s)
+    hips, leans = zip(*(hip_and_lean(rot, trans) for rot, trans, _ in scored))
     return drift_loss(torch.cat(hips, 1), torch.cat(leans, 1), hip_s, lean_s)

@@ -86,6 +86,7 @@ from .export import load_weights, save_weights
 from .layers import MLP
 from . import long_horizon
 from .crouch import CrouchFloor, TiptoeCeiling, crouch_loss, tiptoe_loss
+from .foot_skate import skate_penalty
 from .kinematics import roughness_loss
 from .long_horizon import LONG_HORIZON, accel_loss, root_speed_loss, speed_loss, speed_ratios
 from .models import IntentionModel, joint_groups, make_config, parameter_count
@@ -164,6 +165,10 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--tiptoe-weight", type=float, default=0.0, metavar="W",
                    help="adds W x the tiptoe penalty (crouch.tiptoe_loss: the ankle's height over the lowest foot point "
                         "held at or below the action's real 95th percentile) of the generated frames with gradient")
+    g.add_argument("--skate-weight", type=float, default=0.0, metavar="W",
+                   help="adds W x the foot-skating penalty (foot_skate.skate_penalty: low foot points of the "
+                        "world-space output, root integrated, moving faster than 0.25 m/s horizontally) of the "
+                        "generated frames with gradient")
     g.add_argument("--init-weights", type=Path, metavar="FILE.safetensors",
                    help="a new run whose model (and clustering) starts from an exported intention file; fresh "
                         "discriminators and optimizers; the model size flags do not apply")
@@ -581,6 +586,10 @@ def train(args, argv: list[str]) -> None:
             drift = drift_penalty(model, seed, drift_parts).to(lg.dtype)
             lg = lg + args.drift_weight * drift
             terms["drift"] = drift.item()
+        if args.skate_weight > 0:
+            skate = skate_penalty(model, seed, drift_parts).to(lg.dtype)
+            lg = lg + args.skate_weight * skate
+            terms["skate"] = skate.item()
         loss = lf + lg
         if not math.isfinite(loss.item()):
             raise SystemExit(f"error: loss became {loss.item()} at iteration {iteration + 1}; see {run_dir}")

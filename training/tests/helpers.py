@@ -1,7 +1,9 @@
-"""Test helpers shared by the training tests: a synthetic dataset shaped like H3.6M, a run killed mid-iteration."""
+"""Test helpers shared by the training tests: a synthetic dataset shaped like H3.6M, a run killed mid-iteration, a
+model whose normalized frames are full frames."""
 
 import numpy as np
 import pytest
+import torch
 
 from training import data
 
@@ -43,3 +45,16 @@ def run_interrupted(monkeypatch, module, name: str, calls: int, run) -> None:
     with pytest.raises(KeyboardInterrupt):
         run()
     monkeypatch.setattr(module, name, real)
+
+
+class FullFrames:
+    """Stands in for a model whose normalized frames are the full 99-dim H3.6M frames (``model.norm`` only)."""
+
+    class norm:  # noqa: N801 (mirrors model.norm)
+        dims_used = torch.arange(99)
+        mean = torch.zeros(99, dtype=torch.float64)
+        std = torch.ones(99, dtype=torch.float64)
+
+        @staticmethod
+        def unnormalize(x):
+            return x

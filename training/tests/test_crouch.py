@@ -16,17 +16,10 @@ from training.crouch import (
 )
 from training.kinematics import skeleton
 
+from .helpers import FullFrames
+
 # motion_core::grounding::H36M_STANDING_HEIGHT_MM: the rest pose's root height over its lowest foot point.
 STANDING_MM = 897.1
-
-
-class Identity:
-    """A model whose normalized frames are the full frames."""
-
-    class norm:  # noqa: N801 (mirrors model.norm)
-        @staticmethod
-        def unnormalize(x):
-            return x
 
 
 def turned(joints: tuple[int, ...], angle: float, frames: int) -> torch.Tensor:
@@ -66,9 +59,9 @@ def test_the_penalty_is_zero_over_the_limit_and_pulls_a_crouch_up():
     floor = CrouchFloor([[bent_knees(0.3).numpy()]], lambda x: x)  # limit: the 0.3 rad crouch
     actions = torch.zeros(1, dtype=torch.long)
     tall = bent_knees(0.1, frames=4)[None]
-    assert crouch_loss(Identity, tall, actions, floor).item() == 0.0
+    assert crouch_loss(FullFrames, tall, actions, floor).item() == 0.0
     low = bent_knees(0.9, frames=4)[None].requires_grad_(True)
-    loss = crouch_loss(Identity, low, actions, floor)
+    loss = crouch_loss(FullFrames, low, actions, floor)
     short = floor.limits[0].item() - hip_over_feet(bent_knees(0.9)).item()
     assert abs(loss.item() - (short / CROUCH_SCALE_MM) ** 2) < 1e-9
     loss.backward()
@@ -101,9 +94,9 @@ def test_pointed_feet_raise_the_ankle_and_the_tiptoe_penalty_pulls_them_flat():
     ceiling = TiptoeCeiling([[pointed_feet(sign * 0.4).numpy()], []], lambda x: x)
     assert math.isinf(ceiling.limits[1].item())
     actions = torch.zeros(1, dtype=torch.long)
-    assert tiptoe_loss(Identity, pointed_feet(0.0, 3)[None], actions, ceiling).item() == 0.0
+    assert tiptoe_loss(FullFrames, pointed_feet(0.0, 3)[None], actions, ceiling).item() == 0.0
     high = pointed_feet(sign * 0.8, 3)[None].requires_grad_(True)
-    loss = tiptoe_loss(Identity, high, actions, ceiling)
+    loss = tiptoe_loss(FullFrames, high, actions, ceiling)
     over = heights[2] - ceiling.limits[0].item()
     assert abs(loss.item() - (over / CROUCH_SCALE_MM) ** 2) < 1e-6
     loss.backward()

@@ -2,6 +2,7 @@
 hand-written step loop, the losses, and a smoke run with exact resume and export."""
 
 import json
+import math
 from pathlib import Path
 import numpy as np
 import pytest
@@ -250,12 +251,13 @@ def test_bad_arguments_are_refused(tmp_path, synthetic):
 
 
 def test_init_weights_and_drift_term(tmp_path, synthetic):
-    """A run from an exported file keeps its weights and clustering (lr 0 changes nothing) and logs the drift term."""
+    """A run from an exported file keeps its weights and clustering (lr 0 changes nothing) and logs the drift and
+    the foot-skating terms."""
     run(["--run-dir", str(tmp_path / "base"), "--iterations", "2"] + TINY)
     out = tmp_path / "base.safetensors"
     run(["--export", str(out), "--from", str(tmp_path / "base" / "last.pt"), "--dtype", "float32"])
     run(["--run-dir", str(tmp_path / "ft"), "--iterations", "2", "--init-weights", str(out), "--lr", "0",
-         "--drift-weight", "1"] + TINY)
+         "--drift-weight", "1", "--skate-weight", "1"] + TINY)
     start = load_weights(out).state_dict()
     after = torch.load(tmp_path / "ft" / "last.pt", weights_only=False)["model"]
     for k, v in start.items():
@@ -263,6 +265,8 @@ def test_init_weights_and_drift_term(tmp_path, synthetic):
     records = [json.loads(line) for line in (tmp_path / "ft" / "metrics.jsonl").read_text().splitlines()]
     drifts = [r["drift"] for r in records if r.get("kind") == "train"]
     assert drifts and all(d >= 0 for d in drifts)
+    skates = [r["skate"] for r in records if r.get("kind") == "train"]
+    assert skates and all(math.isfinite(v) and v >= 0 for v in skates)
     with pytest.raises(SystemExit, match="not an intention model"):
         gru_d = Path(__file__).resolve().parents[2] / "tests" / "fixtures" / "parity" / "gru_d.safetensors"
         train_intention.main(["--run-dir", str(tmp_path / "bad"), "--init-weights", str(gru_d)] + TINY)
