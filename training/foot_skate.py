@@ -2,9 +2,9 @@
 
 Grounding (`motion_core::grounding`) holds a foot that touches the floor where it landed. When the model's root
 travels further than its stance foot's leg spans (the stance foot slides in the raw output: 0.7-0.8 of the frames
-of walkingtogether's 60 s validation predictions skate ungrounded in the first 8 s), the hold pulls the body down
-onto the held foot, and the grounded hip height falls under real motion's. This term teaches the model to move its
-root and its stance foot together, so the hold has nothing to pull.
+of run `intention_crouch2`'s walkingtogether 60 s validation predictions skate ungrounded in the first 8 s), the
+hold pulls the body down onto the held foot, and the grounded hip height falls under real motion's. This term
+teaches the model to move its root and its stance foot together, so the hold has nothing to pull.
 
 The measure follows the plausibility metric's skating (`motion_metrics::plausibility`, "Foot skating"): the six
 foot points `FEET` (RightFoot, RightToeBase, RightToeSite and the left ones) in world space (the root integrated
