@@ -271,9 +271,14 @@ pub fn positions_of<'a>(
         (vec![Vec3::ZERO; n], vec![Quat::IDENTITY; n], Vec::new());
     for pose in poses {
         pose.world_positions_into(skeleton, &mut positions, &mut world);
-        out.extend(positions.iter().flat_map(|p| p.to_array().map(f64::from)));
+        extend_flat(&mut out, &positions);
     }
     frames_of(out, n)
+}
+
+/// Appends `positions` to `out` as flat f64 `x, y, z` per joint.
+fn extend_flat(out: &mut Vec<f64>, positions: &[Vec3]) {
+    out.extend(positions.iter().flat_map(|p| p.to_array().map(f64::from)));
 }
 
 /// `T x J x 3` frames from flat positions.
@@ -404,11 +409,7 @@ impl Probe {
 
     /// Appends the positions of the last observed frame (metres, flat `x, y, z` per joint).
     fn record(&self, out: &mut Vec<f64>) {
-        out.extend(
-            self.positions
-                .iter()
-                .flat_map(|p| p.to_array().map(f64::from)),
-        );
+        extend_flat(out, &self.positions);
     }
 }
 

@@ -89,12 +89,8 @@ mod tests {
             5 => 0.001 * t as f64,
             _ => 1.4 * ((t as f64) * 0.11 + d as f64 * 0.9).sin(),
         });
-        let mut decoder = PoseDecoder::new(Arc::clone(&skeleton), RootEncoding::Deltas, 2);
-        let poses: Vec<Pose> = frames
-            .rows()
-            .into_iter()
-            .map(|r| decoder.push(r.as_slice().unwrap()).clone())
-            .collect();
+        let poses = PoseDecoder::new(Arc::clone(&skeleton), RootEncoding::Deltas, 2)
+            .decode_all(frames.view());
         let bvh = poses_to_bvh(&skeleton, &poses, 25.0).unwrap();
         let dir = std::env::temp_dir().join(format!("pose-bvh-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
