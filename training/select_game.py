@@ -18,6 +18,12 @@ fraction >= 0.95, skating within the real S5 continuation's + 0.05, lean p95 wit
 the real p5) wins; ties go to the smallest hip shortfall under the real p5 summed over the actions (mm), then to the
 report listed first (list the incumbent first).
 
+`--readme` (a precondition written 2026-12-07, after a candidate met all five targets on every validation action and
+slowed the README example): a candidate is eligible only if its README example passes, read from ``X.readme.json``
+beside its report ``X.json`` (`training/readme_check.py`: `motion-cli predict --seed examples/walk_seed.bvh --action
+walking --frames 1500` per rng seed, scored by `motion-cli score`): in every window of every rng seed, speed ratio
+>= 0.5, no frame with both feet over 0.1 m above the floor, hip height and lean change within real walking's p95.
+
 Validation windows only (8 per action, disjoint from every test window); the test windows are scored once, for the
 chosen file, afterwards. Besides the rule, the table shows the issue's other targets per action (grounded): lean p95
 against the real p95, hip height within the real p5-p95, on-floor fraction >= 0.95, skating within the real S5
@@ -95,6 +101,24 @@ def verdict(report: dict) -> dict:
     }
 
 
+def readme_verdict(readme: dict) -> dict:
+    """Whether the README example passes (module doc), and its smallest speed ratio over windows and rng seeds."""
+    reports = readme["reports"]
+    if not reports:
+        raise ValueError("no rng seed scored")
+    speeds = [w["ratio"] for r in reports for w in r["speed_ratio"]["windows"]]
+    grounded = all(w["airborne_fraction"] == 0.0 for r in reports for w in r["foot_contact"]["windows"])
+    upright = all(w["hip_height_within_p95"] == 1.0 and w["lean_within_p95"] == 1.0
+                  for r in reports for w in r["drift"]["windows"])
+    return {"passes": min(speeds) >= ALIVE and grounded and upright, "min_speed": min(speeds),
+            "grounded": grounded, "upright": upright, "seeds": len(reports)}
+
+
+def readme_path(report: Path) -> Path:
+    """Where `--readme` reads a report's README example: ``X.json`` -> ``X.readme.json``."""
+    return report.with_name(report.stem + ".readme.json")
+
+
 def key(v: dict) -> tuple:
     """Sort key of the default rule (smaller is better)."""
     return (not v["conditioned"], -v["alive"], -v["floor"])
@@ -106,9 +130,14 @@ def key_targets(v: dict) -> tuple:
 
 
 def table(v: dict) -> str:
+    readme = v.get("readme")
+    readme_text = "" if readme is None else (
+        f"; README example over {readme['seeds']} rng seeds: smallest speed ratio {readme['min_speed']:.3f}"
+        f"{'' if readme['grounded'] else ', off the floor'}{'' if readme['upright'] else ', drifting'}"
+        f"{'' if readme['passes'] else ' (fails: not eligible)'}")
     out = [f"`{v['source']}` ({v['windows']} windows): alive on {v['alive']} of {v['actions']}, mean smallest on-floor "
            f"fraction {v['floor']:.3f}, all five targets on {v['targets']}, hip shortfall {v['hip_short']:.1f} mm"
-           f"{'' if v['conditioned'] else ' (not action-conditioned: not eligible)'}",
+           f"{'' if v['conditioned'] else ' (not action-conditioned: not eligible)'}{readme_text}",
            "",
            "| action | speed raw / grounded (min over windows) | on floor | penetrating | skating (real S5) | "
            "lean p95 (real) | hip p5-p95 mm (real) | drift within real p95: hip / lean |",
@@ -131,6 +160,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--rule", choices=("alive", "targets"), default="alive",
                    help="alive: the game default's rule (alive, then on floor); targets: all five targets, then the hip "
                         "shortfall (module doc)")
+    p.add_argument("--readme", action="store_true",
+                   help="only candidates whose README example passes are eligible, read from X.readme.json beside each "
+                        "report X.json (training/readme_check.py; module doc)")
     args = p.parse_args(argv)
     verdicts = []
     for path in args.reports:
@@ -144,11 +176,18 @@ def main(argv: list[str] | None = None) -> int:
             print(f"error: {path}: scored on {v['windows']} windows; the rule reads validation windows only "
                   "(--allow-test to print a table)", file=sys.stderr)
             return 2
+        if args.readme:
+            readme = readme_path(path)
+            try:
+                v["readme"] = readme_verdict(json.loads(readme.read_text()))
+            except (OSError, ValueError, KeyError, TypeError) as e:
+                print(f"error: {readme}: not a training/readme_check.py output ({e})", file=sys.stderr)
+                return 2
         verdicts.append(v)
     for v in verdicts:
         print(table(v))
         print()
-    eligible = [v for v in verdicts if v["conditioned"]]
+    eligible = [v for v in verdicts if v["conditioned"] and v.get("readme", {"passes": True})["passes"]]
     if eligible and not args.allow_test:
         best = min(eligible, key=key if args.rule == "alive" else key_targets)
         print(f"chosen: {best['source']} (alive on {best['alive']} of {best['actions']}, floor {best['floor']:.3f}, "

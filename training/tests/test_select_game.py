@@ -74,3 +74,33 @@ def test_the_table_shows_the_smallest_share_within_the_drift_band(tmp_path, caps
     assert choose(tmp_path, [r], "--rule", "targets") == 0
     out = capsys.readouterr().out
     assert "| 0.38 / 0.88 |" in out and "| - |" in out
+
+
+def readme(speeds: list[float], airborne: float = 0.0) -> dict:
+    """A `training/readme_check.py` output: one score report per rng seed, its windows' speed ratios `speeds`."""
+    windows = range(len(speeds))
+    score = {"speed_ratio": {"windows": [{"ratio": s} for s in speeds]},
+             "foot_contact": {"windows": [{"airborne_fraction": airborne} for _ in windows]},
+             "drift": {"windows": [{"hip_height_within_p95": 1.0, "lean_within_p95": 1.0} for _ in windows]}}
+    return {"model": "m", "rng_seeds": [0, 1], "reports": [score, score]}
+
+
+def test_readme_makes_a_candidate_whose_readme_walk_slows_ineligible(tmp_path, capsys):
+    incumbent = report("old", [810.0, 790.0])  # 1 of 2
+    better = report("new", [810.0, 805.0])  # 2 of 2, but its README walk slows to 0.45
+    (tmp_path / "r0.readme.json").write_text(json.dumps(readme([0.6, 0.55])))
+    (tmp_path / "r1.readme.json").write_text(json.dumps(readme([0.6, 0.45])))
+    assert choose(tmp_path, [incumbent, better], "--rule", "targets") == 0
+    assert "chosen: new" in capsys.readouterr().out
+    assert choose(tmp_path, [incumbent, better], "--rule", "targets", "--readme") == 0
+    out = capsys.readouterr().out
+    assert "chosen: old" in out and "smallest speed ratio 0.450 (fails: not eligible)" in out
+    (tmp_path / "r1.readme.json").write_text(json.dumps(readme([0.6, 0.55], airborne=0.01)))
+    assert choose(tmp_path, [incumbent, better], "--rule", "targets", "--readme") == 0
+    assert "chosen: old" in capsys.readouterr().out
+    assert select_game.readme_verdict(readme([0.6, 0.55]))["passes"]
+
+
+def test_readme_without_its_file_exits_2_naming_it(tmp_path, capsys):
+    assert choose(tmp_path, [report("a", [810.0])], "--readme") == 2
+    assert "r0.readme.json" in capsys.readouterr().err
