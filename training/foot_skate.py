@@ -52,7 +52,12 @@ def skate_cost(feet: torch.Tensor) -> torch.Tensor:
 def skate_penalty(model, seed: torch.Tensor, parts: list[tuple[torch.Tensor, bool]]) -> torch.Tensor:
     """Mean ``skate_cost`` over the scored parts of a closed loop (``root_drift.scored_root_poses``' ``seed`` and
     ``parts``, normalized model frames), the gradient flowing through both the pose and the root."""
-    _, scored = scored_root_poses(model, seed, parts)
+    return skate_of_poses(model, scored_root_poses(model, seed, parts)[1])
+
+
+def skate_of_poses(model, scored) -> torch.Tensor:
+    """``skate_penalty`` from the scored parts of ``scored_root_poses``' result (a loop integrated once for several
+    terms)."""
     costs = []
     for rot, trans, frames in scored:
         if frames.shape[1] < 2:

@@ -123,7 +123,11 @@ def scored_root_poses(model, seed: torch.Tensor, parts: list[tuple[torch.Tensor,
 def drift_penalty(model, seed: torch.Tensor, parts: list[tuple[torch.Tensor, bool]]) -> torch.Tensor:
     """``drift_loss`` of a closed loop (``scored_root_poses``' ``seed`` and ``parts``): hip height and lean are
     measured against the last seed frame's on the frames of the scored parts."""
-    (rot_s, trans_s), scored = scored_root_poses(model, seed, parts)
-    hip_s, lean_s = hip_and_lean(rot_s, trans_s)
+    return drift_of_poses(*scored_root_poses(model, seed, parts))
+
+
+def drift_of_poses(seed_pose, scored) -> torch.Tensor:
+    """``drift_penalty`` from ``scored_root_poses``' result (a loop integrated once for several terms)."""
+    hip_s, lean_s = hip_and_lean(*seed_pose)
     hips, leans = zip(*(hip_and_lean(rot, trans) for rot, trans, _ in scored))
     return drift_loss(torch.cat(hips, 1), torch.cat(leans, 1), hip_s, lean_s)

@@ -86,11 +86,11 @@ from .export import load_weights, save_weights
 from .layers import MLP
 from . import long_horizon
 from .crouch import CrouchFloor, TiptoeCeiling, crouch_loss, tiptoe_loss
-from .foot_skate import skate_penalty
+from .foot_skate import skate_of_poses
 from .kinematics import roughness_loss
 from .long_horizon import LONG_HORIZON, accel_loss, root_speed_loss, speed_loss, speed_ratios
 from .models import IntentionModel, joint_groups, make_config, parameter_count
-from .root_drift import drift_penalty
+from .root_drift import drift_of_poses, scored_root_poses
 from .word_realism import WordBank, word_realism_loss
 from .checkpoint_io import BEST, CHECKPOINT, add_run_arguments, atomic_save, begin_run, read_checkpoint
 from .train import RESUME_OVERRIDABLE, Logger, Validator, explicit_args
@@ -582,12 +582,14 @@ def train(args, argv: list[str]) -> None:
             tiptoe = sum(tiptoe_loss(model, m, a, tiptoe_ceiling) for m, a in zip(moved, (acts, long_acts)))
             lg = lg + args.tiptoe_weight * tiptoe
             terms["tiptoe"] = tiptoe.item()
+        # The loop's root, integrated once for the drift and skating terms.
+        poses = scored_root_poses(model, seed, drift_parts) if args.drift_weight > 0 or args.skate_weight > 0 else None
         if args.drift_weight > 0:
-            drift = drift_penalty(model, seed, drift_parts).to(lg.dtype)
+            drift = drift_of_poses(*poses).to(lg.dtype)
             lg = lg + args.drift_weight * drift
             terms["drift"] = drift.item()
         if args.skate_weight > 0:
-            skate = skate_penalty(model, seed, drift_parts).to(lg.dtype)
+            skate = skate_of_poses(model, poses[1]).to(lg.dtype)
             lg = lg + args.skate_weight * skate
             terms["skate"] = skate.item()
         loss = lf + lg
