@@ -103,6 +103,20 @@ impl RootIntegrator {
         }
     }
 
+    /// An integrator that continues a take after `before`, the absolute pose of the frame
+    /// before the first one pushed (every pushed frame is applied `step` times, the first one
+    /// too); `None`: the first pushed frame is the take's first ([`Self::new`]).
+    pub fn after(before: Option<RootPose>, step: usize) -> RootIntegrator {
+        match before {
+            None => RootIntegrator::new(step),
+            Some(pose) => RootIntegrator {
+                pose,
+                step: step.max(1),
+                started: true,
+            },
+        }
+    }
+
     /// Integrates one frame (dims 0..5 are read) and returns its absolute pose.
     ///
     /// # Panics
@@ -136,8 +150,20 @@ impl RootIntegrator {
 /// # Panics
 /// If the frames have fewer than 6 columns.
 pub fn integrate_root(frames: ArrayView2<f64>, step: usize) -> Vec<RootPose> {
+    integrate_root_after(None, frames, step)
+}
+
+/// [`integrate_root`] of frames that continue a take after `before` ([`RootIntegrator::after`]).
+///
+/// # Panics
+/// If the frames have fewer than 6 columns.
+pub fn integrate_root_after(
+    before: Option<RootPose>,
+    frames: ArrayView2<f64>,
+    step: usize,
+) -> Vec<RootPose> {
     assert!(frames.ncols() >= 6, "root deltas need 6 columns");
-    let mut integrator = RootIntegrator::new(step);
+    let mut integrator = RootIntegrator::after(before, step);
     let mut row = [0.0; 6];
     frames
         .rows()
@@ -148,6 +174,24 @@ pub fn integrate_root(frames: ArrayView2<f64>, step: usize) -> Vec<RootPose> {
             }
             integrator.push(&row)
         })
+        .collect()
+}
+
+/// The exact absolute root poses of the frames a downsampling by `step` keeps (source frames
+/// `0, step, 2·step, ..`): every source frame of the take (`frames`, at the source rate) is
+/// integrated once, from the identity before the first. A window of the downsampled take that
+/// starts at kept frame `k > 0` continues after pose `k - 1` ([`RootIntegrator::after`]), so
+/// its seed has the orientation the body really had (integrating the window from the identity
+/// instead tilts a seated body by its pelvis' tilt; integrating the downsampled take from its
+/// start piles up the dropped frames' error over minutes).
+///
+/// # Panics
+/// If the frames have fewer than 6 columns.
+pub fn integrate_root_kept(frames: ArrayView2<f64>, step: usize) -> Vec<RootPose> {
+    let step = step.max(1);
+    integrate_root(frames, 1)
+        .into_iter()
+        .step_by(step)
         .collect()
 }
 
@@ -306,6 +350,39 @@ mod tests {
             assert_eq!(p.translation, poses25[t].translation);
             assert_eq!(p.rotation, poses25[t].rotation);
         }
+    }
+
+    #[test]
+    fn kept_poses_are_the_exact_50_hz_poses_and_windows_continue_them() {
+        let d = deltas(400);
+        let exact = integrate_root(d.view(), 1);
+        let kept = integrate_root_kept(d.view(), 2);
+        assert_eq!(kept.len(), 200);
+        for (k, pose) in kept.iter().enumerate() {
+            assert_eq!(*pose, exact[2 * k]);
+        }
+        // A 25 Hz window from kept frame 60 continues pose 59: its first frame applied twice,
+        // as every later one, exactly what integrating the downsampled take from frame 59 does.
+        let d25 = d.slice(ndarray::s![..;2, ..]).to_owned();
+        let window = d25.slice(ndarray::s![60..80, ..]);
+        let continued = integrate_root_after(Some(kept[59]), window, 2);
+        let mut it = RootIntegrator::after(Some(kept[59]), 2);
+        let mut reference = RootIntegrator::new(2);
+        reference.push(d25.row(0).as_slice().unwrap());
+        reference.pose = kept[59];
+        for (t, row) in window.rows().into_iter().enumerate() {
+            let row = row.to_vec();
+            assert_eq!(it.push(&row), continued[t]);
+            assert_eq!(reference.push(&row), continued[t]);
+        }
+        // From the identity instead, the window loses the take's orientation.
+        let lost = integrate_root(window, 2);
+        assert_ne!(lost[0].rotation, continued[0].rotation);
+        // `None` is a take's first frame.
+        assert_eq!(
+            integrate_root_after(None, d.view(), 2),
+            integrate_root(d.view(), 2)
+        );
     }
 
     #[test]

@@ -627,6 +627,7 @@ mod tests {
                 even_frames_in_file: 50 + ground_truth,
             },
             seed: all.slice(s![..50, ..]).to_owned(),
+            root_before: None,
             ground_truth: all.slice(s![50.., ..]).to_owned(),
         }
     }

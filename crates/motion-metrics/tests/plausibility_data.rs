@@ -137,3 +137,39 @@ fn an_unknown_action_is_a_typed_error() {
     let err = action_reference(Path::new("/nonexistent"), "walking").unwrap_err();
     assert!(err.to_string().starts_with("/nonexistent:"), "{err}");
 }
+
+#[test]
+fn seated_test_seeds_keep_their_takes_orientation() {
+    let Some(dataset) = dataset() else { return };
+    // The S5 sitting test seeds: the hip height over the seed's floor on the first frame after
+    // the seed, the root integrated from the take's pose before the seed (as eval does) and
+    // from the identity at the seed (which tilts a seated body by its pelvis' tilt).
+    let windows = load_action_windows(&dataset, "sitting", 10).unwrap();
+    let seated = 0.8 * f64::from(motion_core::grounding::H36M_STANDING_HEIGHT_MM);
+    let mut measurer = motion_metrics::plausibility::Measurer::new();
+    let (mut kept, mut lost) = (0, 0);
+    for w in &windows {
+        assert!(
+            w.root_before.is_some(),
+            "a test seed starts inside its take"
+        );
+        let with = measurer
+            .measure_after(w.root_before, w.seed.view(), w.ground_truth.view())
+            .unwrap();
+        let without = measurer
+            .measure(w.seed.view(), w.ground_truth.view())
+            .unwrap();
+        eprintln!(
+            "sitting window {}: hip {:.0} mm in the take's orientation, {:.0} mm from the identity",
+            w.window.sample, with.hip_height_mm[0], without.hip_height_mm[0]
+        );
+        kept += usize::from(with.hip_height_mm[0] < seated);
+        lost += usize::from(without.hip_height_mm[0] < seated);
+    }
+    assert_eq!(windows.len(), 8);
+    assert!(
+        kept >= 6,
+        "{kept} of 8 seeds seated in their take's orientation"
+    );
+    assert!(lost <= 2, "{lost} of 8 seeds seated from the identity");
+}

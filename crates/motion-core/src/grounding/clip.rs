@@ -15,7 +15,9 @@ use super::{Grounder, GroundingConfig, GroundingError};
 use crate::formats::expmap_bvh::ExpMapTarget;
 use crate::motion::RootEncoding;
 use crate::pose::METRES_PER_MM;
-use crate::root::{delta_between, integrate_root, root_deltas, write_absolute_root, RootPose};
+use crate::root::{
+    delta_between, integrate_root_after, root_deltas, write_absolute_root, RootPose,
+};
 use crate::rotation::{h36m_joint_expmap, h36m_joint_quat, quat_to_row_mat3, row_mat3_to_quat};
 use crate::skeleton::{Skeleton, H36M_SOURCE_FPS};
 
@@ -32,6 +34,12 @@ pub struct ClipSpec<'a> {
     pub fps: f64,
     /// The seed's frames: their feet give the floor; frames from its end on are grounded.
     pub seed: Range<usize>,
+    /// For root deltas: the absolute root pose of the frame before the first one, when the
+    /// frames continue a take ([`crate::root::pose_before`]); `None` integrates from the
+    /// identity (a take's first frame). A window cut from a take needs it for its true
+    /// orientation: a seated body integrated from the identity at the window's start is tilted
+    /// by its pelvis' tilt.
+    pub root_before: Option<RootPose>,
     /// The action (lean limit).
     pub action: Option<&'a str>,
     /// `false`: every frame is only moved into the floor frame (real motion shown beside a
@@ -85,7 +93,7 @@ pub fn ground_expmap_clip(
     let mut grounder = Grounder::new(skeleton, METRES_PER_MM as f32, spec.config)?;
     grounder.set_action(spec.action);
     let poses = match spec.root {
-        RootEncoding::Deltas => integrate_root(frames, spec.step),
+        RootEncoding::Deltas => integrate_root_after(spec.root_before, frames, spec.step),
         RootEncoding::Absolute => frames
             .rows()
             .into_iter()
@@ -170,6 +178,7 @@ impl<'a> ClipSpec<'a> {
             step: ((H36M_SOURCE_FPS / fps).round() as usize).max(1),
             fps,
             seed,
+            root_before: None,
             action,
             ground_after_seed: true,
             config,
@@ -200,6 +209,7 @@ mod tests {
             step: 2,
             fps: 25.0,
             seed: 0..50,
+            root_before: None,
             action: Some("walking"),
             ground_after_seed: true,
             config,
@@ -234,7 +244,7 @@ mod tests {
         }
         // A window of it integrates to the same poses.
         let w = grounded.window(100..150);
-        let again = integrate_root(w.view(), 2);
+        let again = crate::root::integrate_root(w.view(), 2);
         for (a, b) in again.iter().zip(&grounded.root_poses[100..]) {
             for k in 0..3 {
                 assert!((a.translation[k] - b.translation[k]).abs() < 1e-6);

@@ -237,9 +237,9 @@ fn grounded_crouch(action: Option<&str>, config: GroundingConfig) -> (f32, f32, 
 #[test]
 fn a_crouch_stands_up_to_the_actions_hip_height_with_the_feet_planted() {
     // Knees bent by 1.6 rad: the root 0.62 m over the floor; real walking keeps it over 0.85 m
-    // (HIP_P5_MM), sitting down goes to 0.11 m.
+    // (HIP_P5_MM), sitting down to under the floor (no hold).
     let hold = hip_floor_fraction(Some("walking")) * H36M_STANDING_HEIGHT_MM * 1e-3;
-    assert!((hold - 0.849).abs() < 1e-3, "{hold}");
+    assert!((hold - 0.8472).abs() < 1e-3, "{hold}");
     let (lowest, root_y, moved) = grounded_crouch(Some("walking"), GroundingConfig::default());
     assert!(
         root_y >= hold - 1e-3,
@@ -500,5 +500,90 @@ fn a_planted_foot_out_of_reach_behind_the_hip_rolls_onto_its_toes() {
     assert_eq!(
         g.heel_rise(side, ankle, flat, Quat::IDENTITY),
         (ankle, flat)
+    );
+}
+
+/// An H3.6M seated pose: thighs forward by `hip` radians of flexion, knees bent back to
+/// vertical shins when `hip` is a right angle, feet flat.
+fn seated(hip: f32) -> Vec<Quat> {
+    let mut q = vec![Quat::IDENTITY; Skeleton::h36m().len()];
+    for (h, k) in [(1, 2), (6, 7)] {
+        q[h] = Quat::from_rotation_x(-hip);
+        q[k] = Quat::from_rotation_x(std::f32::consts::FRAC_PI_2);
+    }
+    q
+}
+
+/// A grounder that saw 1 s of a seated seed (root 0.454 m over the feet, 0.443 m behind them).
+fn seated_grounder(config: GroundingConfig) -> Grounder {
+    let mut g = Grounder::new(&Skeleton::h36m(), 1e-3, config).unwrap();
+    g.set_action(Some("sitting"));
+    for _ in 0..25 {
+        g.observe_seed(
+            Vec3::new(0.0, 1.0, 0.0),
+            &seated(std::f32::consts::FRAC_PI_2),
+        );
+    }
+    g
+}
+
+#[test]
+fn a_seated_seed_leaves_a_seat_and_a_standing_or_crouching_one_does_not() {
+    let seat = seated_grounder(GroundingConfig::default()).seat().unwrap();
+    assert!((seat.y - 0.454).abs() < 0.005, "{seat}");
+    let off = GroundingConfig {
+        seats: false,
+        ..GroundingConfig::default()
+    };
+    assert_eq!(seated_grounder(off).seat(), None);
+    // A crouch as deep keeps the root over the feet: no seat.
+    let mut g = grounder();
+    for _ in 0..25 {
+        g.observe_seed(Vec3::new(0.0, 0.6, 0.0), &crouch(1.6));
+    }
+    assert_eq!(g.seat(), None);
+    let mut g = grounder();
+    for _ in 0..25 {
+        g.observe_seed(Vec3::new(0.0, 1.0, 0.0), &crouch(0.0));
+    }
+    assert_eq!(g.seat(), None);
+}
+
+#[test]
+fn a_seated_body_that_leans_back_and_lifts_its_legs_stays_on_its_seat() {
+    let mut g = seated_grounder(GroundingConfig::default());
+    let seat = g.seat().unwrap();
+    // Over 2 s the model raises its thighs to 130 degrees of flexion (feet off the floor, in
+    // front), sinks its root and slides it 0.3 m back.
+    let mut start: Option<Vec3> = None;
+    for t in 0..50 {
+        let s = t as f32 / 49.0;
+        let hip = std::f32::consts::FRAC_PI_2 + 0.7 * s;
+        let (mut root, mut rotations) = (Vec3::new(0.0, 1.0 - 0.3 * s, -0.3 * s), seated(hip));
+        g.ground(&mut root, &mut rotations, DT);
+        assert!(
+            root.y >= seat.y - 1e-3,
+            "frame {t}: root {root} under the seat {seat}"
+        );
+        let first = *start.get_or_insert(root);
+        let slid = Vec3::new(root.x - first.x, 0.0, root.z - first.z).length();
+        assert!(slid < 0.01, "frame {t}: the seated root slid {slid} m");
+    }
+}
+
+#[test]
+fn a_seated_body_stands_up_off_its_seat_onto_its_feet() {
+    let mut g = seated_grounder(GroundingConfig::default());
+    let seat = g.seat().unwrap();
+    let mut root_y = 0.0;
+    for _ in 0..25 {
+        let (mut root, mut rotations) = (Vec3::new(0.0, 1.0, 0.0), crouch(0.0));
+        g.ground(&mut root, &mut rotations, DT);
+        root_y = root.y;
+    }
+    assert!(
+        root_y > seat.y + 0.3,
+        "standing: the root at {root_y} m, the seat at {} m",
+        seat.y
     );
 }

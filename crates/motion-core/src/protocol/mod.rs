@@ -12,6 +12,7 @@ use ndarray::{s, Array2, Array3, ArrayView2, ArrayView3, Axis};
 
 use crate::error::FormatError;
 use crate::formats::h36m_text::{downsample_protocol, read_expmap_text};
+use crate::root::{integrate_root_kept, RootPose};
 use crate::rotation::expmap_frame_to_euler_protocol;
 
 pub use crate::skeleton::H36M_ACTIONS as ACTIONS;
@@ -199,6 +200,11 @@ pub struct WindowData {
     pub window: TestWindow,
     /// The [`SEED_FRAMES`] observed frames.
     pub seed: Array2<f64>,
+    /// The absolute root pose of the 25 Hz frame before the seed, integrated exactly from the
+    /// take's first frame ([`integrate_root_kept`]; `None` for a seed starting the take): the
+    /// seed's deltas continue it. Measures in world space (floor, lean, hip height) integrate from it,
+    /// so a seated seed keeps its real orientation.
+    pub root_before: Option<RootPose>,
     /// The `horizon` frames from `predict_start`.
     pub ground_truth: Array2<f64>,
 }
@@ -209,6 +215,7 @@ pub struct WindowData {
 /// window with `horizon` predicted frames reaches past the end.
 pub fn cut_window(
     frames_25hz: ArrayView2<'_, f64>,
+    root_poses: &[RootPose],
     window: &TestWindow,
     horizon: usize,
     path: &Path,
@@ -236,6 +243,10 @@ pub fn cut_window(
         seed: frames_25hz
             .slice(s![window.seed_start..window.predict_start, ..])
             .to_owned(),
+        root_before: window
+            .seed_start
+            .checked_sub(1)
+            .and_then(|k| root_poses.get(k).copied()),
         ground_truth: frames_25hz
             .slice(s![window.predict_start..end, ..])
             .to_owned(),
@@ -291,7 +302,10 @@ pub fn load_action_windows_in(
                     loaded.push((sub, path, frames));
                 }
             }
-            let takes: Vec<(u8, usize)> = loaded.iter().map(|(s, _, f)| (*s, f.nrows())).collect();
+            let takes: Vec<(u8, usize)> = loaded
+                .iter()
+                .map(|(s, _, f)| (*s, f.frames.nrows()))
+                .collect();
             let windows = validation::validation_windows(action, &takes, per_action);
             cut_windows(&windows, loaded, dataset, action, horizon, true)
         }
@@ -318,7 +332,7 @@ fn load_windows(
 /// Cuts `windows` out of their takes (those in `loaded` are used as read, the others read once).
 fn cut_windows(
     windows: &[TestWindow],
-    mut loaded: Vec<(u8, PathBuf, Array2<f64>)>,
+    mut loaded: Vec<(u8, PathBuf, Take)>,
     dataset: &Path,
     action: &str,
     horizon: usize,
@@ -331,24 +345,41 @@ fn cut_windows(
             let frames = read_take(&path)?;
             loaded.push((window.subaction, path, frames));
         }
-        let (_, path, frames) = loaded
+        let (_, path, take) = loaded
             .iter()
             .find(|(sub, _, _)| *sub == window.subaction)
             .expect("loaded above");
+        let frames = &take.frames;
         let available = frames.nrows().saturating_sub(window.predict_start);
         let horizon = if cut_at_file_end {
             horizon.min(available)
         } else {
             horizon
         };
-        out.push(cut_window(frames.view(), window, horizon, path)?);
+        out.push(cut_window(
+            frames.view(),
+            &take.root_poses,
+            window,
+            horizon,
+            path,
+        )?);
     }
     Ok(out)
 }
 
-/// One H3.6M take at the protocol's 25 Hz; a file whose frames are not 99 wide is refused
-/// (naming it) before anything indexes its columns.
-fn read_take(path: &Path) -> Result<Array2<f64>, FormatError> {
+/// One H3.6M take at the protocol's 25 Hz, with the exact absolute root pose of each of its
+/// frames ([`integrate_root_kept`]).
+#[derive(Debug, Clone)]
+pub struct Take {
+    /// The 25 Hz frames ([`downsample_protocol`]).
+    pub frames: Array2<f64>,
+    /// The absolute root pose of each 25 Hz frame, integrated at the source's 50 Hz.
+    pub root_poses: Vec<RootPose>,
+}
+
+/// Reads one H3.6M take ([`Take`]); a file whose frames are not 99 wide is refused (naming it)
+/// before anything indexes its columns.
+pub fn read_take(path: &Path) -> Result<Take, FormatError> {
     let frames = read_expmap_text(path)?;
     if frames.ncols() != crate::skeleton::H36M_FRAME_DIMS {
         return Err(FormatError::Invalid {
@@ -360,7 +391,10 @@ fn read_take(path: &Path) -> Result<Array2<f64>, FormatError> {
             ),
         });
     }
-    Ok(downsample_protocol(frames.view()))
+    Ok(Take {
+        root_poses: integrate_root_kept(frames.view(), ROOT_STEP_25HZ),
+        frames: downsample_protocol(frames.view()),
+    })
 }
 
 /// Both takes of `action` by `subject` at the protocol's 25 Hz (the even frames), those whose file
@@ -374,7 +408,7 @@ pub fn load_subject_sequences(
     for sub in [1, 2] {
         let path = sequence_file(dataset, subject, action, sub);
         if path.is_file() {
-            out.push(read_take(&path)?);
+            out.push(read_take(&path)?.frames);
         }
     }
     Ok(out)
@@ -445,8 +479,16 @@ mod tests {
         let frames = Array2::from_shape_fn((window.even_frames_in_file, 6), |(t, j)| {
             (t * 10 + j) as f64
         });
-        let data = cut_window(frames.view(), &window, 10, Path::new("x.txt")).unwrap();
+        let poses: Vec<RootPose> = (0..window.even_frames_in_file)
+            .map(|t| RootPose {
+                translation: [t as f64, 0.0, 0.0],
+                ..RootPose::IDENTITY
+            })
+            .collect();
+        let data = cut_window(frames.view(), &poses, &window, 10, Path::new("x.txt")).unwrap();
         assert_eq!(data.seed.nrows(), SEED_FRAMES);
+        // The seed continues the take after the pose of the frame before it.
+        assert_eq!(data.root_before, Some(poses[window.seed_start - 1]));
         assert_eq!(data.seed[[0, 0]], (window.seed_start * 10) as f64);
         assert_eq!(
             data.ground_truth[[0, 1]],
@@ -454,7 +496,7 @@ mod tests {
         );
         // A file of another length is rejected, naming the file.
         let short = frames.slice(s![..100, ..]);
-        let err = cut_window(short, &window, 10, Path::new("x.txt")).unwrap_err();
+        let err = cut_window(short, &poses, &window, 10, Path::new("x.txt")).unwrap_err();
         assert!(err.to_string().starts_with("x.txt:"), "{err}");
     }
 

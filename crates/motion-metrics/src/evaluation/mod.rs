@@ -42,6 +42,7 @@ use motion_core::protocol::{
     load_action_windows_in, load_subject_sequences, WindowSet, ACTIONS, LONG_TERM_HORIZON,
     SEED_FRAMES, SUBJECTS, TEST_SUBJECT,
 };
+use motion_core::root::RootPose;
 use motion_core::skeleton::{H36M_FRAME_DIMS, H36M_PROTOCOL_FPS};
 use motion_core::FormatError;
 
@@ -49,7 +50,8 @@ use crate::error::MetricError;
 use crate::ndms::NdmsReport;
 use crate::plausibility::reference::ReferenceError;
 use crate::plausibility::{
-    action_reference, measure_sequences, ActionReference, SequenceMeasures, MAX_HORIZON_FRAMES,
+    action_reference, measure_sequences_after, measure_sequences_in_floor_frame, ActionReference,
+    SequenceMeasures, MAX_HORIZON_FRAMES,
 };
 use crate::protocol::{ActionTruth, Coverage, NpssScores, ProtocolError, Scores, Speed};
 use crate::{
@@ -183,10 +185,14 @@ pub enum EvalError {
 
 /// Measures every `(seed, motion)` pair (`what` names the input in errors).
 fn measure(
-    pairs: &[(ndarray::ArrayView2<'_, f64>, ndarray::ArrayView2<'_, f64>)],
+    triples: &[(
+        Option<RootPose>,
+        ndarray::ArrayView2<'_, f64>,
+        ndarray::ArrayView2<'_, f64>,
+    )],
     what: &str,
 ) -> Result<Vec<SequenceMeasures>, EvalError> {
-    measure_sequences(pairs).map_err(|source| EvalError::Metric {
+    measure_sequences_after(triples).map_err(|source| EvalError::Metric {
         what: what.to_string(),
         source,
     })
@@ -312,7 +318,7 @@ pub fn evaluate(
         let real_pairs: Vec<_> = truth
             .windows()
             .iter()
-            .map(|w| (w.seed.view(), w.ground_truth.view()))
+            .map(|w| (w.root_before, w.seed.view(), w.ground_truth.view()))
             .collect();
         let mut measured = Plausibility {
             classifier: None,
@@ -328,7 +334,10 @@ pub fn evaluate(
                 zero_velocity: curve_of(classifier, &truth, &baseline, action)?,
                 real: classifier_curve_pairs(
                     classifier,
-                    &real_pairs,
+                    &real_pairs
+                        .iter()
+                        .map(|&(_, seed, motion)| (seed, motion))
+                        .collect::<Vec<_>>(),
                     action,
                     protocol_hop(classifier),
                 )
@@ -519,7 +528,13 @@ fn plausibility_of(
         .iter()
         .enumerate()
         .flat_map(|(w, window)| {
-            (0..samples).map(move |k| (window.seed.view(), predictions.slice(s![w, k, .., ..])))
+            (0..samples).map(move |k| {
+                (
+                    window.root_before,
+                    window.seed.view(),
+                    predictions.slice(s![w, k, .., ..]),
+                )
+            })
         })
         .collect();
     Ok(PlausibilityReport::new(
@@ -548,27 +563,33 @@ fn grounded_plausibility(
                 &[window.seed.view(), predictions.slice(s![w, k, .., ..])],
             )
             .expect("same width");
-            let spec = ClipSpec::new(
-                ExpMapTarget::H36m,
-                H36M_PROTOCOL_FPS,
-                0..seed_frames,
-                Some(action),
-                GroundingConfig::default(),
-            );
+            let spec = ClipSpec {
+                root_before: window.root_before,
+                ..ClipSpec::new(
+                    ExpMapTarget::H36m,
+                    H36M_PROTOCOL_FPS,
+                    0..seed_frames,
+                    Some(action),
+                    GroundingConfig::default(),
+                )
+            };
             let clip = ground_expmap_clip(whole.view(), &spec)
                 .map_err(|source| EvalError::Grounding { action, source })?;
             clips.push((clip.frames, seed_frames));
         }
     }
+    // The grounded clips' roots are re-encoded from the identity (their first delta holds the
+    // absolute pose) in the floor frame grounding levelled them into: measured on that floor.
     let pairs: Vec<_> = clips
         .iter()
         .map(|(f, n)| (f.slice(s![..*n, ..]), f.slice(s![*n.., ..])))
         .collect();
-    Ok(PlausibilityReport::new(
-        &measure(&pairs, "the grounded predictions")?,
-        horizon,
-        reference,
-    ))
+    let measured =
+        measure_sequences_in_floor_frame(&pairs).map_err(|source| EvalError::Metric {
+            what: "the grounded predictions".to_string(),
+            source,
+        })?;
+    Ok(PlausibilityReport::new(&measured, horizon, reference))
 }
 
 fn coverage_report(coverage: Coverage) -> CoverageReport {

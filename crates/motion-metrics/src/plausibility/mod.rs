@@ -23,7 +23,10 @@
 //!   pooled; [`reference::ActionReference`]). 1 moves like the data, 0 is frozen.
 //! - **World positions** `x_t,j = (q_t,j − o_0) · R_t + o_0 + T_t` (row vectors; `o_0` the root
 //!   offset, 0 for H3.6M): the root pose `(R_t, T_t)` integrated over seed + motion from the first
-//!   seed frame (identity before it), exactly as FK of the joined frames (`expmap_positions`).
+//!   seed frame, exactly as FK of the joined frames (`expmap_positions`): from the identity for a
+//!   seed that starts a file, and for a seed cut from a take (a test window, a real drift window)
+//!   from the take's own root pose before it (`motion_core::root::pose_before`, integrated from
+//!   the take's first frame), so a seated or bending body keeps the orientation it really had.
 //! - **Floor frame**: the seed's floor (`motion_core::grounding::floor`: a plane fitted to the
 //!   lowest of each seed frame's foot points [`FEET`], lowest in the frame the fit levels) made
 //!   the plane `y = 0`
@@ -38,9 +41,10 @@
 //!   the 95th percentile (linear interpolation between order statistics, numpy's default) of the
 //!   same per-window drift over real 12 s windows of the action, every subject (S1, S5, S6, S7,
 //!   S8, S9, S11), a window starting every 25 frames, each seeded like a prediction by the 50
-//!   frames before it (so the root is integrated from the same place). Integrated H3.6M roots
-//!   start from an unknown orientation, so real motion drifts too (a walk tilted by 3° climbs
-//!   400 mm in 8 m): drift is judged against the data, never against zero.
+//!   frames before it (its root integrated from the take's first frame, as a test window's).
+//!   Integrated H3.6M roots carry the capture's small orientation errors, so real motion drifts
+//!   too (a walk tilted by 3° climbs 400 mm in 8 m): drift is judged against the data, never
+//!   against zero.
 //! - **`foot_contact`**: a frame is *airborne* when both feet (each foot = the lowest of its
 //!   points [`FEET`]) are more than [`FOOT_CLEARANCE_MM`] = 100 mm above the floor (`y = 0` of the
 //!   floor frame). `foot_contact` of a window = the fraction of its frames (over the covering
@@ -278,6 +282,40 @@ impl Measurer {
         seed: ArrayView2<'_, f64>,
         motion: ArrayView2<'_, f64>,
     ) -> Result<SequenceMeasures, MetricError> {
+        self.measure_after(None, seed, motion)
+    }
+
+    /// [`Self::measure`] of a seed that continues a take after `root_before`, the absolute
+    /// root pose of the frame before it (`motion_core::root::pose_before`; `None`: the seed
+    /// starts the take, integrated from the identity).
+    pub fn measure_after(
+        &mut self,
+        root_before: Option<RootPose>,
+        seed: ArrayView2<'_, f64>,
+        motion: ArrayView2<'_, f64>,
+    ) -> Result<SequenceMeasures, MetricError> {
+        self.measure_with(root_before, None, seed, motion)
+    }
+
+    /// [`Self::measure`] of frames already in their floor frame, the plane `y = 0` (a grounded
+    /// clip: grounding moved its seed there, `motion_core::grounding::clip`), measured on that
+    /// floor rather than a floor fitted again (the fit of a levelled seed can come out a
+    /// degree or two off level, which reads a body that walks a few metres as sinking).
+    pub fn measure_in_floor_frame(
+        &mut self,
+        seed: ArrayView2<'_, f64>,
+        motion: ArrayView2<'_, f64>,
+    ) -> Result<SequenceMeasures, MetricError> {
+        self.measure_with(None, Some(Floor::level_at(0.0)), seed, motion)
+    }
+
+    fn measure_with(
+        &mut self,
+        root_before: Option<RootPose>,
+        floor: Option<Floor>,
+        seed: ArrayView2<'_, f64>,
+        motion: ArrayView2<'_, f64>,
+    ) -> Result<SequenceMeasures, MetricError> {
         for (what, a) in [("seed", &seed), ("motion", &motion)] {
             if a.ncols() != H36M_FRAME_DIMS {
                 return Err(MetricError::ShapeMismatch {
@@ -293,7 +331,7 @@ impl Measurer {
             }
             check_finite(what, a)?;
         }
-        let mut root = RootIntegrator::new(ROOT_STEP_25HZ);
+        let mut root = RootIntegrator::after(root_before, ROOT_STEP_25HZ);
         let mut feet = Vec::with_capacity(seed.nrows() * 6);
         let mut pose = RootPose::IDENTITY;
         for row in seed.rows() {
@@ -304,7 +342,10 @@ impl Measurer {
                     .map(|&j| (DVec3::from_array(self.world(j, &pose)) * 1e-3).as_vec3()),
             );
         }
-        let floor = Floor::fit_frames(&feet, 6).unwrap_or_else(|| Floor::level_at(0.0));
+        let floor = match floor {
+            Some(floor) => floor,
+            None => Floor::fit_frames(&feet, 6).unwrap_or_else(|| Floor::level_at(0.0)),
+        };
         let on_floor =
             |p: [f64; 3]| (floor.to_floor_frame_f64(DVec3::from_array(p) * 1e-3) * 1e3).to_array();
         let lean_of = |m: &Self, pose: &RootPose| {
@@ -408,6 +449,32 @@ pub fn measure_sequences(
     pairs
         .par_iter()
         .map_init(Measurer::new, |m, (seed, motion)| m.measure(*seed, *motion))
+        .collect()
+}
+
+/// [`measure_sequences`] of clips already in their floor frame
+/// ([`Measurer::measure_in_floor_frame`]).
+pub fn measure_sequences_in_floor_frame(
+    pairs: &[(ArrayView2<'_, f64>, ArrayView2<'_, f64>)],
+) -> Result<Vec<SequenceMeasures>, MetricError> {
+    pairs
+        .par_iter()
+        .map_init(Measurer::new, |m, (seed, motion)| {
+            m.measure_in_floor_frame(*seed, *motion)
+        })
+        .collect()
+}
+
+/// [`measure_sequences`] of seeds that continue takes, each after its root pose
+/// ([`Measurer::measure_after`]).
+pub fn measure_sequences_after(
+    triples: &[(Option<RootPose>, ArrayView2<'_, f64>, ArrayView2<'_, f64>)],
+) -> Result<Vec<SequenceMeasures>, MetricError> {
+    triples
+        .par_iter()
+        .map_init(Measurer::new, |m, (before, seed, motion)| {
+            m.measure_after(*before, *seed, *motion)
+        })
         .collect()
 }
 

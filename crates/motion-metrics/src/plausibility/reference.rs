@@ -6,7 +6,7 @@
 //! - the **drift p95**: per window, the 95th percentile of the largest hip height change and
 //!   torso lean change over real 12 s windows of the action in every subject's files (a window
 //!   every 25 frames from frame 50 on, seeded by the 50 frames before it, exactly as a prediction
-//!   is measured).
+//!   is measured: the root integrated from the take's first frame).
 //!
 //! Files missing from the data release are skipped (and the files used are listed); files are
 //! read in parallel and windows measured in parallel. [`action_reference`] keeps each result for
@@ -19,8 +19,10 @@ use ndarray::{s, Array2};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use motion_core::formats::h36m_text::{downsample_protocol, read_expmap_text};
-use motion_core::protocol::{sequence_file, ACTIONS, SEED_FRAMES, SUBJECTS, TEST_SUBJECT};
+use motion_core::protocol::{
+    read_take, sequence_file, ACTIONS, SEED_FRAMES, SUBJECTS, TEST_SUBJECT,
+};
+use motion_core::root::RootPose;
 use motion_core::FormatError;
 
 use super::{HorizonWindow, Measurer, DRIFT_PERCENTILE, REAL_WINDOW_FRAMES as MAX_HORIZON_FRAMES};
@@ -124,6 +126,8 @@ struct Take {
     subject: &'static str,
     path: PathBuf,
     frames: Array2<f64>,
+    /// The exact absolute root pose of each frame (`motion_core::protocol::Take`).
+    root_poses: Vec<RootPose>,
 }
 
 impl ActionReference {
@@ -147,11 +151,12 @@ impl ActionReference {
         let takes: Vec<Take> = paths
             .into_par_iter()
             .map(|(subject, path)| {
-                let frames = downsample_protocol(read_expmap_text(&path)?.view());
+                let take = read_take(&path)?;
                 Ok(Take {
                     subject,
                     path,
-                    frames,
+                    frames: take.frames,
+                    root_poses: take.root_poses,
                 })
             })
             .collect::<Result<_, ReferenceError>>()?;
@@ -211,8 +216,11 @@ impl ActionReference {
             .par_iter()
             .map_init(Measurer::new, |m, &(i, start)| {
                 let f = takes[i].frames.view();
-                m.measure(
-                    f.slice(s![start - SEED_FRAMES..start, ..]),
+                let seed_start = start - SEED_FRAMES;
+                let before = seed_start.checked_sub(1).map(|k| takes[i].root_poses[k]);
+                m.measure_after(
+                    before,
+                    f.slice(s![seed_start..start, ..]),
                     f.slice(s![start..start + MAX_HORIZON_FRAMES, ..]),
                 )
                 .map_err(|source| ReferenceError::Metric {
