@@ -13,12 +13,16 @@ eligible. α = 0 is always scored (it is the reference of the rule).
 
     python -m training.interpolate --a weights/vgru_d_multi.safetensors --b training/runs/vgru_alive_d/best.pt \\
         --alphas 0.25,0.5,0.75,1 --out-dir /tmp/wise
+
+``--export ALPHA --out FILE`` writes one blend without scoring it, its provenance holding both parents' (how the
+game default's blend was made, ``training/README.md``).
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import shlex
 import sys
 from pathlib import Path
 
@@ -58,18 +62,76 @@ def choose(rows: list[dict]) -> dict | None:
     return max(eligible, key=lambda r: (r["awake"], -r["npss_ref"]), default=None)
 
 
+def provenance_of(path: str) -> dict:
+    """The provenance a weights file carries (empty for a training checkpoint, which has none)."""
+    if not path.endswith(".safetensors"):
+        return {}
+    from .export import read_metadata
+
+    return json.loads(read_metadata(path).get("provenance", "{}"))
+
+
+def blend_provenance(a: str, b: str, alpha: float, command: str, choice: str | None, date: str) -> dict:
+    """The provenance of ``(1 - alpha) A + alpha B`` written by ``--export``: both parents' own provenance kept."""
+    pa, pb = provenance_of(a), provenance_of(b)
+    prov = {
+        "data": pa.get("data") or pb.get("data") or "unknown",
+        "date": date,
+        "command": command,
+        "export_command": command,
+        "iterations": [pa.get("iterations"), pb.get("iterations")],
+        "weights": f"WiSE-FT interpolation {1 - alpha:g} x A + {alpha:g} x B of the two files' tensors (in f64)",
+        "interpolated": [{"file": a, "weight": 1 - alpha, "provenance": pa},
+                         {"file": b, "weight": alpha, "provenance": pb}],
+    }
+    if choice:
+        prov["checkpoint_choice"] = choice
+    return prov
+
+
+def export_blend(a: str, b: str, alpha: float, out: str, dtype: torch.dtype, command: str,
+                 choice: str | None = None) -> None:
+    """Writes ``(1 - alpha) A + alpha B`` to ``out`` (A's config, e.g. its noise scale) with its provenance."""
+    import datetime
+
+    model_a, model_b = load_model(a), load_model(b)
+    if model_a.config != model_b.config:
+        raise ValueError("the two models have different configs (B must be a fine-tune of A)")
+    model_a.load_state_dict(interpolate(model_a.state_dict(), model_b.state_dict(), alpha))
+    date = datetime.datetime.now(datetime.timezone.utc).replace(microsecond=0).isoformat()
+    save_weights(model_a, out, blend_provenance(a, b, alpha, command, choice, date), dtype=dtype)
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(prog="python -m training.interpolate", description=__doc__,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--a", required=True, help="the base model (.safetensors or .pt)")
     p.add_argument("--b", required=True, help="its fine-tune (.safetensors or .pt)")
     p.add_argument("--alphas", default="0.25,0.5,0.75,1", help="weights of B, comma-separated (0 is always added)")
-    p.add_argument("--out-dir", required=True, help="where the interpolated files go (alpha_0.25.safetensors, ...)")
+    p.add_argument("--out-dir", default=None, help="where the interpolated files go (alpha_0.25.safetensors, ...)")
     p.add_argument("--dtype", choices=["float32", "float16", "bfloat16"], default="float16")
     p.add_argument("--data-dir", default=None)
     p.add_argument("--val-per-action", type=int, default=4)
     p.add_argument("--json", action="store_true")
+    p.add_argument("--export", type=float, default=None, metavar="ALPHA",
+                   help="write only (1 - ALPHA) A + ALPHA B to --out, with both parents' provenance (no scoring)")
+    p.add_argument("--out", default=None, help="the file --export writes")
+    p.add_argument("--choice", default=None, help="how ALPHA was chosen, stored in the provenance")
     args = p.parse_args(argv)
+    dtype = {"float32": torch.float32, "float16": torch.float16, "bfloat16": torch.bfloat16}[args.dtype]
+    if args.export is not None:
+        if not args.out or not 0.0 <= args.export <= 1.0:
+            print("error: --export ALPHA needs --out FILE and 0 <= ALPHA <= 1", file=sys.stderr)
+            return 2
+        command = "python -m training.interpolate " + " ".join(
+            shlex.quote(x) for x in (sys.argv[1:] if argv is None else argv))
+        try:
+            export_blend(args.a, args.b, args.export, args.out, dtype, command, args.choice)
+        except (OSError, ValueError, KeyError, RuntimeError) as e:
+            print(f"error: {e}", file=sys.stderr)
+            return 2
+        print(f"wrote {args.out} ({1 - args.export:g} x {args.a} + {args.export:g} x {args.b})")
+        return 0
     try:
         alphas = sorted({0.0} | {float(x) for x in args.alphas.split(",") if x.strip()})
     except ValueError:
@@ -82,6 +144,9 @@ def main(argv=None) -> int:
     except (OSError, ValueError, KeyError, RuntimeError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
+    if not args.out_dir:
+        print("error: --out-dir is needed to score interpolations (or --export ALPHA --out FILE)", file=sys.stderr)
+        return 2
     out_dir = Path(args.out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     stats = h36m.NormStats(mean=model_a.norm.mean.double().numpy(), std=model_a.norm.std.double().numpy(),
@@ -91,7 +156,6 @@ def main(argv=None) -> int:
                                       log=lambda m: None)
     validator = Validator(windows, stats, actions, int(model_a.config["seed_frames"]), int(model_a.config["horizon"]))
     sa, sb = model_a.state_dict(), model_b.state_dict()
-    dtype = {"float32": torch.float32, "float16": torch.float16, "bfloat16": torch.bfloat16}[args.dtype]
     rows = []
     for alpha in alphas:
         model_a.load_state_dict(interpolate(sa, sb, alpha))

@@ -52,3 +52,31 @@ def test_rule_keeps_the_short_term_fit_then_counts_actions_awake():
     rows[1]["npss_ref"] = 1.70
     rows[2]["npss_ref"] = 1.70
     assert choose(rows) is None
+
+
+def test_export_writes_the_blend_with_both_parents_provenance(tmp_path):
+    import json
+
+    from training.export import load_weights, read_metadata, save_weights
+    from training.interpolate import main
+
+    torch.manual_seed(0)
+    config = make_config("vgru-d", H36M_DIMS_USED, hidden=8, plan_hidden=8)
+    a, b = build_model(config), build_model(config)
+    pa, pb = tmp_path / "a.safetensors", tmp_path / "b.safetensors"
+    save_weights(a, pa, {"data": "H3.6M", "iterations": 100})
+    save_weights(b, pb, {"data": "H3.6M", "iterations": 200})
+    out = tmp_path / "blend.safetensors"
+    assert main(["--a", str(pa), "--b", str(pb), "--export", "0.75", "--out", str(out), "--dtype", "float32",
+                 "--choice", "a test"]) == 0
+    blend = load_weights(str(out)).state_dict()
+    want = interpolate(load_weights(str(pa)).state_dict(), load_weights(str(pb)).state_dict(), 0.75)
+    for name, t in want.items():
+        assert torch.equal(blend[name], t), name
+    prov = json.loads(read_metadata(out)["provenance"])
+    assert [p["provenance"]["iterations"] for p in prov["interpolated"]] == [100, 200]
+    assert [p["weight"] for p in prov["interpolated"]] == [0.25, 0.75]
+    assert prov["checkpoint_choice"] == "a test" and "--export 0.75" in prov["command"]
+    # Refused: no --out, an alpha outside [0, 1].
+    assert main(["--a", str(pa), "--b", str(pb), "--export", "0.75"]) == 2
+    assert main(["--a", str(pa), "--b", str(pb), "--export", "1.5", "--out", str(out)]) == 2

@@ -80,8 +80,7 @@ fn every_action_has_reference_statistics_and_real_motion_is_within_them() {
                 real.lean_p95_deg
             ));
         }
-        let hip = motion_core::grounding::hip_floor_fraction(Some(action))
-            * motion_core::grounding::H36M_STANDING_HEIGHT_MM;
+        let hip = motion_core::grounding::hip_p5_mm(Some(action));
         // At least the real p5, more by under 0.2 mm.
         let over = f64::from(hip) - real.hip_height_p5_mm;
         if !(-1e-3..=0.2).contains(&over) {

@@ -237,9 +237,9 @@ fn grounded_crouch(action: Option<&str>, config: GroundingConfig) -> (f32, f32, 
 #[test]
 fn a_crouch_stands_up_to_the_actions_hip_height_with_the_feet_planted() {
     // Knees bent by 1.6 rad: the root 0.62 m over the floor; real walking keeps it over 0.85 m
-    // (HIP_P5_MM), sitting down to under the floor (no hold).
+    // (HIP_P5_MM; the hold 13.5 mm over it), sitting down to under the floor (no hold).
     let hold = hip_floor_fraction(Some("walking")) * H36M_STANDING_HEIGHT_MM * 1e-3;
-    assert!((hold - 0.8472).abs() < 1e-3, "{hold}");
+    assert!((hold - 0.8607).abs() < 1e-3, "{hold}");
     let (lowest, root_y, moved) = grounded_crouch(Some("walking"), GroundingConfig::default());
     assert!(
         root_y >= hold - 1e-3,
