@@ -21,6 +21,7 @@ game default's blend was made, ``training/README.md``).
 from __future__ import annotations
 
 import argparse
+import datetime
 import json
 import shlex
 import sys
@@ -31,7 +32,7 @@ import torch
 
 from . import data as h36m
 from .evaluate import load_model
-from .export import load_weights, save_weights
+from .export import load_weights, read_metadata, save_weights
 from .long_horizon import ELIGIBLE_RATIO, long_closed_loop, speed_ratios
 from .train import Validator
 
@@ -66,8 +67,6 @@ def provenance_of(path: str) -> dict:
     """The provenance a weights file carries (empty for a training checkpoint, which has none)."""
     if not path.endswith(".safetensors"):
         return {}
-    from .export import read_metadata
-
     return json.loads(read_metadata(path).get("provenance", "{}"))
 
 
@@ -92,8 +91,6 @@ def blend_provenance(a: str, b: str, alpha: float, command: str, choice: str | N
 def export_blend(a: str, b: str, alpha: float, out: str, dtype: torch.dtype, command: str,
                  choice: str | None = None) -> None:
     """Writes ``(1 - alpha) A + alpha B`` to ``out`` (A's config, e.g. its noise scale) with its provenance."""
-    import datetime
-
     model_a, model_b = load_model(a), load_model(b)
     if model_a.config != model_b.config:
         raise ValueError("the two models have different configs (B must be a fine-tune of A)")

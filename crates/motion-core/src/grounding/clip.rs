@@ -35,7 +35,7 @@ pub struct ClipSpec<'a> {
     /// The seed's frames: their feet give the floor; frames from its end on are grounded.
     pub seed: Range<usize>,
     /// For root deltas: the absolute root pose of the frame before the first one, when the
-    /// frames continue a take ([`crate::root::pose_before`]); `None` integrates from the
+    /// frames continue a take ([`crate::protocol::WindowData::root_before`]); `None` integrates from the
     /// identity (a take's first frame). A window cut from a take needs it for its true
     /// orientation: a seated body integrated from the identity at the window's start is tilted
     /// by its pelvis' tilt.
@@ -190,6 +190,7 @@ impl<'a> ClipSpec<'a> {
 mod tests {
     use super::*;
     use crate::kinematics::expmap_positions;
+    use crate::root::integrate_root;
 
     /// 50 seed frames standing, then 100 frames whose root climbs 20 mm a frame.
     fn floating() -> Array2<f64> {
@@ -244,7 +245,7 @@ mod tests {
         }
         // A window of it integrates to the same poses.
         let w = grounded.window(100..150);
-        let again = crate::root::integrate_root(w.view(), 2);
+        let again = integrate_root(w.view(), 2);
         for (a, b) in again.iter().zip(&grounded.root_poses[100..]) {
             for k in 0..3 {
                 assert!((a.translation[k] - b.translation[k]).abs() < 1e-6);

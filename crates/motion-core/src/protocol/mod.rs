@@ -380,6 +380,15 @@ pub struct Take {
 /// Reads one H3.6M take ([`Take`]); a file whose frames are not 99 wide is refused (naming it)
 /// before anything indexes its columns.
 pub fn read_take(path: &Path) -> Result<Take, FormatError> {
+    let frames = read_source_frames(path)?;
+    Ok(Take {
+        root_poses: integrate_root_kept(frames.view(), ROOT_STEP_25HZ),
+        frames: downsample_protocol(frames.view()),
+    })
+}
+
+/// One H3.6M file's 50 Hz frames, refused (naming it) unless 99 wide.
+fn read_source_frames(path: &Path) -> Result<Array2<f64>, FormatError> {
     let frames = read_expmap_text(path)?;
     if frames.ncols() != crate::skeleton::H36M_FRAME_DIMS {
         return Err(FormatError::Invalid {
@@ -391,10 +400,7 @@ pub fn read_take(path: &Path) -> Result<Take, FormatError> {
             ),
         });
     }
-    Ok(Take {
-        root_poses: integrate_root_kept(frames.view(), ROOT_STEP_25HZ),
-        frames: downsample_protocol(frames.view()),
-    })
+    Ok(frames)
 }
 
 /// Both takes of `action` by `subject` at the protocol's 25 Hz (the even frames), those whose file
@@ -408,7 +414,7 @@ pub fn load_subject_sequences(
     for sub in [1, 2] {
         let path = sequence_file(dataset, subject, action, sub);
         if path.is_file() {
-            out.push(read_take(&path)?.frames);
+            out.push(downsample_protocol(read_source_frames(&path)?.view()));
         }
     }
     Ok(out)

@@ -25,8 +25,8 @@
 //!   offset, 0 for H3.6M): the root pose `(R_t, T_t)` integrated over seed + motion from the first
 //!   seed frame, exactly as FK of the joined frames (`expmap_positions`): from the identity for a
 //!   seed that starts a file, and for a seed cut from a take (a test window, a real drift window)
-//!   from the take's own root pose before it (`motion_core::root::pose_before`, integrated from
-//!   the take's first frame), so a seated or bending body keeps the orientation it really had.
+//!   from the take's own root pose before it (`motion_core::protocol::WindowData::root_before`,
+//!   integrated from the take's first frame), so a seated or bending body keeps the orientation it really had.
 //! - **Floor frame**: the seed's floor (`motion_core::grounding::floor`: a plane fitted to the
 //!   lowest of each seed frame's foot points [`FEET`], lowest in the frame the fit levels) made
 //!   the plane `y = 0`
@@ -286,7 +286,7 @@ impl Measurer {
     }
 
     /// [`Self::measure`] of a seed that continues a take after `root_before`, the absolute
-    /// root pose of the frame before it (`motion_core::root::pose_before`; `None`: the seed
+    /// root pose of the frame before it (`motion_core::protocol::WindowData::root_before`; `None`: the seed
     /// starts the take, integrated from the identity).
     pub fn measure_after(
         &mut self,
@@ -446,10 +446,15 @@ impl Measurer {
 pub fn measure_sequences(
     pairs: &[(ArrayView2<'_, f64>, ArrayView2<'_, f64>)],
 ) -> Result<Vec<SequenceMeasures>, MetricError> {
-    pairs
-        .par_iter()
-        .map_init(Measurer::new, |m, (seed, motion)| m.measure(*seed, *motion))
-        .collect()
+    measure_all(pairs, |m, &(seed, motion)| m.measure(seed, motion))
+}
+
+/// Each item measured in parallel, one [`Measurer`] per worker.
+fn measure_all<T: Sync>(
+    items: &[T],
+    measure: impl Fn(&mut Measurer, &T) -> Result<SequenceMeasures, MetricError> + Sync + Send,
+) -> Result<Vec<SequenceMeasures>, MetricError> {
+    items.par_iter().map_init(Measurer::new, measure).collect()
 }
 
 /// [`measure_sequences`] of clips already in their floor frame
@@ -457,12 +462,9 @@ pub fn measure_sequences(
 pub fn measure_sequences_in_floor_frame(
     pairs: &[(ArrayView2<'_, f64>, ArrayView2<'_, f64>)],
 ) -> Result<Vec<SequenceMeasures>, MetricError> {
-    pairs
-        .par_iter()
-        .map_init(Measurer::new, |m, (seed, motion)| {
-            m.measure_in_floor_frame(*seed, *motion)
-        })
-        .collect()
+    measure_all(pairs, |m, &(seed, motion)| {
+        m.measure_in_floor_frame(seed, motion)
+    })
 }
 
 /// [`measure_sequences`] of seeds that continue takes, each after its root pose
@@ -470,12 +472,9 @@ pub fn measure_sequences_in_floor_frame(
 pub fn measure_sequences_after(
     triples: &[(Option<RootPose>, ArrayView2<'_, f64>, ArrayView2<'_, f64>)],
 ) -> Result<Vec<SequenceMeasures>, MetricError> {
-    triples
-        .par_iter()
-        .map_init(Measurer::new, |m, (before, seed, motion)| {
-            m.measure_after(*before, *seed, *motion)
-        })
-        .collect()
+    measure_all(triples, |m, &(before, seed, motion)| {
+        m.measure_after(before, seed, motion)
+    })
 }
 
 /// `speed_ratio` in one window.
