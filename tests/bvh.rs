@@ -962,3 +962,113 @@ fn bvh_is_a_motion_in_the_channels_layout() {
     assert_eq!((back.skeleton, back.frames), (bvh.skeleton, bvh.frames));
     assert!(Bvh::from_motion(&h36m_motion(synthetic_h36m(2), 50.0)).is_none());
 }
+
+/// `MOTION_DATA_DIR/cmu_locomotion/{name}` (default `<repo>/../shared/data`), or `None` after a
+/// visible SKIPPED message.
+fn cmu_locomotion_take(test: &str, name: &str) -> Option<PathBuf> {
+    let root = std::env::var_os("MOTION_DATA_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data"));
+    let path = root.join("cmu_locomotion").join(name);
+    if path.exists() {
+        Some(path)
+    } else {
+        eprintln!(
+            "SKIPPED: {test}: {} not found (set MOTION_DATA_DIR)",
+            path.display()
+        );
+        None
+    }
+}
+
+/// The CMU takes on ASF names (16_15: `pelvis, lfemur, thorax, lhumerus, ...`, no `Spine` or
+/// `Neck` counterpart) and 3dsMax-friendly names (131_01: `LeftHip`, `LeftCollar`, and
+/// `LeftShoulder` for the upper arm) are recognised and retargeted onto an upright H3.6M body
+/// moving at the take's pace.
+#[test]
+fn cmu_asf_and_3dsmax_takes_retarget_onto_an_upright_h36m_body() {
+    use motion::core::retarget::{JointMap, Retargeter};
+    // (take, built-in map, rig metres per unit, the take's hips path over its length in metres
+    // (manifest.tsv: 1 s smoothing))
+    for (take, preset, metres_per_unit, path_m) in [
+        ("16_15.bvh", "CMU ASF-named", 0.01, 4.52),
+        ("131_01.bvh", "CMU 3dsMax-friendly BVH", 0.056444, 4.53),
+    ] {
+        let test = "cmu_asf_and_3dsmax_takes_retarget_onto_an_upright_h36m_body";
+        let Some(path) = cmu_locomotion_take(test, take) else {
+            return;
+        };
+        let bvh = read_bvh(&path).unwrap();
+        let map = JointMap::detect(&bvh.skeleton).unwrap();
+        assert_eq!(map.name, preset, "{take}");
+        let r = Retargeter::new(&bvh.skeleton, map).unwrap();
+        let model = r.to_model(bvh.frames.view(), bvh.frame_time);
+        let p = channel_positions(&model.skeleton, model.frames.view()).unwrap();
+        let h36m = Skeleton::h36m();
+        let at = |t: usize, joint: &str| {
+            let j = h36m.joint_index(joint).unwrap();
+            [p[[t, j, 0]], p[[t, j, 1]], p[[t, j, 2]]]
+        };
+        let y = |t: usize, joint: &str| at(t, joint)[1];
+        // The first frame: hips above the ankles, head above the hips, each upper arm hanging
+        // (the elbow below the shoulder), the head 1.4-1.9 m above the lower foot.
+        let floor = y(0, "LeftFoot").min(y(0, "RightFoot"));
+        assert!(
+            y(0, "Hips") > y(0, "LeftFoot") + 600.0 && y(0, "Hips") > y(0, "RightFoot") + 600.0,
+            "{take}: hips {} feet {} {}",
+            y(0, "Hips"),
+            y(0, "LeftFoot"),
+            y(0, "RightFoot")
+        );
+        assert!(y(0, "Head") > y(0, "Hips") + 400.0, "{take}");
+        assert!(
+            (1400.0..1900.0).contains(&(y(0, "Head") - floor)),
+            "{take}: head {} mm above the foot",
+            y(0, "Head") - floor
+        );
+        for side in ["Left", "Right"] {
+            let (shoulder, elbow) = (y(0, &format!("{side}Arm")), y(0, &format!("{side}ForeArm")));
+            assert!(
+                elbow < shoulder - 100.0,
+                "{take}: {side} elbow {elbow} shoulder {shoulder}"
+            );
+        }
+        // Upright throughout: the head above the hips in every frame.
+        for t in 0..model.frames.nrows() {
+            assert!(y(t, "Head") > y(t, "Hips") + 300.0, "{take} frame {t}");
+        }
+        // The pace: the hips' ground path (1 s moving average) on the model, against the take's
+        // in metres, through the body-size ratio of the two skeletons (model metres per rig
+        // metre), within 25 %.
+        let fps = (1.0 / bvh.frame_time).round() as usize;
+        let n = model.frames.nrows();
+        let smooth: Vec<[f64; 2]> = (0..=n - fps)
+            .map(|t| {
+                let (mut x, mut z) = (0.0, 0.0);
+                for k in t..t + fps {
+                    x += at(k, "Hips")[0] / fps as f64;
+                    z += at(k, "Hips")[2] / fps as f64;
+                }
+                [x, z]
+            })
+            .collect();
+        let model_path_m: f64 = smooth
+            .windows(2)
+            .map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]))
+            .sum::<f64>()
+            / 1000.0;
+        let ratio = 1.0 / (r.scale() * 1000.0 * metres_per_unit);
+        let rig_path_m = model_path_m / ratio;
+        let seconds = n as f64 * bvh.frame_time;
+        eprintln!(
+            "{take}: model path {model_path_m:.2} m ({:.2} m/s), rig {rig_path_m:.2} m ({:.2} m/s), size ratio {ratio:.3}",
+            model_path_m / seconds,
+            rig_path_m / seconds
+        );
+        assert!(
+            (rig_path_m / path_m - 1.0).abs() < 0.25,
+            "{take}: {rig_path_m} m against {path_m} m"
+        );
+        assert!((0.8..1.4).contains(&ratio), "{take}: size ratio {ratio}");
+    }
+}

@@ -276,7 +276,7 @@ fn a_character_steered_by_its_control_allocates_nothing_per_tick() {
         character.advance(TICK).unwrap();
     }
     let mut generator =
-        motion::core::model::Generator::new(character.generator_mut().model().clone());
+        motion::core::model::Generator::new(character.generator_mut().unwrap().model().clone());
     let seed = ndarray::Array2::<f32>::zeros((50, 99));
     generator.start(seed.view(), None, Noise::Seed(0)).unwrap();
     generator.step().unwrap();

@@ -27,7 +27,8 @@ struct Cli {
 enum Command {
     /// Convert between H3.6M exp-map text (.txt/.txt.gz), BVH and .npy.
     Convert(commands::convert::Args),
-    /// Describe a weights file: architecture, sizes, parameters, fps, actions, provenance.
+    /// Describe a weights or motion-matching database file: architecture or rig, sizes, fps,
+    /// actions or takes, licence, provenance.
     Info(commands::info::Args),
     /// Score predictions against ground truth: NPSS, Euler error, NDMS, APD.
     Score(commands::score::Args),
@@ -39,6 +40,9 @@ enum Command {
     Render(commands::render::Args),
     /// Time closed-loop generation steps per batch size (µs/step, character-steps/s, peak RSS).
     Bench(commands::bench::Args),
+    /// Motion matching on your own takes: `matching build` makes a database from a folder of BVH
+    /// takes on any rig (play it with `predict --model DB.safetensors`).
+    Matching(commands::matching::Args),
 }
 
 /// `text` with its control characters escaped (`\u{7}`), so that a name a user typed is never
@@ -118,6 +122,7 @@ fn main() -> ExitCode {
         Command::Predict(args) => commands::predict::run(args),
         Command::Render(args) => commands::render::run(args),
         Command::Bench(args) => commands::bench::run(args),
+        Command::Matching(args) => commands::matching::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -101,6 +101,7 @@ pub mod rotation;
 pub mod seed;
 pub mod skeleton;
 pub mod steering;
+pub mod takes;
 pub mod weights;
 
 pub use error::{FormatError, MotionError, SkeletonError};

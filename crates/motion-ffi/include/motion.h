@@ -39,7 +39,9 @@ extern "C" {
 // Valid until the next failing call on the same thread.
 const char *motion_last_error(void);
 
-// Loads a motion-weights `.safetensors` file; NULL on error (see `motion_last_error`).
+// Loads a motion-weights `.safetensors` file or a motion-matching database (played by the same
+// generator calls: seed it with `motion_generator_start_bvh`, steer it with
+// `motion_generator_set_goal`); NULL on error (see `motion_last_error`).
 //
 // # Safety
 // `path` is NULL or a valid NUL-terminated string.

@@ -24,12 +24,13 @@ use std::cell::RefCell;
 use std::ffi::{c_char, c_int, CStr, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::Path;
-use std::sync::Arc;
 
+use motion_core::formats::bvh::read_bvh;
 use motion_core::grounding::GroundingConfig;
-use motion_core::model::{builtin, Character, MotionModel, Noise};
+use motion_core::model::{builtin, Character, MotionSource, Noise};
 use motion_core::seed::load_model_seed;
 use motion_core::steering::Goal;
+use motion_core::takes::seed_poses_on_rig;
 use ndarray::ArrayView2;
 
 /// Status codes (negative on failure).
@@ -116,28 +117,27 @@ unsafe fn text<'a>(
 
 /// A loaded model (opaque): immutable weights shared by any number of generators.
 pub struct motion_model {
-    model: Arc<MotionModel>,
+    model: MotionSource,
     joint_names: Vec<CString>,
 }
 
 impl motion_model {
-    fn new(model: MotionModel) -> motion_model {
-        let joint_names = motion_core::skeleton::Skeleton::h36m()
+    fn new(model: impl Into<MotionSource>) -> motion_model {
+        let model = model.into();
+        let joint_names = model
+            .skeleton()
             .joints()
             .iter()
             .map(|j| CString::new(j.name.clone()).unwrap_or_default())
             .collect();
-        motion_model {
-            model: Arc::new(model),
-            joint_names,
-        }
+        motion_model { model, joint_names }
     }
 }
 
 /// One animated character (opaque).
 pub struct motion_generator {
     character: Character,
-    model: Arc<MotionModel>,
+    model: MotionSource,
     rng_seed: u64,
     started: bool,
 }
@@ -149,7 +149,9 @@ pub extern "C" fn motion_last_error() -> *const c_char {
     LAST_ERROR.with(|e| e.borrow().as_ptr())
 }
 
-/// Loads a motion-weights `.safetensors` file; NULL on error (see `motion_last_error`).
+/// Loads a motion-weights `.safetensors` file or a motion-matching database (played by the same
+/// generator calls: seed it with `motion_generator_start_bvh`, steer it with
+/// `motion_generator_set_goal`); NULL on error (see `motion_last_error`).
 ///
 /// # Safety
 /// `path` is NULL or a valid NUL-terminated string.
@@ -159,7 +161,7 @@ pub unsafe extern "C" fn motion_model_load(path: *const c_char) -> *mut motion_m
         let path = unsafe { text(path, "path") }
             .map_err(|e| e.1)?
             .ok_or("path is NULL")?;
-        let model = MotionModel::load(path).map_err(|e| e.to_string())?;
+        let model = MotionSource::load(path).map_err(|e| e.to_string())?;
         Ok(Box::new(motion_model::new(model)))
     })
 }
@@ -227,7 +229,12 @@ pub unsafe extern "C" fn motion_model_action_index(
     guard(|| {
         let model = unsafe { model.as_ref() }.ok_or_else(|| invalid("model is NULL"))?;
         let action = unsafe { text(action, "action") }?.ok_or_else(|| invalid("action is NULL"))?;
-        let config = model.model.config();
+        let Some(m) = model.model.model() else {
+            return Err(bad(format!(
+                "unknown action `{action}`: a motion-matching database has no actions"
+            )));
+        };
+        let config = m.config();
         config
             .action_index(action)
             .map(|i| i as c_int)
@@ -251,10 +258,10 @@ pub unsafe extern "C" fn motion_generator_new(
 ) -> *mut motion_generator {
     guard_ptr(|| {
         let model = unsafe { model.as_ref() }.ok_or("model is NULL")?;
-        let character = Character::new(Arc::clone(&model.model)).map_err(|e| e.to_string())?;
+        let character = Character::new(model.model.clone()).map_err(|e| e.to_string())?;
         Ok(Box::new(motion_generator {
             character,
-            model: Arc::clone(&model.model),
+            model: model.model.clone(),
             rng_seed,
             started: false,
         }))
@@ -301,7 +308,18 @@ pub unsafe extern "C" fn motion_generator_start_bvh(
         let path =
             unsafe { text(bvh_path, "bvh_path") }?.ok_or_else(|| invalid("bvh_path is NULL"))?;
         let action = unsafe { text(action, "action") }?;
-        let config = g.model.config();
+        let config = match &g.model {
+            MotionSource::Model(m) => m.config().clone(),
+            MotionSource::Database(db) => {
+                // A database plays on its rig: the seed goes onto it (the action is ignored).
+                let bvh = read_bvh(path).map_err(bad)?;
+                let poses = seed_poses_on_rig(bvh, db.skeleton(), db.mm_per_unit(), db.fps(), None)
+                    .map_err(|e| bad(format!("{path}: {e}")))?;
+                g.character.start_poses(&poses).map_err(bad)?;
+                g.started = true;
+                return Ok(0);
+            }
+        };
         let seed =
             load_model_seed(Path::new(path), config.frame_dims, config.fps, None).map_err(bad)?;
         start(g, seed.frames.view(), action)
@@ -328,7 +346,12 @@ pub unsafe extern "C" fn motion_generator_start_frames(
         if frames.is_null() {
             return Err(invalid("frames is NULL"));
         }
-        let width = g.model.config().frame_dims;
+        let Some(model) = g.model.model() else {
+            return Err(bad(
+                "a motion-matching database starts from a BVH seed (motion_generator_start_bvh)",
+            ));
+        };
+        let width = model.config().frame_dims;
         if frame_dims != width {
             return Err(invalid(&format!(
                 "frame_dims is {frame_dims}, the model's frames have {width}"
@@ -475,7 +498,7 @@ fn advance_and_write(
             "a pose was asked for before a start: seed the generator first".into(),
         ));
     }
-    let dt = dt.unwrap_or(1.0 / g.model.config().fps);
+    let dt = dt.unwrap_or(1.0 / g.model.fps());
     let pose = g.character.advance(dt).map_err(bad)?;
     write_pose(pose, outputs.0, outputs.1, outputs.2, outputs.3)
 }

@@ -233,3 +233,81 @@ fn goals_steer_and_bad_goals_are_refused() {
         motion_model_free(model);
     }
 }
+
+/// The shipped motion-matching database is steered as a model is: loaded by
+/// `motion_model_load`, started from a BVH seed on another rig (the H3.6M example walk,
+/// retargeted onto the database's CMU rig), and sent along +x by `motion_generator_set_goal`
+/// at 60 Hz ticks: it goes there on the floor.
+#[test]
+fn the_shipped_database_is_steered_by_goals() {
+    unsafe {
+        let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");
+        let db = c(&format!("{root}/weights/matching_cmu.safetensors"));
+        let model = motion_model_load(db.as_ptr());
+        assert!(!model.is_null(), "{}", last_error());
+        let joints = motion_model_joint_count(model);
+        assert!(joints > 20, "{joints} joints");
+        // A database has no actions.
+        assert!(motion_model_action_index(model, c("walking").as_ptr()) < 0);
+        let generator = motion_generator_new(model, 1);
+        assert!(!generator.is_null(), "{}", last_error());
+        let seed = c(&format!("{root}/examples/walk_seed.bvh"));
+        assert_eq!(
+            motion_generator_start_bvh(generator, seed.as_ptr(), null()),
+            0,
+            "{}",
+            last_error()
+        );
+        // Exp-map frames are for learned models.
+        let frames = vec![0.0f32; 10 * 99];
+        assert_eq!(
+            motion_generator_start_frames(generator, frames.as_ptr(), 10, 99, null()),
+            MotionStatus::BadInput as i32
+        );
+        assert!(last_error().contains("database"), "{}", last_error());
+        assert_eq!(motion_generator_set_goal(generator, 1.2, 0.0, 1.5708), 0);
+        let (mut p, mut r, mut q) = ([0f32; 3], [0f32; 4], vec![0f32; 4 * joints]);
+        assert_eq!(
+            motion_generator_advance_pose(
+                generator,
+                0.0,
+                p.as_mut_ptr(),
+                r.as_mut_ptr(),
+                q.as_mut_ptr(),
+                joints
+            ),
+            0,
+            "{}",
+            last_error()
+        );
+        let start = p;
+        let (mut low, mut high) = (f32::INFINITY, f32::NEG_INFINITY);
+        for _ in 0..360 {
+            assert_eq!(
+                motion_generator_advance_pose(
+                    generator,
+                    1.0 / 60.0,
+                    p.as_mut_ptr(),
+                    r.as_mut_ptr(),
+                    q.as_mut_ptr(),
+                    joints
+                ),
+                0,
+                "{}",
+                last_error()
+            );
+            low = low.min(p[1]);
+            high = high.max(p[1]);
+        }
+        // 6 s toward +x at 1.2 m/s: most of 7.2 m that way, little across, hips at a
+        // standing person's height all along.
+        let moved = (p[0] - start[0], p[2] - start[2]);
+        assert!(moved.0 > 4.0 && moved.1.abs() < 1.5, "{moved:?}");
+        assert!(
+            low > start[1] - 0.25 && high < start[1] + 0.25,
+            "{low} {high}"
+        );
+        motion_generator_free(generator);
+        motion_model_free(model);
+    }
+}

@@ -30,6 +30,7 @@ pub mod evaluation;
 pub mod ndms;
 pub mod npss;
 pub mod plausibility;
+pub mod posture;
 pub mod protocol;
 pub mod reference;
 pub mod responsiveness;
@@ -45,3 +46,4 @@ pub use euler_error::{
 pub use ndms::{NdmsConfig, NdmsDatabase, NdmsReport, NnMethod};
 pub use npss::{npss, npss_reference, npss_windows, Npss, SpectrumPower, NPSS_WINDOWS_25HZ};
 pub use plausibility::{ActionReference, PlausibilityReport};
+pub use posture::{PostureJoints, PostureReference, PostureReport};

@@ -174,6 +174,7 @@ impl Animator {
         for _ in 0..n {
             self.character
                 .generator_mut()
+                .ok_or("a motion-matching database has no model steps")?
                 .step()
                 .map_err(|e| e.to_string())?;
         }

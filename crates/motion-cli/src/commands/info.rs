@@ -2,9 +2,16 @@
 //! — architecture, sizes (an intention model's noise, forecaster, intentions, clusters,
 //! look-ahead and convolution too), parameter count, fps, actions, dims, residual, GRU convention
 //! and training provenance; for an `action-classifier` file its windows, sizes and classes. Loading
-//! checks every tensor, so this also validates the file.
+//! checks every tensor, so this also validates the file. A motion-matching database
+//! (`motion-cli matching build`) prints its rig, rate, frames, takes, feature weights, licence
+//! and provenance.
 use std::fmt::Write as _;
 use std::path::PathBuf;
+
+use motion_core::matching::features::{GROUP_NAMES, TRAJECTORY_TIMES_S};
+use motion_core::matching::file::{FORMAT_NAME, FORMAT_VERSION};
+use motion_core::matching::{is_database, MatchingDatabase};
+use motion_core::takes::unit_name;
 
 use motion_core::model::config::architecture_name;
 use motion_core::model::{
@@ -15,7 +22,7 @@ use motion_core::nn::GruConvention;
 /// Arguments of `motion-cli info`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// A motion-weights safetensors file.
+    /// A motion-weights or motion-matching database safetensors file.
     pub weights: PathBuf,
     #[command(flatten)]
     pub reporting: super::output::Output,
@@ -24,6 +31,17 @@ pub struct Args {
 /// Runs the command.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let store = WeightStore::open(&args.weights)?;
+    if is_database(&store) {
+        let db = MatchingDatabase::from_store(&store)?;
+        let file_bytes = std::fs::metadata(&args.weights).map_or(0, |m| m.len());
+        let text = if args.reporting.json {
+            database_json(&args, &db, file_bytes)?
+        } else {
+            database_text(&args, &db, file_bytes)
+        };
+        print!("{text}");
+        return Ok(());
+    }
     if architecture_name(&store).ok().as_deref() == Some(CLASSIFIER_ARCHITECTURE) {
         let classifier = ActionClassifier::from_store(&store)?;
         let text = if args.reporting.json {
@@ -271,6 +289,138 @@ fn json_summary(model: &MotionModel) -> anyhow::Result<String> {
         "stored_dtype": model.stored_dtype(),
         "config": model.config(),
         "provenance": model.provenance(),
+    });
+    Ok(format!("{}\n", serde_json::to_string_pretty(&summary)?))
+}
+
+/// The feature groups with their weights: `foot positions 0.75, ...`.
+fn weighted_groups(db: &MatchingDatabase) -> String {
+    GROUP_NAMES
+        .iter()
+        .zip(db.weights())
+        .map(|(name, w)| format!("{name} {w}"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+fn database_text(args: &Args, db: &MatchingDatabase, file_bytes: u64) -> String {
+    let mut s = String::new();
+    let mut line = |key: &str, value: String| {
+        let _ = writeln!(s, "{key:<15} {value}");
+    };
+    let skeleton = db.skeleton();
+    line("file", args.weights.display().to_string());
+    line(
+        "format",
+        format!("{FORMAT_NAME} version {FORMAT_VERSION} (a motion-matching database)"),
+    );
+    line(
+        "rig",
+        format!(
+            "{} joints ({} with End Sites), root {}, {} ({} mm per unit)",
+            skeleton.body_joint_names().len(),
+            skeleton.len(),
+            skeleton.joint(0).name,
+            unit_name(db.mm_per_unit()),
+            db.mm_per_unit()
+        ),
+    );
+    line("fps", format!("{}", db.fps()));
+    line(
+        "frames",
+        format!(
+            "{} ({:.1} s), {} searchable",
+            thousands(db.frames()),
+            db.frames() as f64 / db.fps(),
+            thousands(db.searchable_frames())
+        ),
+    );
+    let takes = db.takes();
+    let retargeted = takes.iter().filter(|t| t.retargeted).count();
+    line(
+        "takes",
+        format!(
+            "{}{}: {}",
+            takes.len(),
+            if retargeted > 0 {
+                format!(" ({retargeted} retargeted from other rigs)")
+            } else {
+                String::new()
+            },
+            takes
+                .iter()
+                .map(|t| t.name.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    );
+    line("features", weighted_groups(db));
+    line(
+        "trajectory",
+        format!(
+            "{} s ahead; a search every {} frames while steered",
+            TRAJECTORY_TIMES_S
+                .iter()
+                .map(|t| format!("{t:.2}"))
+                .collect::<Vec<_>>()
+                .join(", "),
+            db.search_frames()
+        ),
+    );
+    line(
+        "licence",
+        if db.licence().is_empty() {
+            "(none recorded)".into()
+        } else {
+            db.licence().to_string()
+        },
+    );
+    line(
+        "bytes",
+        format!(
+            "{} in the file, {} in memory",
+            thousands(file_bytes as usize),
+            thousands(db.bytes())
+        ),
+    );
+    if db.provenance().is_empty() {
+        let _ = writeln!(s, "{:<15} (none recorded)", "provenance");
+    } else {
+        let _ = writeln!(s, "provenance");
+        let width = db.provenance().keys().map(String::len).max().unwrap_or(0);
+        for (key, value) in db.provenance() {
+            let _ = writeln!(s, "  {key:<width$}  {value}");
+        }
+    }
+    s
+}
+
+fn database_json(args: &Args, db: &MatchingDatabase, file_bytes: u64) -> anyhow::Result<String> {
+    let skeleton = db.skeleton();
+    let summary = serde_json::json!({
+        "file": args.weights.display().to_string(),
+        "format": FORMAT_NAME,
+        "format_version": FORMAT_VERSION,
+        "rig": {
+            "joints": skeleton.body_joint_names().len(),
+            "joints_with_end_sites": skeleton.len(),
+            "root": skeleton.joint(0).name,
+            "joint_names": skeleton.body_joint_names(),
+            "mm_per_unit": db.mm_per_unit(),
+            "units": unit_name(db.mm_per_unit()),
+        },
+        "fps": db.fps(),
+        "frames": db.frames(),
+        "seconds": db.frames() as f64 / db.fps(),
+        "searchable_frames": db.searchable_frames(),
+        "takes": db.takes(),
+        "feature_weights": GROUP_NAMES.iter().zip(db.weights()).map(|(n, w)| (n.to_string(), w)).collect::<std::collections::BTreeMap<_, _>>(),
+        "trajectory_s": TRAJECTORY_TIMES_S,
+        "search_frames": db.search_frames(),
+        "licence": db.licence(),
+        "provenance": db.provenance(),
+        "file_bytes": file_bytes,
+        "memory_bytes": db.bytes(),
     });
     Ok(format!("{}\n", serde_json::to_string_pretty(&summary)?))
 }

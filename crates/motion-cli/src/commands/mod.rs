@@ -4,6 +4,7 @@ pub mod classifier;
 pub mod convert;
 pub mod eval;
 pub mod info;
+pub mod matching;
 pub mod output;
 
 pub mod plausibility;
@@ -127,6 +128,9 @@ pub fn exit_code(err: &anyhow::Error) -> u8 {
             || c.is::<motion_core::retarget::RetargetError>()
             || c.is::<motion_core::any_format::AnyMotionError>()
             || c.is::<motion_core::file_sets::FileSetError>()
+            || c.is::<motion_core::matching::MatchingError>()
+            || c.is::<motion_core::takes::TakesError>()
+            || c.is::<motion_core::steering::path::PathError>()
             || c.is::<motion_metrics::MetricError>()
             || c.is::<motion_metrics::plausibility::ReferenceError>()
             || c.is::<motion_metrics::protocol::ProtocolError>()

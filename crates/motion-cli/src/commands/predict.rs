@@ -21,6 +21,8 @@ use serde_json::{json, Value};
 
 use super::UsageError;
 use crate::model_source::{describe, load_model, BuiltIn};
+
+mod steered;
 use motion_core::clip::{check_not_an_input, check_output, write_clips, Clips};
 use motion_core::seed::{load_seed, model_window, WrittenClip};
 
@@ -52,9 +54,35 @@ Examples:
   motion-cli predict --seed S5/walking_1.txt.gz --seed-end 1000 --truth truth.bvh --out pred.bvh
   motion-cli render pred.bvh --compare truth.bvh --seed-frames 50 --out walking.gif
 
+Steering (--path FILE.json): the character is steered frame by frame toward the goal a path \
+gives, one JSON object of either kind (metres, seconds; the floor is x-z, +y up; a facing is a \
+yaw in radians, 0 facing +z, pi/2 facing +x):
+  {\"waypoints\": [[x, z], ...], \"speed\": 1.2, \"radius\": 0.5, \"loop\": false}
+      walk to each point in turn at speed (m/s, default 1.2), the next once within radius \
+(m, default 0.5); after the last, stand (or start again with \"loop\": true)
+  {\"goals\": [{\"t\": 0.0, \"velocity\": [vx, vz], \"facing\": 1.57}, ...]}
+      from t seconds after the seed's end (increasing), move at velocity facing facing \
+(default: where the velocity goes)
+Coordinates are those of the written BVH, in which the seed's end is said in a notice (--json: \
+seed_end). The output is BVH only; it lasts --frames, --seconds, the path's own time (timed \
+goals: the last goal's t; waypoints: their length at their speed plus 3 s) or 10 s.
+
+Motion matching (--model DB.safetensors, from `motion-cli matching build`): the seed is a BVH \
+take on any rig (the database's rig by joint names, any units; another rig is retargeted onto \
+it, --joint-map if the built-in maps do not fit), resampled to the database's rate; the whole \
+seed (or its first --seed-end frames) is written, then the frames the database plays, steered \
+by --path (without it, it plays on from the seed), as BVH on the database's rig in its own units.
+
+  motion-cli matching build --takes ../shared/data/cmu_locomotion --out db.safetensors
+  echo '{\"waypoints\": [[0, 4], [4, 4], [4, 0], [0, 0]], \"speed\": 1.2}' > square.json
+  motion-cli predict --model db.safetensors --seed ../shared/data/cmu_locomotion/16_15.bvh \
+      --path square.json --seconds 40 --out square.bvh
+  motion-cli predict --seed examples/walk_seed.bvh --path square.json --seconds 20 --out steered.bvh
+
 Bad input (missing or malformed file, skeleton mismatch, NaN, too few frames, unknown action, \
-invalid weights, missing output directory) prints one line naming the file and exits with 2; \
-outputs are written to a temporary file and renamed, so they are never left half-written.";
+invalid weights, missing output directory, a malformed path) prints one line naming the file \
+and exits with 2; outputs are written to a temporary file and renamed, so they are never left \
+half-written.";
 
 /// Arguments of `motion-cli predict`.
 #[derive(clap::Args, Debug)]
@@ -63,7 +91,8 @@ pub struct Args {
     /// Seed sequence (.bvh, .txt, .txt.gz, .npy), or a directory of them (batch mode).
     #[arg(long, value_name = "SEQ")]
     pub seed: PathBuf,
-    /// Weights file (default: the weights built into this binary).
+    /// Weights file, or a motion-matching database from `matching build` (default: the
+    /// weights built into this binary).
     #[arg(long, value_name = "W")]
     pub model: Option<PathBuf>,
     /// Action label to condition on. Default: the seed's action as the built-in action classifier
@@ -74,9 +103,16 @@ pub struct Args {
     /// (default: the built-in action_classifier.safetensors).
     #[arg(long, value_name = "FILE")]
     pub classifier: Option<PathBuf>,
-    /// Frames to predict, at the model's frame rate.
-    #[arg(long, default_value_t = 100)]
-    pub frames: usize,
+    /// Frames to predict, at the model's (or database's) frame rate [default: 100; with --path
+    /// or a database: the path's own time, else 10 s].
+    #[arg(long, value_name = "N", conflicts_with = "seconds")]
+    pub frames: Option<usize>,
+    /// Seconds to predict (instead of --frames).
+    #[arg(long, value_name = "S")]
+    pub seconds: Option<f64>,
+    /// Steer along a path file (JSON waypoints or timed goals; see below). Output .bvh only.
+    #[arg(long, value_name = "FILE.json")]
+    pub path: Option<PathBuf>,
     /// Number of samples (different noise: VGRU-d's plan noise, the intention model's z).
     #[arg(long, value_name = "N", default_value_t = 1)]
     pub samples: usize,
@@ -121,6 +157,9 @@ pub struct Args {
     pub reporting: super::output::Output,
 }
 
+/// Frames predicted without --frames, --seconds or --path (4 s at 25 Hz).
+const DEFAULT_FRAMES: usize = 100;
+
 /// Everything one prediction needs besides the seed and output paths.
 struct Job {
     model: Arc<MotionModel>,
@@ -156,8 +195,12 @@ struct Done {
 
 /// Runs the command.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    if args.frames == 0 {
+    if args.frames == Some(0) {
         return Err(UsageError("--frames must be at least 1".into()).into());
+    }
+    steered::check_seconds(args.seconds)?;
+    if let Some(store) = steered::open_database(args.model.as_deref()) {
+        return steered::run_database(&args, &store);
     }
     if args.samples == 0 {
         return Err(UsageError("--samples must be at least 1".into()).into());
@@ -213,16 +256,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .into());
     }
     let model = load_model(args.model.as_deref(), BuiltIn::Game)?;
-    check_sample_size(args.samples, args.frames, model.config().frame_dims).map_err(|e| {
-        UsageError(format!(
-            "--samples {} --frames {}: {e}",
-            args.samples, args.frames
-        ))
-    })?;
+    let frames = match (args.frames, args.seconds) {
+        (Some(n), _) => n,
+        (None, Some(seconds)) => ((seconds * model.config().fps).round() as usize).max(1),
+        (None, None) => DEFAULT_FRAMES,
+    };
+    check_sample_size(args.samples, frames, model.config().frame_dims)
+        .map_err(|e| UsageError(format!("--samples {} --frames {frames}: {e}", args.samples)))?;
     if let Some(fps) = args.fps {
         // BVH output at --fps: refused before anything is generated if it would be too long.
         let config = model.config();
-        let written = resampled_len(config.seed_frames + args.frames, config.fps, fps);
+        let written = resampled_len(config.seed_frames + frames, config.fps, fps);
         check_clip(
             written,
             config.frame_dims,
@@ -230,9 +274,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         )
         .map_err(|e| {
             UsageError(format!(
-                "--fps {} --frames {}: {e}",
+                "--fps {} --frames {frames}: {e}",
                 compact_number(fps),
-                args.frames
             ))
         })?;
     }
@@ -252,7 +295,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         infer,
         defaulted,
         model,
-        frames: args.frames,
+        frames,
         samples: args.samples,
         rng_seed: args.rng_seed,
         prediction_only: args.prediction_only,
@@ -274,7 +317,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             args.samples
         ));
     }
-    if batch {
+    if args.path.is_some() {
+        let name = describe(args.model.as_deref(), BuiltIn::Game);
+        steered::run_model_path(&args, &job, &name)
+    } else if batch {
         run_batch(&args, &job)
     } else {
         let done = predict_one(&job, &args.seed, &args.out, args.truth.as_deref())?;

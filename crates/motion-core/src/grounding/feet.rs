@@ -29,6 +29,9 @@ const BALANCE_MAX_TRAVEL_M_S: f32 = 0.6;
 const STANCE_REACH: f32 = 0.9;
 /// Seconds a free foot takes to rise to the swing clearance.
 const SWING_RISE_S: f32 = 0.06;
+/// A held foot farther than this (horizontally) from where a source that gives its own contacts
+/// ([`Grounder::set_source_contacts`]) has it is let go (metres).
+const SOURCE_UNLOCK_M: f32 = 0.2;
 /// A held foot farther than this times its leg's reach from the hip is let go.
 const RELEASE_REACH: f32 = 1.3;
 /// The body is held back so that a held foot is at most this times its leg's reach away.
@@ -115,12 +118,15 @@ impl Grounder {
         carried: Vec3,
     ) {
         let fraction = self.release_fraction(dt);
+        let source_known = self.source_contacts.is_some();
         let leg = &self.parts.legs[side];
         let ankle = self.positions[leg.ankle];
         let state = &mut self.feet[side];
         state.previous = Some(ankle - carried);
-        state.contact =
-            height < self.config.contact_height_m && speed < self.config.contact_speed_m_s;
+        state.contact = match self.source_contacts {
+            Some(contacts) => contacts[side],
+            None => height < self.config.contact_height_m && speed < self.config.contact_speed_m_s,
+        };
         if !self.config.foot_locking {
             return;
         }
@@ -137,7 +143,10 @@ impl Grounder {
         match state.lock {
             Some(lock)
                 if state.weight >= 1.0
-                    && (!state.contact || (lock - hip).length() > reach * RELEASE_REACH) =>
+                    && (!state.contact
+                        || (lock - hip).length() > reach * RELEASE_REACH
+                        || source_known
+                            && (lock.x - ankle.x).hypot(lock.z - ankle.z) > SOURCE_UNLOCK_M) =>
             {
                 // A foot held away from where the model has it steps there rather than slides.
                 let (dx, dz) = (ankle.x - lock.x, ankle.z - lock.z);
@@ -265,6 +274,11 @@ impl Grounder {
     /// leg's reach (the mean over the held feet that need it): flat, or, while the root leads
     /// ([`Grounder::set_root_leads`]), rolled onto its toes as far as [`Self::heel_rise`] allows.
     pub(super) fn held_back(&self) -> Vec3 {
+        if self.source_contacts.is_some() {
+            // The source's root is where it is steered; a foot it leaves behind lets go
+            // (`SOURCE_UNLOCK_M`).
+            return Vec3::ZERO;
+        }
         let (mut sum, mut n) = (Vec3::ZERO, 0.0);
         for side in 0..2 {
             let Some((lock, hip, reach)) = self.held(side) else {
@@ -344,13 +358,16 @@ impl Grounder {
             let rise = dt / SWING_RISE_S;
             let lifted = &mut self.feet[side].lifted;
             *lifted = over.min(*lifted + rise).max(*lifted - rise);
-            let wanted = if support {
+            // A source that gives its contacts swings its feet as it likes (only out of the
+            // floor).
+            let own = self.source_contacts.is_some();
+            let wanted = if support || own {
                 0.0
             } else {
                 self.config.swing_clearance_m * *lifted
             };
             // The support foot goes back to the floor when the hip-height hold raised it.
-            if height < wanted || (support && height > wanted) {
+            if height < wanted || (support && !own && height > wanted) {
                 let target = ankle + Vec3::Y * (wanted - height);
                 let rotation = self.rotations[leg.ankle];
                 let (target, rotation) = if support {

@@ -280,6 +280,8 @@ pub struct Grounder {
     model_root: Option<Vec3>,
     /// Whether the root leads (a steered character): see [`Grounder::set_root_leads`].
     root_leads: bool,
+    /// The source's own foot contacts for the next frame: see [`Grounder::set_source_contacts`].
+    source_contacts: Option<[bool; 2]>,
 }
 
 /// Seed frames kept for the floor fit (the last ones).
@@ -327,6 +329,7 @@ impl Grounder {
             one_foot: None,
             model_root: None,
             root_leads: false,
+            source_contacts: None,
         })
     }
 
@@ -375,6 +378,19 @@ impl Grounder {
         self.root_leads = leads;
     }
 
+    /// The source's own foot contacts for the frames that follow (`None`, the default: found by
+    /// the contact rule). A source that knows them (a motion-matching database plays real takes
+    /// whose contacts were found before the root was steered) gives them here: the supporting
+    /// foot is the one in contact, the source's height is kept (only a foot under the floor
+    /// lifts the body: a run keeps its flight, a blend into a contact does not pull the body
+    /// down), a foot is locked while the source says it is in contact and let go once the
+    /// source's foot is 0.2 m away, and held feet never hold the body back (the source's root
+    /// goes where it is steered) nor move it (no hip-height hold or balance over a lone foot).
+    /// Kept across [`Self::reset`].
+    pub fn set_source_contacts(&mut self, contacts: Option<[bool; 2]>) {
+        self.source_contacts = contacts;
+    }
+
     /// The lean limit in force (degrees).
     pub fn lean_limit(&self) -> f32 {
         self.lean_limit
@@ -421,6 +437,14 @@ impl Grounder {
         }
         let floor = Floor::fit_frames(&self.seed_points, self.foot_points_per_frame())
             .unwrap_or_else(|| Floor::level_at(0.0));
+        self.set_floor(floor);
+        floor
+    }
+
+    /// Grounds on `floor` instead of the one fitted on the seed (a source that knows its floor:
+    /// a motion-matching database continues a seed it has put on a level floor). Call it after
+    /// the last [`Self::observe_seed`], which forgets it.
+    pub fn set_floor(&mut self, floor: Floor) {
         self.floor = Some(floor);
         self.seat = self
             .seed_last
@@ -433,7 +457,6 @@ impl Grounder {
                     self.standing_height,
                 )
             });
-        floor
     }
 
     /// The seat the seed left (floor frame, metres; its `y` the lowest the root goes while
@@ -549,12 +572,22 @@ impl Grounder {
             });
         }
         let slow = self.config.contact_speed_m_s;
-        let support = if speeds[0] < slow && speeds[1] < slow {
-            usize::from(heights[1] < heights[0])
-        } else {
-            usize::from(speeds[1] < speeds[0])
+        let lower = usize::from(heights[1] < heights[0]);
+        let support = match self.source_contacts {
+            Some([true, true]) => lower,
+            Some([left, right]) if left || right => usize::from(right),
+            Some(_) => lower,
+            None if speeds[0] < slow && speeds[1] < slow => lower,
+            None => usize::from(speeds[1] < speeds[0]),
         };
-        let lift = -heights[support];
+        // A source that gives its contacts stands on its own floor already: it is only lifted
+        // out of it (a blend into a contact does not pull the body down to the landing foot).
+        let own_height = self.source_contacts.is_some();
+        let lift = if own_height {
+            (-heights[0].min(heights[1])).max(0.0)
+        } else {
+            -heights[support]
+        };
         root.y += lift;
         for p in &mut self.positions {
             p.y += lift;
@@ -583,7 +616,7 @@ impl Grounder {
         for p in &mut self.positions {
             *p += seat_hold;
         }
-        let raise = if self.config.foot_locking {
+        let raise = if self.config.foot_locking && !own_height {
             self.hip_raise(root.y, model_speed, dt)
         } else {
             Vec3::ZERO
@@ -606,7 +639,10 @@ impl Grounder {
                 .seat
                 .and_then(|s| seat::height_under(s, *root, self.standing_height))
                 .map_or(f32::NEG_INFINITY, |y| y.min(root.y));
-            let lowest = root.y - (root.y - self.lowest_foot_point().y).max(seat_floor);
+            let mut lowest = root.y - (root.y - self.lowest_foot_point().y).max(seat_floor);
+            if own_height {
+                lowest = lowest.min(0.0);
+            }
             root.y -= lowest;
             for (leg, state) in self.parts.legs.iter().zip(&mut self.feet) {
                 let ankle = self.positions[leg.ankle] - Vec3::Y * lowest;

@@ -51,6 +51,12 @@ impl PoseGrounder {
         self.grounder.set_root_leads(leads);
     }
 
+    /// The source's own foot contacts for the frames that follow
+    /// ([`Grounder::set_source_contacts`]).
+    pub fn set_source_contacts(&mut self, contacts: Option<[bool; 2]>) {
+        self.grounder.set_source_contacts(contacts);
+    }
+
     /// Sets the lean limit for `action`.
     pub fn set_action(&mut self, action: Option<&str>) {
         self.grounder.set_action(action);
@@ -60,6 +66,11 @@ impl PoseGrounder {
     pub fn observe_seed(&mut self, pose: &Pose) {
         self.grounder
             .observe_seed(pose.root_translation, &pose.local_rotations);
+    }
+
+    /// Grounds on `floor` instead of the one fitted on the seed ([`Grounder::set_floor`]).
+    pub fn set_floor(&mut self, floor: super::floor::Floor) {
+        self.grounder.set_floor(floor);
     }
 
     /// `pose` grounded (its root motion against the last grounded pose), or `pose` itself when

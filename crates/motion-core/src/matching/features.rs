@@ -1,6 +1,6 @@
-//! The matching features of one frame: where the feet are and how they and the hips move, and
-//! where the root goes and faces over the next second, all in the frame's own ground frame
-//! (root on the floor, its facing along +z).
+//! The matching features of one frame (Clavet 2016; Holden et al. 2020): where the feet are and
+//! how they and the hips move, and where the root goes and faces over the next second, all in the
+//! frame's own ground frame (the smoothed root on the floor, its facing along +z).
 
 use glam::{Vec2, Vec3};
 
@@ -8,13 +8,30 @@ use crate::steering::direction_of;
 
 /// Numbers per feature vector.
 pub const FEATURES: usize = 27;
-/// Frames ahead (at 25 Hz) of the three trajectory samples: 0.32, 0.68 and 1.0 s.
-pub const TRAJECTORY_FRAMES: [usize; 3] = [8, 17, 25];
+/// Seconds ahead of the three trajectory samples.
+pub const TRAJECTORY_TIMES_S: [f64; 3] = [1.0 / 3.0, 2.0 / 3.0, 1.0];
 /// The feature groups (start, length): foot positions, foot velocities, hip velocity,
 /// trajectory positions, trajectory directions. Each group is scaled by its own spread.
 pub const GROUPS: [(usize, usize); 5] = [(0, 6), (6, 6), (12, 3), (15, 6), (21, 6)];
+/// The groups' names, in [`GROUPS`] order (the database file's `features.groups`).
+pub const GROUP_NAMES: [&str; 5] = [
+    "foot_positions",
+    "foot_velocities",
+    "hip_velocity",
+    "trajectory_positions",
+    "trajectory_directions",
+];
 /// Where the trajectory part starts (positions, then directions).
 pub const TRAJECTORY_START: usize = 15;
+
+/// The frames ahead of the trajectory samples at `fps` (at least 1, increasing).
+pub fn trajectory_frames(fps: f64) -> [usize; 3] {
+    let mut out = TRAJECTORY_TIMES_S.map(|t| ((t * fps).round() as usize).max(1));
+    for k in 1..3 {
+        out[k] = out[k].max(out[k - 1] + 1);
+    }
+    out
+}
 
 /// A frame's ground frame: the root on the floor and the facing (yaw about +y).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -36,6 +53,11 @@ impl GroundFrame {
         let f = self.local(Vec2::new(v.x, v.z));
         Vec3::new(f.x, v.y, f.y)
     }
+
+    /// A floor vector of this frame in world axes (the inverse of [`GroundFrame::local`]).
+    pub fn world(&self, v: Vec2) -> Vec2 {
+        rotate(v, self.facing)
+    }
 }
 
 /// `v` turned by `angle` about +y (a facing of `angle` maps +z to `direction_of(angle)`).
@@ -44,9 +66,9 @@ pub fn rotate(v: Vec2, angle: f32) -> Vec2 {
     Vec2::new(c * v.x + s * v.y, -s * v.x + c * v.y)
 }
 
-/// The pose part of the features (`out[..15]`): both ankles relative to the root's floor point,
-/// their velocities and the root's velocity, in `frame` (world metres, `dt` seconds between
-/// `previous` and `current` positions).
+/// The pose part of the features (`out[..15]`): both ankles relative to the ground frame's
+/// floor point, their velocities and the root's velocity, in `frame` (world metres, `dt` seconds
+/// between `previous` and `current` positions).
 pub fn pose_features(
     frame: &GroundFrame,
     root: Vec3,
@@ -56,7 +78,7 @@ pub fn pose_features(
     dt: f32,
     out: &mut [f32; FEATURES],
 ) {
-    let floor = Vec3::new(root.x, 0.0, root.z);
+    let floor = Vec3::new(frame.position.x, 0.0, frame.position.y);
     for (side, (&now, &before)) in ankles.iter().zip(&previous_ankles).enumerate() {
         let p = frame.local3(now - floor);
         let v = frame.local3((now - before) / dt);
@@ -68,7 +90,7 @@ pub fn pose_features(
 }
 
 /// The trajectory part of the features (`out[15..]`): the ground frames `ahead` (at
-/// [`TRAJECTORY_FRAMES`]) as positions and facing directions in `frame`.
+/// [`TRAJECTORY_TIMES_S`]) as positions and facing directions in `frame`.
 pub fn trajectory_features(
     frame: &GroundFrame,
     ahead: [GroundFrame; 3],
@@ -96,6 +118,7 @@ mod tests {
         // Facing +x: one metre further along +x is one metre ahead (+z local).
         let ahead = frame.local(Vec2::new(1.0, 0.0));
         assert!((ahead - Vec2::new(0.0, 1.0)).length() < 1e-6, "{ahead}");
+        assert!((frame.world(ahead) - Vec2::new(1.0, 0.0)).length() < 1e-6);
         let mut out = [0.0; FEATURES];
         let later = GroundFrame {
             position: Vec2::new(2.0, 2.0),
@@ -105,5 +128,12 @@ mod tests {
         assert!((out[15] - 0.0).abs() < 1e-6 && (out[16] - 1.0).abs() < 1e-6);
         // The same facing: straight ahead.
         assert!((out[21]).abs() < 1e-6 && (out[22] - 1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn trajectory_frames_follow_the_rate() {
+        assert_eq!(trajectory_frames(30.0), [10, 20, 30]);
+        assert_eq!(trajectory_frames(25.0), [8, 17, 25]);
+        assert_eq!(trajectory_frames(1.0), [1, 2, 3]);
     }
 }

@@ -15,10 +15,12 @@ use super::batch::Noise;
 use super::generate_error::GenerateError;
 use super::generator::Generator;
 use super::pose_stream::PoseStream;
-use super::predictor::MotionModel;
+use super::source::MotionSource;
 use crate::grounding::{Grounder, GroundingConfig, GroundingError};
+use crate::matching::Matcher;
 use crate::motion::FrameScalar;
 use crate::pose::Pose;
+use crate::resample::PoseResampler;
 use crate::resample::ResampleError;
 use crate::skeleton::{Skeleton, H36M_SOURCE_FPS};
 use crate::steering::{Goal, Steerable};
@@ -39,34 +41,72 @@ pub enum CharacterError {
     /// The skeleton has no legs to ground.
     #[error(transparent)]
     Grounding(#[from] GroundingError),
+    /// A motion-matching database was given exp-map frames to start from.
+    #[error(
+        "a motion-matching database starts from poses on its rig (a BVH seed), not exp-map frames"
+    )]
+    NeedsPoses,
+    /// A learned model was given poses to start from.
+    #[error("a learned model starts from exp-map frames (a seed file), not poses")]
+    NeedsFrames,
+    /// A seed the database cannot continue.
+    #[error("{0}")]
+    Seed(String),
 }
 
-/// A generator and a [`PoseStream`] for one character (see the module docs).
+/// What steps a [`Character`]: a generator and its [`PoseStream`], or a motion matcher and a
+/// resampler to the engine's rate.
+#[derive(Debug)]
+enum Driver {
+    Model {
+        generator: Box<Generator>,
+        stream: Box<PoseStream>,
+    },
+    Matching {
+        matcher: Box<Matcher>,
+        resampler: Box<PoseResampler>,
+        grounding: GroundingConfig,
+    },
+}
+
+/// One character driven by a learned model or a motion-matching database (see the module docs).
 #[derive(Debug)]
 pub struct Character {
-    generator: Generator,
-    stream: PoseStream,
+    driver: Driver,
 }
 
 impl Character {
-    /// A character driven by `model` (weights shared between characters), grounded
-    /// ([`GroundingConfig::default`]).
+    /// A character driven by `source` (a learned model or a motion-matching database, weights
+    /// shared between characters), grounded ([`GroundingConfig::default`]).
     ///
     /// # Errors
-    /// A model whose skeleton is not the H3.6M one.
-    pub fn new(model: Arc<MotionModel>) -> Result<Character, CharacterError> {
-        Character::with_grounding(model, GroundingConfig::default())
+    /// A learned model whose skeleton is not the H3.6M one.
+    pub fn new(source: impl Into<MotionSource>) -> Result<Character, CharacterError> {
+        Character::with_grounding(source, GroundingConfig::default())
     }
 
-    /// A character driven by `model` whose frames are grounded as `grounding` says
-    /// ([`GroundingConfig::off`]: the model's raw motion).
+    /// A character driven by `source` whose frames are grounded as `grounding` says
+    /// ([`GroundingConfig::off`]: the raw motion).
     ///
     /// # Errors
-    /// A model whose skeleton is not the H3.6M one.
+    /// A learned model whose skeleton is not the H3.6M one.
     pub fn with_grounding(
-        model: Arc<MotionModel>,
+        source: impl Into<MotionSource>,
         grounding: GroundingConfig,
     ) -> Result<Character, CharacterError> {
+        let model = match source.into() {
+            MotionSource::Model(model) => model,
+            MotionSource::Database(db) => {
+                let resampler = Box::new(PoseResampler::new(db.skeleton().len(), db.fps()));
+                return Ok(Character {
+                    driver: Driver::Matching {
+                        matcher: Box::new(Matcher::with_grounding(db, grounding)),
+                        resampler,
+                        grounding,
+                    },
+                });
+            }
+        };
         let config = model.config();
         if config.skeleton != "h36m-32" {
             return Err(CharacterError::Skeleton(config.skeleton.clone()));
@@ -76,50 +116,116 @@ impl Character {
         let mut stream = PoseStream::new(Arc::new(Skeleton::h36m()), config.fps, step, grounding)?;
         stream.use_control_of(config);
         Ok(Character {
-            stream,
-            generator: Generator::new(model),
+            driver: Driver::Model {
+                stream: Box::new(stream),
+                generator: Box::new(Generator::new(model)),
+            },
         })
     }
 
+    /// Whether a motion-matching database drives this character.
+    pub fn is_database(&self) -> bool {
+        matches!(self.driver, Driver::Matching { .. })
+    }
+
+    /// The frame rate of what drives the character (the model's or the database's, Hz).
+    pub fn source_fps(&self) -> f64 {
+        match &self.driver {
+            Driver::Model { generator, .. } => generator.model().config().fps,
+            Driver::Matching { matcher, .. } => matcher.database().fps(),
+        }
+    }
+
     /// Grounds the frames after the next [`start`](Self::start) as `grounding` says
-    /// ([`GroundingConfig::off`]: the model's raw motion); the motion under way keeps its own.
+    /// ([`GroundingConfig::off`]: the raw motion); the motion under way keeps its own.
     pub fn set_grounding(&mut self, grounding: GroundingConfig) {
-        self.stream.set_grounding(grounding);
+        match &mut self.driver {
+            Driver::Model { stream, .. } => stream.set_grounding(grounding),
+            Driver::Matching {
+                grounding: kept, ..
+            } => *kept = grounding,
+        }
     }
 
     /// The grounding in force (floor, contacts, lean limit).
     pub fn grounder(&self) -> &Grounder {
-        self.stream.grounder()
+        match &self.driver {
+            Driver::Model { stream, .. } => stream.grounder(),
+            Driver::Matching { matcher, .. } => matcher.grounder(),
+        }
     }
 
     /// The skeleton the poses are on (joint order of [`Pose::local_rotations`]).
     pub fn skeleton(&self) -> &Arc<Skeleton> {
-        self.stream.skeleton()
+        match &self.driver {
+            Driver::Model { stream, .. } => stream.skeleton(),
+            Driver::Matching { matcher, .. } => matcher.skeleton(),
+        }
     }
 
-    /// The generator (plan horizon, model).
-    pub fn generator_mut(&mut self) -> &mut Generator {
-        &mut self.generator
+    /// The generator (plan horizon, model); `None` for a database.
+    pub fn generator_mut(&mut self) -> Option<&mut Generator> {
+        match &mut self.driver {
+            Driver::Model { generator, .. } => Some(generator),
+            Driver::Matching { .. } => None,
+        }
+    }
+
+    /// The matcher; `None` for a learned model.
+    pub fn matcher(&self) -> Option<&Matcher> {
+        match &self.driver {
+            Driver::Model { .. } => None,
+            Driver::Matching { matcher, .. } => Some(matcher),
+        }
     }
 
     /// Seeds the character with `seed` (exp-map frames at the model's rate, at least its
     /// `seed_frames`), conditioned on `action`; returns the pose of the last seed frame, where
-    /// the motion continues from (the root integrated over the seed from the origin).
+    /// the motion continues from (the root integrated over the seed from the origin). A database
+    /// starts from poses instead ([`start_poses`](Self::start_poses)).
     pub fn start<T: FrameScalar>(
         &mut self,
         seed: ArrayView2<'_, T>,
         action: Option<&str>,
         noise: Noise<'_>,
     ) -> Result<&Pose, CharacterError> {
-        self.generator.start(seed, action, noise)?;
-        self.stream.start(seed, action)?;
-        if let Some(control) = self.stream.control_vector() {
+        let Driver::Model { generator, stream } = &mut self.driver else {
+            return Err(CharacterError::NeedsPoses);
+        };
+        generator.start(seed, action, noise)?;
+        stream.start(seed, action)?;
+        if let Some(control) = stream.control_vector() {
             // A model told where to go reads its first control over the seed too (as in
             // training): seeded again with the control the seed and the goal give.
-            self.generator.set_control(&control)?;
-            self.generator.start(seed, action, noise)?;
+            generator.set_control(&control)?;
+            generator.start(seed, action, noise)?;
         }
-        Ok(self.stream.current())
+        Ok(stream.current())
+    }
+
+    /// Seeds a database's character with `seed` (poses on its rig at its rate, oldest first,
+    /// e.g. [`crate::takes::seed_poses_on_rig`]): the motion continues from the last one, in the
+    /// seed's coordinates. Learned models start from exp-map frames ([`start`](Self::start)).
+    pub fn start_poses(&mut self, seed: &[Pose]) -> Result<&Pose, CharacterError> {
+        let Driver::Matching {
+            matcher,
+            resampler,
+            grounding,
+        } = &mut self.driver
+        else {
+            return Err(CharacterError::NeedsFrames);
+        };
+        if *matcher.grounder().config() != *grounding {
+            let goal = matcher.goal();
+            **matcher = Matcher::with_grounding(matcher.database().clone(), *grounding);
+            matcher.set_goal(goal);
+        }
+        let pose = matcher
+            .start(seed)
+            .map_err(|e| CharacterError::Seed(e.to_string()))?;
+        resampler.reset();
+        resampler.push(pose)?;
+        Ok(resampler.advance(0.0)?)
     }
 
     /// [`start`](Self::start) from the last `seed_frames` frames of a longer clip (a loaded seed
@@ -131,7 +237,10 @@ impl Character {
         action: Option<&str>,
         noise: Noise<'_>,
     ) -> Result<&Pose, CharacterError> {
-        let needed = self.generator.model().config().seed_frames;
+        let Driver::Model { generator, .. } = &self.driver else {
+            return Err(CharacterError::NeedsPoses);
+        };
+        let needed = generator.model().config().seed_frames;
         if clip.nrows() < needed {
             return Err(GenerateError::TooFewSeedFrames {
                 needed,
@@ -144,38 +253,58 @@ impl Character {
     }
 
     /// Moves the character's clock by `dt` seconds (any rate, variable steps) and returns its
-    /// pose there, generating model frames as needed.
+    /// pose there, making frames as needed (a database's character that was never started
+    /// plays from the database's first frame).
     /// A long `dt` (a hitch) is walked through frame by frame; the pose's root-motion deltas
     /// span all of it.
     pub fn advance(&mut self, dt: f64) -> Result<&Pose, CharacterError> {
-        self.stream.advance_generating(dt, &mut self.generator)
+        match &mut self.driver {
+            Driver::Model { generator, stream } => stream.advance_generating(dt, generator),
+            Driver::Matching {
+                matcher, resampler, ..
+            } => resampler.advance_pulling(dt, |r| {
+                r.push(matcher.step())?;
+                Ok::<(), CharacterError>(())
+            }),
+        }
     }
 
     /// Changes the action without re-seeding ([`Generator::set_action`]); the lean limit
-    /// follows it.
+    /// follows it. A database has no actions: it plays its takes whatever the action.
     pub fn set_action(&mut self, action: &str, crossfade: usize) -> Result<(), CharacterError> {
-        self.generator.set_action(action, crossfade)?;
-        self.stream.set_action(Some(action));
+        if let Driver::Model { generator, stream } = &mut self.driver {
+            generator.set_action(action, crossfade)?;
+            stream.set_action(Some(action));
+        }
         Ok(())
     }
 
     /// Steers the character toward `goal` (a velocity on the floor and a facing; `None`: the
-    /// model's own root motion) from the next model frame on, by root-motion warping
-    /// ([`crate::steering`]), and a model told where to go (`goal-gru`) also by its control
-    /// vector; kept across [`start`](Self::start)s.
+    /// source's own root motion) from the next frame on: a learned model by root-motion warping
+    /// ([`crate::steering`]), a model told where to go (`goal-gru`) also by its control vector,
+    /// a database by searching for frames that go there; kept across [`start`](Self::start)s.
     pub fn set_goal(&mut self, goal: Option<Goal>) {
-        self.stream.set_goal(goal);
+        match &mut self.driver {
+            Driver::Model { stream, .. } => stream.set_goal(goal),
+            Driver::Matching { matcher, .. } => matcher.set_goal(goal),
+        }
     }
 
     /// The goal in force ([`Character::set_goal`]).
     pub fn goal(&self) -> Option<Goal> {
-        self.stream.goal()
+        match &self.driver {
+            Driver::Model { stream, .. } => stream.goal(),
+            Driver::Matching { matcher, .. } => matcher.goal(),
+        }
     }
 
     /// The heading (yaw about +y, `0` facing +z) of `pose`'s pelvis, the angle a goal's facing
     /// is compared with.
     pub fn heading_of(&self, pose: &Pose) -> f32 {
-        self.stream.heading_of(pose)
+        match &self.driver {
+            Driver::Model { stream, .. } => stream.heading_of(pose),
+            Driver::Matching { matcher, .. } => matcher.heading_of(pose),
+        }
     }
 }
 
@@ -183,7 +312,7 @@ impl Steerable for Character {
     type Error = CharacterError;
 
     fn skeleton(&self) -> &Skeleton {
-        self.stream.skeleton()
+        Character::skeleton(self)
     }
 
     fn set_goal(&mut self, goal: Option<Goal>) {
@@ -202,6 +331,7 @@ impl Steerable for Character {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::MotionModel;
 
     fn fixture() -> Arc<MotionModel> {
         let path = concat!(

@@ -48,6 +48,7 @@ pub mod pose_stream;
 pub mod predictor;
 pub mod random;
 pub mod samples;
+pub mod source;
 pub mod vgru;
 /// The weights store lives below both `nn` and `model` ([`crate::weights`]); this path is kept.
 pub use crate::weights;
@@ -66,6 +67,7 @@ pub use intention::IntentionFields;
 pub use pose_stream::PoseStream;
 pub use predictor::{MotionModel, Network};
 pub use samples::generate_samples;
+pub use source::{MotionSource, SourceError};
 pub use vgru::VgruDFields;
 pub use weights::{WeightStore, WeightsError};
 

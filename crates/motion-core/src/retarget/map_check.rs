@@ -1,7 +1,8 @@
-//! What makes a joint map usable, checked before any retargeting: a JSON object without repeated
-//! keys, one rig joint per H3.6M joint, the H3.6M hierarchy kept (each mapped joint below the rig
-//! joint its mapped H3.6M ancestor goes to) and the left arm on the same side as the left leg.
-//! Each error names the offending entries.
+//! What makes a joint map usable, checked before any retargeting (and on each built-in map that
+//! a rig's names fit): a JSON object without repeated keys, one rig joint per H3.6M joint, the
+//! H3.6M hierarchy kept (each mapped joint below the rig joint its nearest mapped H3.6M ancestor
+//! goes to; unmapped optional spine joints are skipped) and the left arm on the same side as the
+//! left leg. Each error names the offending entries.
 use std::fmt;
 
 use glam::DVec3;
@@ -47,12 +48,20 @@ pub(super) fn repeated_entry(pairs: &[(String, String)]) -> Result<(), RetargetE
     Ok(())
 }
 
-/// The H3.6M skeleton index of each of [`MAPPED_JOINTS`]' nearest mapped ancestor.
-fn mapped_parent(model: &Skeleton, model_index: &[usize; 21], slot: usize) -> Option<usize> {
+/// The entry of [`MAPPED_JOINTS`] that is the nearest mapped H3.6M ancestor of entry `slot`
+/// (skipping unmapped optional spine joints; `None` for the hips).
+pub(super) fn mapped_parent(
+    model: &Skeleton,
+    model_index: &[usize; 21],
+    user: &[Option<usize>; 21],
+    slot: usize,
+) -> Option<usize> {
     let mut j = model.joint(model_index[slot]).parent;
     while let Some(p) = j {
         if let Some(s) = model_index.iter().position(|&m| m == p) {
-            return Some(s);
+            if user[s].is_some() {
+                return Some(s);
+            }
         }
         j = model.joint(p).parent;
     }
@@ -71,19 +80,25 @@ fn is_below(rig: &Skeleton, joint: usize, ancestor: usize) -> bool {
     false
 }
 
-/// Checks `user` (rig joint per entry of [`MAPPED_JOINTS`]) against the rig: distinct joints,
-/// the H3.6M hierarchy kept, left and right arms on the legs' sides (`rest`: the rig's rest
-/// world positions).
+/// Checks `user` (rig joint per entry of [`MAPPED_JOINTS`], `None` for an unmapped optional
+/// one) against the rig: distinct joints, the H3.6M hierarchy kept (each mapped joint below the
+/// rig joint of its nearest mapped H3.6M ancestor), left and right arms on the legs' sides
+/// (`rest`: the rig's rest world positions). The arms and legs are required joints.
 pub(super) fn check_map(
     rig: &Skeleton,
     model: &Skeleton,
     model_index: &[usize; 21],
-    user: &[usize; 21],
+    user: &[Option<usize>; 21],
     rest: &[DVec3],
 ) -> Result<(), RetargetError> {
-    let rig_name = |s: usize| rig.joint(user[s]).name.clone();
-    for s in 0..21 {
-        if let Some(t) = (0..s).find(|&t| user[t] == user[s]) {
+    let rig_joint = |s: usize| user[s].expect("a mapped joint");
+    let rig_name = |s: usize| rig.joint(rig_joint(s)).name.clone();
+    let mapped = || (0..21).filter(|&s| user[s].is_some());
+    for s in mapped() {
+        if let Some(t) = mapped()
+            .take_while(|&t| t < s)
+            .find(|&t| user[t] == user[s])
+        {
             return Err(RetargetError::MapShared {
                 rig_joint: rig_name(s),
                 first: MAPPED_JOINTS[t].into(),
@@ -91,11 +106,11 @@ pub(super) fn check_map(
             });
         }
     }
-    for s in 1..21 {
-        let Some(p) = mapped_parent(model, model_index, s) else {
+    for s in mapped() {
+        let Some(p) = mapped_parent(model, model_index, user, s) else {
             continue;
         };
-        if !is_below(rig, user[s], user[p]) {
+        if !is_below(rig, rig_joint(s), rig_joint(p)) {
             return Err(RetargetError::MapHierarchy {
                 model: MAPPED_JOINTS[s].into(),
                 rig_joint: rig_name(s),
@@ -104,18 +119,19 @@ pub(super) fn check_map(
             });
         }
     }
-    let at = |name: &str| {
-        rest[user[MAPPED_JOINTS
+    let slot = |name: &str| {
+        MAPPED_JOINTS
             .iter()
             .position(|m| *m == name)
-            .expect("a mapped joint")]]
+            .expect("a mapped joint")
     };
+    let at = |name: &str| rest[rig_joint(slot(name))];
     let legs = at("LeftUpLeg") - at("RightUpLeg");
     let arms = at("LeftArm") - at("RightArm");
     if legs.dot(arms) < 0.0 {
         return Err(RetargetError::MapSides {
-            left: rig.joint(user[14]).name.clone(),
-            right: rig.joint(user[18]).name.clone(),
+            left: rig_name(slot("LeftArm")),
+            right: rig_name(slot("RightArm")),
         });
     }
     Ok(())

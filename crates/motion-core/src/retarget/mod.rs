@@ -3,17 +3,25 @@
 //!
 //! ## Method
 //! - A [`JointMap`] pairs each of the 21 H3.6M body joints ([`MAPPED_JOINTS`]) with a joint of the
-//!   user's rig: built in for CMU mocap BVH conversions, Mixamo (any `prefix:`), the Unreal
-//!   mannequin, and the H3.6M names themselves; or read from a JSON file
+//!   user's rig: built in for the CMU mocap BVH conversions (MotionBuilder-friendly
+//!   `Hips, LeftUpLeg, ...` and 3dsMax-friendly `Hips, LeftHip, LeftCollar, ...`), rigs with
+//!   CMU's own ASF bone names (`root`/`pelvis`, `lfemur`, `thorax`, `lhumerus`, ...), Mixamo (any
+//!   `prefix:`), the Unreal mannequin, and the H3.6M names themselves; or read from a JSON file
 //!   (`{"LeftArm": "upperarm_l", ...}`: H3.6M name → rig name, [`JointMap::from_json`]).
 //!   Names match case-insensitively, on the part after the last `:`.
+//! - The spine joints of [`OPTIONAL_JOINTS`] (`Spine`, `Spine1`, `Neck`) may go unmapped on a
+//!   rig with fewer spine bones (CMU takes retargeted onto a `pelvis, thorax, head` spine). An
+//!   unmapped H3.6M joint keeps an identity local rotation both ways: on the model it turns with
+//!   its nearest mapped ancestor, and going back to the rig its rotation is carried by the next
+//!   mapped joint below it (whose world rotation is what the rig receives).
 //! - Rest poses: both skeletons with every channel 0. A global rotation `G` takes the rig's world
 //!   axes to the model's (from the hips → head and right → left hip directions, so z-up rigs
 //!   work); per mapped joint `m` an offset `Q_m` turns the model's rest bone direction (towards
-//!   its mapped child) onto the rig's (T-pose or A-pose against H3.6M's arms-up rest).
+//!   its next mapped joint down the bone chain: its child, or past unmapped spine joints) onto
+//!   the rig's (T-pose or A-pose against H3.6M's arms-up rest).
 //! - Rig → model: world rotation `W_m = G W_u G⁻¹ Q_m` for each mapped pair, identity local
-//!   rotation for unmapped model joints (fingers, sites); the hips' world position scaled from
-//!   the rig's units to millimetres by the ratio of body sizes.
+//!   rotation for unmapped model joints (fingers, sites, spine joints the rig lacks); the hips'
+//!   world position scaled from the rig's units to millimetres by the ratio of body sizes.
 //! - Model → rig: `W_u = G⁻¹ W_m Q_m⁻¹ G` for mapped joints; every unmapped rig joint (an extra
 //!   spine or neck bone, fingers, twist bones, a `root` above the pelvis) keeps its local rotation
 //!   from a reference frame of the rig (the seed's own frames, then its last one), and the rig's
@@ -30,6 +38,8 @@ use crate::kinematics::local_transform;
 use crate::rotation::EulerOrder;
 use crate::skeleton::Skeleton;
 
+#[cfg(test)]
+mod cmu_rig_tests;
 mod map_check;
 
 /// The H3.6M joints a rig must provide, in skeleton order (the thumbs, wrist ends and sites are
@@ -59,7 +69,8 @@ pub const MAPPED_JOINTS: [&str; 21] = [
 ];
 
 /// Each mapped H3.6M joint's child that gives its bone direction (`None`: the joint keeps its
-/// parent's rest offset; the hips use the global alignment).
+/// nearest mapped ancestor's rest offset; the hips use the global alignment). An unmapped child
+/// passes on to its own direction child: the next mapped joint down the chain.
 const DIRECTION_CHILD: [Option<&str>; 21] = [
     None,
     Some("RightLeg"),
@@ -110,10 +121,79 @@ pub const CMU_NAMES: [&str; 21] = [
     "RightHand",
 ];
 
-/// Built-in rig name maps, in [`MAPPED_JOINTS`] order; the first whose names a rig has wins, so
-/// the rigs with a distinctive bone (CMU's `LowerBack`, Mixamo's `Spine2`) come first.
-const PRESETS: [(&str, [&str; 21]); 4] = [
+/// The entries of [`MAPPED_JOINTS`] a rig (a built-in map, or a JSON joint map) may leave
+/// unmapped: spine joints a rig with fewer spine bones has no counterpart for. Every other one
+/// is required.
+pub const OPTIONAL_JOINTS: [&str; 3] = ["Spine", "Spine1", "Neck"];
+
+/// Whether entry `slot` of [`MAPPED_JOINTS`] is one of [`OPTIONAL_JOINTS`].
+fn is_optional(slot: usize) -> bool {
+    OPTIONAL_JOINTS.contains(&MAPPED_JOINTS[slot])
+}
+
+/// Built-in rig name maps, in [`MAPPED_JOINTS`] order. An entry may give alternatives
+/// (`"root|pelvis"`: the first the rig has); an entry of [`OPTIONAL_JOINTS`] the rig lacks stays
+/// unmapped. [`JointMap::detect`] takes, among the maps whose required names the rig has and
+/// whose result passes the hierarchy check, the one that maps the most joints; ties go to the
+/// earlier one here (a CMU MotionBuilder rig also fits the H3.6M names, a Mixamo rig the CMU
+/// names without `LowerBack`). The 3dsMax-friendly CMU names reuse `LeftShoulder` for the upper
+/// arm (the clavicle is `LeftCollar`), where MotionBuilder and Mixamo rigs use it for the
+/// clavicle: the two maps require different leg names (`LeftHip` against `LeftUpLeg`), and a
+/// map that sends the clavicle below the upper arm fails the hierarchy check.
+const PRESETS: [(&str, [&str; 21]); 6] = [
     ("CMU mocap BVH", CMU_NAMES),
+    (
+        "CMU 3dsMax-friendly BVH",
+        [
+            "Hips",
+            "RightHip",
+            "RightKnee",
+            "RightAnkle",
+            "RightToe",
+            "LeftHip",
+            "LeftKnee",
+            "LeftAnkle",
+            "LeftToe",
+            "lowerback",
+            "Chest",
+            "lowerneck",
+            "Head",
+            "LeftCollar",
+            "LeftShoulder",
+            "LeftElbow",
+            "LeftWrist",
+            "RightCollar",
+            "RightShoulder",
+            "RightElbow",
+            "RightWrist",
+        ],
+    ),
+    (
+        "CMU ASF-named",
+        [
+            "root|pelvis",
+            "rfemur",
+            "rtibia",
+            "rfoot",
+            "rtoes",
+            "lfemur",
+            "ltibia",
+            "lfoot",
+            "ltoes",
+            "lowerback",
+            "upperback|thorax",
+            "lowerneck",
+            "head",
+            "lclavicle",
+            "lhumerus",
+            "lradius",
+            "lwrist|lhand",
+            "rclavicle",
+            "rhumerus",
+            "rradius",
+            "rwrist|rhand",
+        ],
+    ),
     (
         "Mixamo",
         [
@@ -173,16 +253,25 @@ const PRESETS: [(&str, [&str; 21]); 4] = [
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum RetargetError {
-    /// No built-in map fits and no joint map was given: names the first H3.6M joint without a
-    /// match under the closest map.
+    /// No built-in map fits and no joint map was given: names the first required H3.6M joint
+    /// without a match under the closest map.
     #[error("the rig has no joint matching H3.6M {joint:?} (looked for {looked_for:?} as in a {rig} rig); give a joint map (--joint-map FILE.json)")]
     Unmapped {
         /// The H3.6M joint.
         joint: String,
-        /// The name looked for.
+        /// The name looked for (alternatives separated by `|`).
         looked_for: String,
         /// The built-in map tried.
         rig: String,
+    },
+    /// The rig has every name of a built-in map, but that map fails the checks of a joint map
+    /// (the bones are not where the names say).
+    #[error("the rig's joint names fit the built-in {rig} map, but {reason}; give a joint map (--joint-map FILE.json)")]
+    PresetRefused {
+        /// The built-in map.
+        rig: String,
+        /// Why it was refused (a [`RetargetError`] of the map check, as text).
+        reason: String,
     },
     /// A joint map names a rig joint the rig does not have, or an H3.6M joint that does not exist.
     #[error("the joint map names {name:?}, which the {side} has not")]
@@ -193,7 +282,11 @@ pub enum RetargetError {
         side: &'static str,
     },
     /// A joint map leaves a required H3.6M joint out.
-    #[error("the joint map has no entry for H3.6M {0:?} (every one of {joints} is needed)", joints = MAPPED_JOINTS.join(", "))]
+    #[error(
+        "the joint map has no entry for H3.6M {0:?} (all of {required} are needed; {optional} may be left out when the rig has no such spine bone)",
+        required = MAPPED_JOINTS.iter().filter(|m| !OPTIONAL_JOINTS.contains(m)).copied().collect::<Vec<_>>().join(", "),
+        optional = OPTIONAL_JOINTS.join(", ")
+    )]
     MapIncomplete(String),
     /// The joint map file is not a JSON object of strings.
     #[error("the joint map is not a JSON object of H3.6M name -> rig name strings: {0}")]
@@ -222,7 +315,8 @@ pub enum RetargetError {
         second: String,
     },
     /// A joint map breaks the H3.6M hierarchy: a joint's rig joint is not below the rig joint
-    /// its H3.6M parent goes to (swapped hips and head, an arm sent to a leg).
+    /// its nearest mapped H3.6M ancestor goes to (swapped hips and head, an arm sent to a leg,
+    /// a clavicle sent below its upper arm).
     #[error("the joint map sends H3.6M {model:?} to {rig_joint:?}, which is not below {parent_rig:?} (where its H3.6M parent {parent:?} goes) in the rig's hierarchy")]
     MapHierarchy {
         /// The H3.6M joint.
@@ -247,11 +341,12 @@ pub enum RetargetError {
     Degenerate(String),
 }
 
-/// Which rig joint stands for each of [`MAPPED_JOINTS`].
+/// Which rig joint stands for each of [`MAPPED_JOINTS`] (none for an unmapped one of
+/// [`OPTIONAL_JOINTS`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct JointMap {
     /// Rig joint index per entry of [`MAPPED_JOINTS`].
-    user: [usize; 21],
+    user: [Option<usize>; 21],
     /// What the map is (a built-in rig's name, or "joint map").
     pub name: String,
 }
@@ -268,48 +363,84 @@ fn find(rig: &Skeleton, name: &str) -> Option<usize> {
         .position(|j| !j.is_end_site && key(&j.name) == k)
 }
 
+/// A preset entry's rig joint: the first of its `|`-separated alternatives the rig has.
+fn find_any(rig: &Skeleton, names: &str) -> Option<usize> {
+    names.split('|').find_map(|n| find(rig, n))
+}
+
+/// The H3.6M skeleton and the index in it of each of [`MAPPED_JOINTS`].
+fn model_and_index() -> (Skeleton, [usize; 21]) {
+    let model = Skeleton::h36m();
+    let index = MAPPED_JOINTS.map(|n| find(&model, n).expect("H3.6M joint"));
+    (model, index)
+}
+
+/// The required joint a map lacks.
+fn first_missing(user: &[Option<usize>; 21]) -> Option<usize> {
+    (0..21).find(|&s| user[s].is_none() && !is_optional(s))
+}
+
 impl JointMap {
-    /// The built-in map whose names the rig has; the error names the first H3.6M joint without
-    /// a match under the map that matched most.
+    /// The built-in map that fits the rig: every required name found (optional spine joints may
+    /// be missing) and the result passing the checks of a joint map (hierarchy, sides); of
+    /// several, the one mapping the most joints, then the first in the built-in order. The error
+    /// names the first required H3.6M joint without a match under the map that matched most, or
+    /// why a map whose names all fit was refused.
     pub fn detect(rig: &Skeleton) -> Result<JointMap, RetargetError> {
-        let mut best: Option<(usize, &str, usize)> = None;
-        for (name, names) in PRESETS {
-            let found: Vec<Option<usize>> = names.iter().map(|n| find(rig, n)).collect();
-            if let Some(user) = found.iter().copied().collect::<Option<Vec<_>>>() {
-                return Ok(JointMap {
-                    user: user.try_into().expect("21 joints"),
-                    name: name.to_string(),
-                });
+        let (model, model_index) = model_and_index();
+        let rest = rest_positions(rig);
+        let mut fit: Option<(usize, JointMap)> = None;
+        let mut refused: Option<RetargetError> = None;
+        let mut closest: Option<(usize, usize, usize)> = None; // (hits, preset, missing slot)
+        for (p, (name, names)) in PRESETS.iter().enumerate() {
+            let user: [Option<usize>; 21] = std::array::from_fn(|s| find_any(rig, names[s]));
+            let hits = user.iter().flatten().count();
+            if let Some(missing) = first_missing(&user) {
+                if closest.is_none_or(|(h, _, _)| hits > h) {
+                    closest = Some((hits, p, missing));
+                }
+                continue;
             }
-            let hits = found.iter().filter(|f| f.is_some()).count();
-            let missing = found
-                .iter()
-                .position(|f| f.is_none())
-                .expect("one is missing");
-            if best.is_none_or(|(h, _, _)| hits > h) {
-                best = Some((hits, name, missing));
+            match map_check::check_map(rig, &model, &model_index, &user, &rest) {
+                Ok(()) => {
+                    if fit.as_ref().is_none_or(|(h, _)| hits > *h) {
+                        let map = JointMap {
+                            user,
+                            name: name.to_string(),
+                        };
+                        fit = Some((hits, map));
+                    }
+                }
+                Err(e) => {
+                    refused.get_or_insert(RetargetError::PresetRefused {
+                        rig: name.to_string(),
+                        reason: e.to_string(),
+                    });
+                }
             }
         }
-        let (_, rig_name, missing) = best.expect("presets exist");
-        let names = PRESETS
-            .iter()
-            .find(|p| p.0 == rig_name)
-            .expect("a preset")
-            .1;
+        if let Some((_, map)) = fit {
+            return Ok(map);
+        }
+        if let Some(e) = refused {
+            return Err(e);
+        }
+        let (_, p, missing) = closest.expect("presets exist");
         Err(RetargetError::Unmapped {
             joint: MAPPED_JOINTS[missing].to_string(),
-            looked_for: names[missing].to_string(),
-            rig: rig_name.to_string(),
+            looked_for: PRESETS[p].1[missing].to_string(),
+            rig: PRESETS[p].0.to_string(),
         })
     }
 
-    /// A map from `(H3.6M name, rig name)` pairs covering every one of [`MAPPED_JOINTS`].
+    /// A map from `(H3.6M name, rig name)` pairs covering every one of [`MAPPED_JOINTS`] except,
+    /// if the rig lacks them, those of [`OPTIONAL_JOINTS`].
     pub fn from_pairs(
         rig: &Skeleton,
         pairs: &[(String, String)],
     ) -> Result<JointMap, RetargetError> {
         map_check::repeated_entry(pairs)?;
-        let mut user = [usize::MAX; 21];
+        let mut user = [None; 21];
         for (model, rig_name) in pairs {
             let slot = MAPPED_JOINTS
                 .iter()
@@ -319,18 +450,19 @@ impl JointMap {
                     side: "H3.6M skeleton (or it is not one of the mapped body joints)",
                 })?;
             user[slot] =
-                find(rig, rig_name).ok_or_else(|| RetargetError::MapNamesMissingJoint {
-                    name: rig_name.clone(),
-                    side: "rig",
-                })?;
+                Some(
+                    find(rig, rig_name).ok_or_else(|| RetargetError::MapNamesMissingJoint {
+                        name: rig_name.clone(),
+                        side: "rig",
+                    })?,
+                );
         }
-        if let Some(missing) = user.iter().position(|&u| u == usize::MAX) {
+        if let Some(missing) = first_missing(&user) {
             return Err(RetargetError::MapIncomplete(
                 MAPPED_JOINTS[missing].to_string(),
             ));
         }
-        let model = Skeleton::h36m();
-        let model_index = MAPPED_JOINTS.map(|n| find(&model, n).expect("H3.6M joint"));
+        let (model, model_index) = model_and_index();
         map_check::check_map(rig, &model, &model_index, &user, &rest_positions(rig))?;
         Ok(JointMap {
             user,
@@ -339,7 +471,10 @@ impl JointMap {
     }
 
     /// A map from JSON text `{"Hips": "pelvis", "LeftArm": "upperarm_l", ...}` (H3.6M name → rig
-    /// name, every one of [`MAPPED_JOINTS`]).
+    /// name). Every one of [`MAPPED_JOINTS`] needs an entry, except the spine joints of
+    /// [`OPTIONAL_JOINTS`] (`Spine`, `Spine1`, `Neck`), which a map leaves out when the rig has
+    /// no such bone (a `pelvis → thorax → head` spine maps `Spine1` only): the H3.6M joint then
+    /// keeps an identity local rotation and turns with its nearest mapped ancestor.
     pub fn from_json(rig: &Skeleton, text: &str) -> Result<JointMap, RetargetError> {
         let entries: map_check::Entries =
             serde_json::from_str(text).map_err(|e| RetargetError::MapSyntax(e.to_string()))?;
@@ -362,6 +497,15 @@ impl JointMap {
         self.name == "H3.6M" && rig.joints().iter().filter(|j| !j.is_end_site).count() == 32
     }
 
+    /// The rig joint (index in the rig's skeleton) standing for H3.6M joint `model_joint` (a
+    /// name of [`MAPPED_JOINTS`], matched as rig names are); `None` for an unmapped optional
+    /// joint or a name that is not a mapped H3.6M joint.
+    pub fn rig_joint(&self, model_joint: &str) -> Option<usize> {
+        let k = key(model_joint);
+        let slot = MAPPED_JOINTS.iter().position(|m| key(m) == k)?;
+        self.user[slot]
+    }
+
     /// Reads a joint map file (see [`JointMap::from_json`]); errors carry the path.
     pub fn read(rig: &Skeleton, path: &Path) -> Result<JointMap, String> {
         let text = crate::input_file::read_regular_text(path)
@@ -369,7 +513,6 @@ impl JointMap {
         JointMap::from_json(rig, &text).map_err(|e| format!("{}: {e}", path.display()))
     }
 }
-
 /// A rig joint's channel layout.
 #[derive(Debug, Clone)]
 struct Layout {
@@ -466,8 +609,8 @@ pub struct Retargeter {
     rig_layouts: Vec<Layout>,
     /// For each rig joint, its entry in [`MAPPED_JOINTS`], if mapped.
     rig_slot: Vec<Option<usize>>,
-    /// For each model joint, its entry in [`MAPPED_JOINTS`], if mapped.
-    model_slot: Vec<Option<usize>>,
+    /// For each model joint, its entry in [`MAPPED_JOINTS`] and rig joint, if mapped.
+    model_slot: Vec<Option<(usize, usize)>>,
     /// The rig joints from the hips up to the root (exclusive), whose offsets place the hips.
     hips_chain: Vec<usize>,
 }
@@ -475,8 +618,12 @@ pub struct Retargeter {
 impl Retargeter {
     /// Prepares retargeting between `rig` and the H3.6M skeleton under `map`.
     pub fn new(rig: &Skeleton, map: JointMap) -> Result<Retargeter, RetargetError> {
-        let model = Skeleton::h36m();
-        let model_index: [usize; 21] = MAPPED_JOINTS.map(|n| find(&model, n).expect("H3.6M joint"));
+        let (model, model_index) = model_and_index();
+        if let Some(missing) = first_missing(&map.user) {
+            return Err(RetargetError::MapIncomplete(
+                MAPPED_JOINTS[missing].to_string(),
+            ));
+        }
         let (pm, pu) = (rest_positions(&model), rest_positions(rig));
         let slot_of = |name: &str| {
             MAPPED_JOINTS
@@ -484,68 +631,76 @@ impl Retargeter {
                 .position(|m| *m == name)
                 .expect("mapped")
         };
-        let at = |p: &[DVec3], idx: &[usize; 21], name: &str| p[idx[slot_of(name)]];
-        let span = |p: &[DVec3], idx: &[usize; 21]| {
+        map_check::check_map(rig, &model, &model_index, &map.user, &pu)?;
+        // Each skeleton's joint per entry of MAPPED_JOINTS (the required ones, which `at` reads,
+        // are mapped on both).
+        let model_at = model_index.map(Some);
+        let at = |p: &[DVec3], idx: &[Option<usize>; 21], name: &str| {
+            p[idx[slot_of(name)].expect("a required joint")]
+        };
+        let span = |p: &[DVec3], idx: &[Option<usize>; 21]| {
             (
                 at(p, idx, "Head") - at(p, idx, "Hips"),
                 at(p, idx, "LeftUpLeg") - at(p, idx, "RightUpLeg"),
             )
         };
-        map_check::check_map(rig, &model, &model_index, &map.user, &pu)?;
         // World axes: up is the world axis nearest each rest spine (hips to head), so that the
         // world's vertical maps onto the model's and a rest spine that leans does not tilt the
         // floor (a tilted map sinks or lifts the body as it travels); the side axis is the hips'.
-        let (mu, ms) = span(&pm, &model_index);
+        let (mu, ms) = span(&pm, &model_at);
         let (uu, us) = span(&pu, &map.user);
         let (mu, uu) = (nearest_axis(mu), nearest_axis(uu));
         let fm = frame(mu, ms).expect("the H3.6M rest pose has a frame");
         let fu = frame(uu, us).ok_or_else(|| RetargetError::Degenerate("Hips".into()))?;
         let g = DQuat::from_mat3(&(fm * fu.transpose())).normalize();
         // Body size: hips to head plus a leg, in each skeleton's units.
-        let size = |p: &[DVec3], idx: &[usize; 21]| {
+        let size = |p: &[DVec3], idx: &[Option<usize>; 21]| {
             (at(p, idx, "Head") - at(p, idx, "Hips")).length()
                 + (at(p, idx, "LeftFoot") - at(p, idx, "LeftUpLeg")).length()
         };
-        let scale = size(&pu, &map.user) / size(&pm, &model_index);
+        let scale = size(&pu, &map.user) / size(&pm, &model_at);
         if !(scale.is_finite() && scale > 0.0) {
             return Err(RetargetError::Degenerate("Head".into()));
         }
+        // Rest offsets, in slot order (ancestors first). An unmapped joint has none: it keeps an
+        // identity local rotation, so the model's bones from a mapped joint down to the next
+        // mapped one (past unmapped spine joints) turn rigidly with it, and that whole span's
+        // rest direction is matched to the rig's.
         let mut q = [DQuat::IDENTITY; 21];
         for s in 0..21 {
-            let Some(child) = DIRECTION_CHILD[s] else {
-                // Leaves keep their parent's offset (the hips: none).
-                if s > 0 {
-                    let parent = model.joint(model_index[s]).parent.expect("not the root");
-                    let ps = model_index
-                        .iter()
-                        .position(|&i| i == parent)
-                        .expect("mapped parent");
-                    q[s] = q[ps];
+            let Some(user_s) = map.user[s] else { continue };
+            let mut next = DIRECTION_CHILD[s].map(slot_of);
+            while let Some(c) = next.filter(|&c| map.user[c].is_none()) {
+                next = DIRECTION_CHILD[c].map(slot_of);
+            }
+            let Some(c) = next else {
+                // Leaves keep their nearest mapped ancestor's offset (the hips: none).
+                if let Some(a) = map_check::mapped_parent(&model, &model_index, &map.user, s) {
+                    q[s] = q[a];
                 }
                 continue;
             };
-            let c = slot_of(child);
+            let user_c = map.user[c].expect("mapped");
             let dm = pm[model_index[c]] - pm[model_index[s]];
-            let du = g * (pu[map.user[c]] - pu[map.user[s]]);
+            let du = g * (pu[user_c] - pu[user_s]);
             let (dm, du) = (
                 dm.try_normalize().expect("H3.6M bones have length"),
-                du.try_normalize().ok_or_else(|| {
-                    RetargetError::Degenerate(rig.joint(map.user[s]).name.clone())
-                })?,
+                du.try_normalize()
+                    .ok_or_else(|| RetargetError::Degenerate(rig.joint(user_s).name.clone()))?,
             );
             q[s] = DQuat::from_rotation_arc(dm, du);
         }
         let mut rig_slot = vec![None; rig.len()];
-        for (s, &u) in map.user.iter().enumerate() {
-            rig_slot[u] = Some(s);
-        }
         let mut model_slot = vec![None; model.len()];
-        for (s, &m) in model_index.iter().enumerate() {
-            model_slot[m] = Some(s);
+        for (s, &u) in map.user.iter().enumerate() {
+            if let Some(u) = u {
+                rig_slot[u] = Some(s);
+                model_slot[model_index[s]] = Some((s, u));
+            }
         }
         // The rig joints from the hips up to (not including) the root.
         let mut hips_chain = Vec::new();
-        let mut j = map.user[0];
+        let mut j = map.user[0].expect("the hips are required");
         while let Some(p) = rig.joint(j).parent {
             hips_chain.push(j);
             j = p;
@@ -576,7 +731,8 @@ impl Retargeter {
     }
 
     /// Rig BVH frames → a BVH on the H3.6M skeleton (millimetres, the rig's rate): mapped joints'
-    /// world rotations carried over, the others at rest, the hips' path scaled to millimetres.
+    /// world rotations carried over, the others (unmapped spine joints included) at rest, the
+    /// hips' path scaled to millimetres.
     pub fn to_model(&self, rig_frames: ArrayView2<'_, f64>, frame_time: f64) -> Bvh {
         let model = &self.model;
         let mut frames = Array2::zeros((rig_frames.nrows(), model.channel_count()));
@@ -587,14 +743,14 @@ impl Retargeter {
         let mut wm = vec![DQuat::IDENTITY; model.len()];
         let layouts = layouts(model).expect("the H3.6M skeleton has BVH channels");
         let g_inv = self.g.inverse();
-        let hips = self.map.user[0];
+        let hips = self.map.user[0].expect("the hips are required");
         for (t, row) in rig_frames.rows().into_iter().enumerate() {
             let row = row.to_vec();
             Retargeter::model_world(&self.rig, &row, &mut wu, &mut pu);
             for (m, joint) in model.joints().iter().enumerate() {
                 let parent = joint.parent.map_or(DQuat::IDENTITY, |p| wm[p]);
                 wm[m] = match self.model_slot[m] {
-                    Some(s) => (self.g * wu[self.map.user[s]] * g_inv * self.q[s]).normalize(),
+                    Some((s, u)) => (self.g * wu[u] * g_inv * self.q[s]).normalize(),
                     None => parent,
                 };
             }
@@ -965,7 +1121,10 @@ mod tests {
                     let c = MAPPED_JOINTS.iter().position(|m| m == child).unwrap();
                     // Only rigid segments: an unmapped rig bone between the two (CMU's Neck1)
                     // moves the child in ways the model's one bone cannot show.
-                    if rig.joint(r.map.user[c]).parent != Some(r.map.user[s]) {
+                    let (Some(us), Some(uc)) = (r.map.user[s], r.map.user[c]) else {
+                        continue;
+                    };
+                    if rig.joint(uc).parent != Some(us) {
                         continue;
                     }
                     let point = |p: &ndarray::Array3<f64>, j: usize| {
@@ -976,8 +1135,7 @@ mod tests {
                         find(&h36m, child).unwrap(),
                     );
                     let dm = (point(&pm, mc) - point(&pm, mj)).normalize();
-                    let du =
-                        r.g * (point(&pu, r.map.user[c]) - point(&pu, r.map.user[s])).normalize();
+                    let du = r.g * (point(&pu, uc) - point(&pu, us)).normalize();
                     assert!(
                         (dm - du).length() < 1e-9,
                         "{prefix} t {t} {}: {dm} vs {du}",
