@@ -1,17 +1,17 @@
 //! motion-weights `.safetensors` files as Bevy assets.
-use std::sync::Arc;
 
 use bevy::asset::io::Reader;
 use bevy::asset::{Asset, AssetLoader, LoadContext};
 use bevy::reflect::TypePath;
 use motion_core::model::weights::WeightStore;
-use motion_core::model::MotionModel;
+use motion_core::model::{MotionSource, SourceError};
 
-/// A motion model loaded from a self-describing safetensors file (`asset_server.load("vgru.safetensors")`).
+/// A learned model or a motion-matching database loaded from a self-describing safetensors file
+/// (`asset_server.load("vgru.safetensors")`, `asset_server.load("matching_cmu.safetensors")`).
 #[derive(Asset, TypePath, Debug, Clone)]
 pub struct MotionWeights {
-    /// The model, shared by every character that uses it.
-    pub model: Arc<MotionModel>,
+    /// The model or database, shared by every character that uses it.
+    pub source: MotionSource,
 }
 
 /// Why a weights file did not load.
@@ -29,6 +29,9 @@ pub enum MotionAssetError {
     /// The file is not a valid motion model (names the tensor or field at fault).
     #[error(transparent)]
     Weights(#[from] motion_core::model::weights::WeightsError),
+    /// The file is not a valid model or database (names the tensor or field at fault).
+    #[error(transparent)]
+    Source(#[from] SourceError),
 }
 
 /// Loads [`MotionWeights`] from `.safetensors` files.
@@ -57,7 +60,7 @@ impl AssetLoader for MotionWeightsLoader {
             })?;
         let store = WeightStore::from_bytes(&bytes, path)?;
         Ok(MotionWeights {
-            model: Arc::new(MotionModel::from_store(&store)?),
+            source: MotionSource::from_store(&store)?,
         })
     }
 

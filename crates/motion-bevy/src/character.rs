@@ -14,7 +14,9 @@ pub enum MotionModelSource {
     /// The weights built into motion-core (the shipped default model).
     #[default]
     Builtin,
-    /// A weights asset (`asset_server.load("model.safetensors")`); the character starts once
+    /// A weights asset (`asset_server.load("model.safetensors")`: a learned model, or a
+    /// motion-matching database such as `matching_cmu.safetensors`, whose characters play on its
+    /// own rig, the seed retargeted onto it, and ignore the action); the character starts once
     /// it has loaded.
     Asset(Handle<MotionWeights>),
 }

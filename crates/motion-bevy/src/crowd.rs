@@ -10,11 +10,14 @@ use std::sync::Arc;
 use bevy::prelude::*;
 use motion_core::formats::expmap_bvh::ExpMapTarget;
 use motion_core::grounding::GroundingConfig;
-use motion_core::model::{CharacterError, Crowd, GenerateError, MemberId, MotionModel};
+use motion_core::model::{
+    CharacterError, Crowd, GenerateError, MemberId, MotionModel, MotionSource,
+};
 use motion_core::pose::{root_motion_between, Pose, METRES_PER_MM};
 use motion_core::seed::seed_from_bvh;
 use motion_core::skeleton::Skeleton;
 use motion_core::steering::Goal;
+use motion_core::takes::seed_poses_on_rig;
 
 use crate::asset::MotionWeights;
 use crate::character::{MotionCharacter, MotionFailed, MotionModelSource, MotionPose, MotionRig};
@@ -40,10 +43,10 @@ impl BuiltinModel {
     }
 }
 
-/// Characters of one model at one playback rate: one [`Crowd`] (motion-core's batch of
-/// characters), each member an entity.
+/// Characters of one model (or database) at one playback rate: one [`Crowd`] (motion-core's
+/// batch of characters), each member an entity.
 struct Group {
-    model: Arc<MotionModel>,
+    source: MotionSource,
     rate: f32,
     crowd: Crowd,
     /// Each member's entity, id and the action it was last given.
@@ -57,18 +60,18 @@ pub(crate) struct Crowds {
 }
 
 impl Crowds {
-    /// The group of `model` at `rate`, made when there is none.
-    fn group(&mut self, model: Arc<MotionModel>, rate: f32) -> Result<&mut Group, String> {
+    /// The group of `source` at `rate`, made when there is none.
+    fn group(&mut self, source: MotionSource, rate: f32) -> Result<&mut Group, String> {
         let found = self
             .groups
             .iter()
-            .position(|g| Arc::ptr_eq(&g.model, &model) && g.rate == rate);
+            .position(|g| same_source(&g.source, &source) && g.rate == rate);
         let i = match found {
             Some(i) => i,
             None => {
-                let crowd = Crowd::new(Arc::clone(&model)).map_err(|e| e.to_string())?;
+                let crowd = Crowd::new(source.clone()).map_err(|e| e.to_string())?;
                 self.groups.push(Group {
-                    model,
+                    source,
                     rate,
                     crowd,
                     members: Vec::new(),
@@ -80,11 +83,21 @@ impl Crowds {
     }
 }
 
-/// Joins a new character to its model's group; its first pose, or why it cannot start.
+/// Whether two sources are the same loaded file.
+fn same_source(a: &MotionSource, b: &MotionSource) -> bool {
+    match (a, b) {
+        (MotionSource::Model(a), MotionSource::Model(b)) => Arc::ptr_eq(a, b),
+        (MotionSource::Database(a), MotionSource::Database(b)) => Arc::ptr_eq(a, b),
+        _ => false,
+    }
+}
+
+/// Joins a new character to its model's (or database's) group; its first pose, or why it cannot
+/// start.
 fn join(
     crowds: &mut Crowds,
     entity: Entity,
-    model: Arc<MotionModel>,
+    source: MotionSource,
     character: &MotionCharacter,
 ) -> Result<(Arc<Skeleton>, Pose), String> {
     if !(character.playback_rate.is_finite() && character.playback_rate >= 0.0) {
@@ -93,38 +106,58 @@ fn join(
             character.playback_rate
         ));
     }
-    let fps = model.config().fps;
-    let seed = seed_from_bvh(
-        (*character.seed.bvh).clone(),
-        Path::new(&*character.seed.label),
-        ExpMapTarget::H36m,
-        fps,
-        None,
-    )
-    .map_err(|e| e.to_string())?;
     let grounding = if character.grounding {
         GroundingConfig::default()
     } else {
         GroundingConfig::off()
     };
-    let group = crowds.group(model, character.playback_rate)?;
-    let id = group
-        .crowd
-        .add(
-            seed.frames.view(),
-            Some(&character.action),
-            character.rng_seed,
-            grounding,
-        )
-        .map_err(|e| match e {
-            // Errors of the seed name its file.
-            CharacterError::Generate(
-                GenerateError::TooFewSeedFrames { .. }
-                | GenerateError::WrongWidth { .. }
-                | GenerateError::NonFiniteSeed { .. },
-            ) => format!("{}: {e}", character.seed.label),
-            e => e.to_string(),
-        })?;
+    let id = match source.clone() {
+        MotionSource::Database(db) => {
+            // A database plays on its own rig: the seed goes onto it (retargeted when needed).
+            let seed = seed_poses_on_rig(
+                (*character.seed.bvh).clone(),
+                db.skeleton(),
+                db.mm_per_unit(),
+                db.fps(),
+                None,
+            )
+            .map_err(|e| format!("{}: {e}", character.seed.label))?;
+            let group = crowds.group(source.clone(), character.playback_rate)?;
+            group
+                .crowd
+                .add_poses(&seed, grounding)
+                .map_err(|e| format!("{}: {e}", character.seed.label))?
+        }
+        MotionSource::Model(model) => {
+            let seed = seed_from_bvh(
+                (*character.seed.bvh).clone(),
+                Path::new(&*character.seed.label),
+                ExpMapTarget::H36m,
+                model.config().fps,
+                None,
+            )
+            .map_err(|e| e.to_string())?;
+            let group = crowds.group(source.clone(), character.playback_rate)?;
+            group
+                .crowd
+                .add(
+                    seed.frames.view(),
+                    Some(&character.action),
+                    character.rng_seed,
+                    grounding,
+                )
+                .map_err(|e| match e {
+                    // Errors of the seed name its file.
+                    CharacterError::Generate(
+                        GenerateError::TooFewSeedFrames { .. }
+                        | GenerateError::WrongWidth { .. }
+                        | GenerateError::NonFiniteSeed { .. },
+                    ) => format!("{}: {e}", character.seed.label),
+                    e => e.to_string(),
+                })?
+        }
+    };
+    let group = crowds.group(source, character.playback_rate)?;
     group.members.push((entity, id, character.action.clone()));
     let pose = group.crowd.pose(id).expect("just added").clone();
     Ok((group.crowd.skeleton().clone(), pose))
@@ -151,9 +184,9 @@ pub(crate) fn start_characters(
 ) {
     for (entity, character, transform) in &new {
         let model = match &character.model {
-            MotionModelSource::Builtin => builtin.0.clone(),
+            MotionModelSource::Builtin => builtin.0.clone().map(MotionSource::Model),
             MotionModelSource::Asset(handle) => match weights.get(handle) {
-                Some(w) => Ok(Arc::clone(&w.model)),
+                Some(w) => Ok(w.source.clone()),
                 None => match asset_server.load_state(handle) {
                     bevy::asset::LoadState::Failed(e) => Err(e.to_string()),
                     _ => continue, // still loading

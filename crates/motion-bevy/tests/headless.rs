@@ -270,3 +270,54 @@ fn a_goal_in_world_axes_steers_the_character_that_way() {
         "steered toward +x, moved {moved}"
     );
 }
+
+/// The shipped motion-matching database as a weights asset: the character starts from the
+/// example seed (retargeted onto the database's CMU rig), its rig has that rig's joints, and a
+/// goal sends it along +x on the floor.
+#[test]
+fn a_database_asset_drives_a_character_on_its_own_rig() {
+    let weights = concat!(env!("CARGO_MANIFEST_DIR"), "/../../weights");
+    let mut app = app(weights);
+    let handle = app
+        .world()
+        .resource::<AssetServer>()
+        .load::<MotionWeights>("matching_cmu.safetensors");
+    let mut c = MotionCharacter::new("walking", 1);
+    c.model = MotionModelSource::Asset(handle);
+    c.goal = Some(MotionGoal::towards(Vec2::new(1.2, 0.0)));
+    let walker = app.world_mut().spawn(c).id();
+    for _ in 0..400 {
+        app.update();
+        let w = app.world();
+        if w.get::<MotionRig>(walker).is_some() || w.get::<MotionFailed>(walker).is_some() {
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    let failed = app.world().get::<MotionFailed>(walker).map(|f| f.0.clone());
+    assert!(failed.is_none(), "{failed:?}");
+    let rig = app.world().get::<MotionRig>(walker).expect("started");
+    let joints = rig.joints().len();
+    assert!(
+        joints > 15 && joints != 32,
+        "{joints} joints: the database's rig"
+    );
+    let start = app
+        .world()
+        .get::<MotionPose>(walker)
+        .unwrap()
+        .0
+        .root_translation;
+    for _ in 0..240 {
+        app.update();
+    }
+    let end = app
+        .world()
+        .get::<MotionPose>(walker)
+        .unwrap()
+        .0
+        .root_translation;
+    let moved = end - start;
+    assert!(moved.x > 2.0 && moved.z.abs() < 1.5, "{moved:?}");
+    assert!((0.6..1.2).contains(&end.y), "hips at {} m", end.y);
+}

@@ -265,7 +265,10 @@ fn the_shipped_database_is_steered_by_goals() {
             MotionStatus::BadInput as i32
         );
         assert!(last_error().contains("database"), "{}", last_error());
-        assert_eq!(motion_generator_set_goal(generator, 1.2, 0.0, 1.5708), 0);
+        assert_eq!(
+            motion_generator_set_goal(generator, 1.2, 0.0, std::f32::consts::FRAC_PI_2),
+            0
+        );
         let (mut p, mut r, mut q) = ([0f32; 3], [0f32; 4], vec![0f32; 4 * joints]);
         assert_eq!(
             motion_generator_advance_pose(

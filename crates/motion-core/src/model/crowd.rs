@@ -3,6 +3,10 @@
 //! steering, grounding, resampling to any clock), as [`Character`](super::Character) does for
 //! one. Engines with many characters (the Bevy plugin) drive this.
 //!
+//! A crowd of a motion-matching database ([`Crowd::new`] with a [`MotionSource::Database`]) holds
+//! one [`Character`](super::Character) per member instead (a database has no batch to share):
+//! members join with [`Crowd::add_poses`], and the rest of the API is the same.
+//!
 //! Members join and leave at any time: the batch restarts on the next
 //! [`advance`](Crowd::advance), every member re-seeded from the last `seed_frames` frames it
 //! generated (its seed at first), so the motion goes on from where it was; each draws noise
@@ -38,6 +42,8 @@ use super::character::CharacterError;
 use super::generate_error::GenerateError;
 use super::pose_stream::PoseStream;
 use super::predictor::MotionModel;
+use super::source::MotionSource;
+use super::Character;
 use crate::grounding::GroundingConfig;
 use crate::motion::FrameScalar;
 use crate::pose::Pose;
@@ -90,10 +96,22 @@ impl Member {
     }
 }
 
-/// Characters of one model stepped as one batch (see the module docs).
+/// A member of a database's crowd: its character and its current pose.
+#[derive(Debug)]
+struct Player {
+    id: MemberId,
+    character: Character,
+    pose: Pose,
+}
+
+/// Characters of one model stepped as one batch, or of one motion-matching database (see the
+/// module docs).
 #[derive(Debug)]
 pub struct Crowd {
-    model: Arc<MotionModel>,
+    source: MotionSource,
+    /// The learned model (`None`: a database's crowd, whose members are `players`).
+    model: Option<Arc<MotionModel>>,
+    players: Vec<Player>,
     skeleton: Arc<Skeleton>,
     root_step: usize,
     members: Vec<Member>,
@@ -104,11 +122,25 @@ pub struct Crowd {
 }
 
 impl Crowd {
-    /// An empty crowd of `model`'s characters.
+    /// An empty crowd of `source`'s characters (a learned model, or a motion-matching database).
     ///
     /// # Errors
-    /// A model whose skeleton is not the H3.6M one.
-    pub fn new(model: Arc<MotionModel>) -> Result<Crowd, CharacterError> {
+    /// A learned model whose skeleton is not the H3.6M one.
+    pub fn new(source: impl Into<MotionSource>) -> Result<Crowd, CharacterError> {
+        let source = source.into();
+        let Some(model) = source.model().cloned() else {
+            return Ok(Crowd {
+                skeleton: source.skeleton(),
+                source,
+                model: None,
+                players: Vec::new(),
+                root_step: 1,
+                members: Vec::new(),
+                batch: None,
+                dirty: false,
+                next_id: 0,
+            });
+        };
         let config = model.config();
         if config.skeleton != "h36m-32" {
             return Err(CharacterError::Skeleton(config.skeleton.clone()));
@@ -116,7 +148,9 @@ impl Crowd {
         // H3.6M root deltas are per 50 Hz source frame: a 25 Hz model frame spans 2.
         let root_step = ((H36M_SOURCE_FPS / config.fps).round() as usize).max(1);
         Ok(Crowd {
-            model,
+            source,
+            model: Some(model),
+            players: Vec::new(),
             skeleton: Arc::new(Skeleton::h36m()),
             root_step,
             members: Vec::new(),
@@ -126,9 +160,14 @@ impl Crowd {
         })
     }
 
-    /// The model.
-    pub fn model(&self) -> &Arc<MotionModel> {
-        &self.model
+    /// The learned model (`None`: a database's crowd).
+    pub fn model(&self) -> Option<&Arc<MotionModel>> {
+        self.model.as_ref()
+    }
+
+    /// What drives the members.
+    pub fn source(&self) -> &MotionSource {
+        &self.source
     }
 
     /// The skeleton of the poses.
@@ -138,17 +177,51 @@ impl Crowd {
 
     /// Members.
     pub fn len(&self) -> usize {
-        self.members.len()
+        self.members.len() + self.players.len()
     }
 
     /// Whether the crowd has no member.
     pub fn is_empty(&self) -> bool {
-        self.members.is_empty()
+        self.len() == 0
     }
 
     /// Every member, in the order they joined.
     pub fn members(&self) -> impl Iterator<Item = MemberId> + '_ {
-        self.members.iter().map(|m| m.id)
+        self.members
+            .iter()
+            .map(|m| m.id)
+            .chain(self.players.iter().map(|p| p.id))
+    }
+
+    /// A new member of a database's crowd continuing `seed` (poses on the database's rig at its
+    /// rate, oldest first: [`crate::takes::seed_poses_on_rig`]; empty: the database's first
+    /// frame), grounded as `grounding` says; its first pose is there at once.
+    ///
+    /// # Errors
+    /// A learned model's crowd ([`CharacterError::NeedsFrames`]: use [`add`](Self::add)), or a
+    /// seed of another joint count or with a non-finite value.
+    pub fn add_poses(
+        &mut self,
+        seed: &[Pose],
+        grounding: GroundingConfig,
+    ) -> Result<MemberId, CharacterError> {
+        if self.model.is_some() {
+            return Err(CharacterError::NeedsFrames);
+        }
+        let mut character = Character::with_grounding(self.source.clone(), grounding)?;
+        let pose = if seed.is_empty() {
+            character.advance(0.0)?.clone()
+        } else {
+            character.start_poses(seed)?.clone()
+        };
+        let id = MemberId(self.next_id);
+        self.next_id += 1;
+        self.players.push(Player {
+            id,
+            character,
+            pose,
+        });
+        Ok(id)
     }
 
     /// A new member seeded from the last `seed_frames` frames of `clip` (exp-map frames at the
@@ -157,7 +230,8 @@ impl Crowd {
     /// [`advance`](Self::advance) on, its first pose (the last seed frame's) is there at once.
     ///
     /// # Errors
-    /// A clip shorter than `seed_frames`, of the wrong width or with a non-finite value; an
+    /// A database's crowd ([`CharacterError::NeedsPoses`]: use [`add_poses`](Self::add_poses));
+    /// a clip shorter than `seed_frames`, of the wrong width or with a non-finite value; an
     /// action the model does not know (or none for an action-conditioned model).
     pub fn add<T: FrameScalar>(
         &mut self,
@@ -166,7 +240,10 @@ impl Crowd {
         rng_seed: u64,
         grounding: GroundingConfig,
     ) -> Result<MemberId, CharacterError> {
-        let config = self.model.config();
+        let Some(model) = self.model.clone() else {
+            return Err(CharacterError::NeedsPoses);
+        };
+        let config = model.config();
         let (needed, dims) = (config.seed_frames, config.frame_dims);
         if clip.nrows() < needed {
             return Err(GenerateError::TooFewSeedFrames {
@@ -193,7 +270,7 @@ impl Crowd {
             }
             .into());
         }
-        let action = check_action(&self.model, action)?;
+        let action = check_action(&model, action)?;
         let mut stream =
             PoseStream::new(self.skeleton.clone(), config.fps, self.root_step, grounding)?;
         stream.use_control_of(config);
@@ -220,17 +297,25 @@ impl Crowd {
         self.members.retain(|m| m.id != id);
         let removed = self.members.len() != before;
         self.dirty |= removed;
-        removed
+        let players = self.players.len();
+        self.players.retain(|p| p.id != id);
+        removed || self.players.len() != players
     }
 
     /// The current pose of a member.
     pub fn pose(&self, id: MemberId) -> Option<&Pose> {
-        self.member(id).map(|m| m.stream.current())
+        match self.player(id) {
+            Some(p) => Some(&p.pose),
+            None => self.member(id).map(|m| m.stream.current()),
+        }
     }
 
     /// The heading (yaw about +y, `0` facing +z) of a member's pose's pelvis.
     pub fn heading_of(&self, id: MemberId, pose: &Pose) -> Option<f32> {
-        self.member(id).map(|m| m.stream.heading_of(pose))
+        match self.player(id) {
+            Some(p) => Some(p.character.heading_of(pose)),
+            None => self.member(id).map(|m| m.stream.heading_of(pose)),
+        }
     }
 
     /// A member's action.
@@ -241,6 +326,10 @@ impl Crowd {
     /// Steers a member toward `goal` (`None`: the model's own root motion) from its next model
     /// frame on; whether it is a member.
     pub fn set_goal(&mut self, id: MemberId, goal: Option<Goal>) -> bool {
+        if let Some(p) = self.players.iter_mut().find(|p| p.id == id) {
+            p.character.set_goal(goal);
+            return true;
+        }
         match self.members.iter_mut().find(|m| m.id == id) {
             Some(m) => {
                 m.stream.set_goal(goal);
@@ -250,12 +339,23 @@ impl Crowd {
         }
     }
 
-    /// Switches a member to `action` from its next model frame on, without re-seeding.
+    /// Switches a member to `action` from its next model frame on, without re-seeding (a
+    /// database's member has no actions: ignored).
     ///
     /// # Errors
     /// Not a member ([`GenerateError::NoSuchRow`]), an action the model does not know, or a
     /// model without actions.
     pub fn set_action(&mut self, id: MemberId, action: &str) -> Result<(), CharacterError> {
+        let Some(model) = self.model.clone() else {
+            if self.player(id).is_none() {
+                return Err(GenerateError::NoSuchRow {
+                    row: id.0 as usize,
+                    batch: self.players.len(),
+                }
+                .into());
+            }
+            return Ok(());
+        };
         let row = self
             .members
             .iter()
@@ -264,7 +364,7 @@ impl Crowd {
                 row: id.0 as usize,
                 batch: self.members.len(),
             })?;
-        let known = check_action(&self.model, Some(action))?;
+        let known = check_action(&model, Some(action))?;
         if let (Some(batch), false) = (self.batch.as_mut(), self.dirty) {
             batch.set_action(row, action, 0)?;
         }
@@ -281,13 +381,19 @@ impl Crowd {
     /// # Errors
     /// A bad time step, or the generator failed (a non-finite output).
     pub fn advance(&mut self, dt: f64) -> Result<(), CharacterError> {
+        for p in &mut self.players {
+            p.pose.clone_from(p.character.advance(dt)?);
+        }
+        let Some(model) = self.model.clone() else {
+            return Ok(());
+        };
         if self.members.is_empty() {
             return Ok(());
         }
         if self.dirty || self.batch.is_none() {
-            self.restart()?;
+            self.restart(&model)?;
         }
-        let frame = 1.0 / self.model.config().fps;
+        let frame = 1.0 / model.config().fps;
         let mut left = dt;
         loop {
             let step = left.min(frame);
@@ -303,9 +409,13 @@ impl Crowd {
         self.members.iter().find(|m| m.id == id)
     }
 
+    fn player(&self, id: MemberId) -> Option<&Player> {
+        self.players.iter().find(|p| p.id == id)
+    }
+
     /// A new batch of every member, each re-seeded from its history.
-    fn restart(&mut self) -> Result<(), CharacterError> {
-        let config = self.model.config();
+    fn restart(&mut self, model: &Arc<MotionModel>) -> Result<(), CharacterError> {
+        let config = model.config();
         let (rows, len, dims) = (self.members.len(), config.seed_frames, config.frame_dims);
         let mut seeds = Array3::<f32>::zeros((rows, len, dims));
         for (i, m) in self.members.iter().enumerate() {
@@ -329,7 +439,7 @@ impl Crowd {
             .iter()
             .map(|m| Noise::Seed(m.rng_seed))
             .collect();
-        let mut batch = BatchGenerator::new(Arc::clone(&self.model), rows);
+        let mut batch = BatchGenerator::new(Arc::clone(model), rows);
         set_controls(&self.members, &mut batch)?;
         batch.start(seeds.view(), &actions, &noise)?;
         self.batch = Some(batch);

@@ -159,3 +159,47 @@ fn bad_members_are_refused_with_what_is_wrong() {
     ));
     assert!(!crowd.set_goal(a, None));
 }
+
+#[test]
+fn a_database_crowd_plays_its_members_on_the_databases_rig() {
+    let path =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../weights/matching_cmu.safetensors");
+    let source = MotionSource::load(path).expect("the shipped database");
+    let mut crowd = Crowd::new(source).unwrap();
+    assert!(crowd.model().is_none());
+    // Exp-map seeds are for learned models.
+    let frames = Array2::<f32>::zeros((50, 99));
+    assert!(matches!(
+        crowd.add(frames.view(), None, 0, GroundingConfig::default()),
+        Err(CharacterError::NeedsPoses)
+    ));
+    let a = crowd.add_poses(&[], GroundingConfig::default()).unwrap();
+    let b = crowd.add_poses(&[], GroundingConfig::default()).unwrap();
+    assert_eq!(crowd.len(), 2);
+    assert_eq!(crowd.members().collect::<Vec<_>>(), vec![a, b]);
+    let joints = crowd.skeleton().len();
+    assert_eq!(crowd.pose(a).unwrap().local_rotations.len(), joints);
+    crowd.set_action(a, "walking").unwrap();
+    let start = [a, b].map(|id| crowd.pose(id).unwrap().root_translation);
+    assert!(crowd.set_goal(a, Some(Goal::towards(glam::Vec2::new(1.2, 0.0), 0.0))));
+    assert!(crowd.set_goal(b, Some(Goal::towards(glam::Vec2::new(0.0, -1.2), 0.0))));
+    for _ in 0..240 {
+        crowd.advance(1.0 / 60.0).unwrap();
+    }
+    let moved = [a, b].map(|id| crowd.pose(id).unwrap().root_translation - start[id.0 as usize]);
+    assert!(moved[0].x > 2.5 && moved[0].z.abs() < 1.5, "{:?}", moved[0]);
+    assert!(
+        moved[1].z < -2.5 && moved[1].x.abs() < 1.5,
+        "{:?}",
+        moved[1]
+    );
+    assert!(crowd.remove(a));
+    assert_eq!(crowd.len(), 1);
+    crowd.advance(1.0 / 60.0).unwrap();
+    // A learned model's crowd takes exp-map seeds only.
+    let mut models = Crowd::new(model()).unwrap();
+    assert!(matches!(
+        models.add_poses(&[], GroundingConfig::default()),
+        Err(CharacterError::NeedsFrames)
+    ));
+}
