@@ -534,3 +534,62 @@ fn the_game_default_walks_a_square_of_waypoints_with_its_feet_planted() {
     // same 4 m square at 0.4 m/s for noise seeds 0-7, every corner within 2 s of the ideal.
     walks_a_square("intention_actions", 8, 4.0, 0.4, false, 2.0);
 }
+
+#[test]
+fn a_character_plays_a_database_from_a_seed_in_the_seeds_coordinates() {
+    let dir = std::env::temp_dir().join(format!("motion-character-db-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let example_seed = || repo().join("examples/walk_seed.bvh");
+    std::fs::copy(example_seed(), dir.join("walk.bvh")).unwrap();
+    let takes = motion::core::takes::read_takes(&dir, &motion::core::takes::TakeOptions::default())
+        .unwrap();
+    let db = Arc::new(
+        MatchingDatabase::from_takes(&takes, motion::core::matching::DEFAULT_WEIGHTS).unwrap(),
+    );
+    let bvh = motion::core::formats::bvh::read_bvh(example_seed()).unwrap();
+    let seed = motion::core::takes::seed_poses_on_rig(
+        bvh,
+        db.skeleton(),
+        db.mm_per_unit(),
+        db.fps(),
+        None,
+    )
+    .unwrap();
+    let mut character = motion::core::model::Character::new(db.clone()).unwrap();
+    let first = character.start_poses(&seed[..45]).unwrap().clone();
+    // The first pose is the seed's last, unchanged.
+    assert!((first.root_translation - seed[44].root_translation).length() < 1e-5);
+    // Sent along +x: it goes there, on the floor, at 60 Hz ticks.
+    character.set_goal(Some(Goal::towards(Vec2::new(0.7, 0.0), 0.0)));
+    let mut positions = vec![Vec3::ZERO; db.skeleton().len()];
+    let mut world = vec![glam::Quat::IDENTITY; db.skeleton().len()];
+    let mut lowest = f32::INFINITY;
+    let mut last = first.root_translation;
+    let mut largest_step = 0.0f32;
+    for _ in 0..360 {
+        let pose = character.advance(1.0 / 60.0).unwrap().clone();
+        pose.world_positions_into(db.skeleton(), &mut positions, &mut world);
+        lowest = lowest.min(positions.iter().map(|p| p.y).fold(f32::INFINITY, f32::min));
+        largest_step = largest_step.max((pose.root_translation - last).length());
+        last = pose.root_translation;
+    }
+    let travelled = last - first.root_translation;
+    assert!(
+        travelled.x > 2.5 && travelled.z.abs() < 1.5,
+        "travelled {travelled}"
+    );
+    assert!(
+        lowest > -0.03 && lowest < 0.08,
+        "lowest joint at {lowest} m"
+    );
+    // No pop: at most 4 cm of root per 60 Hz tick (2.4 m/s).
+    assert!(largest_step < 0.04, "{largest_step}");
+    // A database has no exp-map start.
+    let frames = ndarray::Array2::<f64>::zeros((50, 99));
+    assert!(matches!(
+        character.start(frames.view(), None, motion::core::model::Noise::Seed(0)),
+        Err(motion::core::model::CharacterError::NeedsPoses)
+    ));
+    let _ = std::fs::remove_dir_all(&dir);
+}

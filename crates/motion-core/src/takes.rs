@@ -44,12 +44,12 @@ use ndarray::Array2;
 use crate::formats::bvh::{read_bvh, Bvh};
 use crate::grounding::{find_body_parts, BodyParts, GroundingConfig};
 use crate::kinematics::local_transform;
-use crate::matching::features::GroundFrame;
 use crate::pose::{root_motion_between, Pose, METRES_PER_MM};
 use crate::resample::resample_bvh;
 use crate::retarget::{JointMap, Retargeter};
 use crate::seed::rescale_bvh;
 use crate::skeleton::Skeleton;
+use crate::steering::ground_frame::GroundFrame;
 use crate::steering::{wrap_angle, Steering};
 
 /// The rate takes are brought to unless told otherwise (Hz).

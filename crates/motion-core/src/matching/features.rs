@@ -2,9 +2,10 @@
 //! how they and the hips move, and where the root goes and faces over the next second, all in the
 //! frame's own ground frame (the smoothed root on the floor, its facing along +z).
 
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 
 use crate::steering::direction_of;
+pub use crate::steering::ground_frame::{rotate, GroundFrame};
 
 /// Numbers per feature vector.
 pub const FEATURES: usize = 27;
@@ -31,39 +32,6 @@ pub fn trajectory_frames(fps: f64) -> [usize; 3] {
         out[k] = out[k].max(out[k - 1] + 1);
     }
     out
-}
-
-/// A frame's ground frame: the root on the floor and the facing (yaw about +y).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct GroundFrame {
-    /// The root's floor position `(x, z)`, metres.
-    pub position: Vec2,
-    /// Yaw about +y, radians (`0` facing +z).
-    pub facing: f32,
-}
-
-impl GroundFrame {
-    /// A world floor vector `(x, z)` in this frame (+z forward, +x to the facing's left).
-    pub fn local(&self, v: Vec2) -> Vec2 {
-        rotate(v, -self.facing)
-    }
-
-    /// A world 3-vector in this frame (its floor part turned, its height kept).
-    pub fn local3(&self, v: Vec3) -> Vec3 {
-        let f = self.local(Vec2::new(v.x, v.z));
-        Vec3::new(f.x, v.y, f.y)
-    }
-
-    /// A floor vector of this frame in world axes (the inverse of [`GroundFrame::local`]).
-    pub fn world(&self, v: Vec2) -> Vec2 {
-        rotate(v, self.facing)
-    }
-}
-
-/// `v` turned by `angle` about +y (a facing of `angle` maps +z to `direction_of(angle)`).
-pub fn rotate(v: Vec2, angle: f32) -> Vec2 {
-    let (s, c) = angle.sin_cos();
-    Vec2::new(c * v.x + s * v.y, -s * v.x + c * v.y)
 }
 
 /// The pose part of the features (`out[..15]`): both ankles relative to the ground frame's
@@ -108,6 +76,7 @@ pub fn trajectory_features(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::Vec2;
 
     #[test]
     fn a_frame_facing_x_sees_x_ahead() {

@@ -16,6 +16,7 @@
 //! [`control`] vector made from the goal and from where it is shown ([`Steering::control_vector`]):
 //! its body walks where the goal asks, and the warping corrects what is left of its path.
 pub mod control;
+pub mod ground_frame;
 pub mod path;
 
 pub use control::GoalControl;
