@@ -593,3 +593,27 @@ fn a_character_plays_a_database_from_a_seed_in_the_seeds_coordinates() {
     ));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn a_database_character_allocates_nothing_per_tick() {
+    // The shipped motion-matching database, steered through turns and a stop at 60 Hz ticks:
+    // searches, jumps, blends, grounding and resampling allocate nothing.
+    let source =
+        motion::core::model::MotionSource::load(repo().join("weights/matching_cmu.safetensors"))
+            .unwrap();
+    let mut character = Character::new(source).unwrap();
+    character.set_goal(Some(Goal::towards(Vec2::new(1.2, 0.0), 0.0)));
+    for _ in 0..30 {
+        character.advance(TICK).unwrap();
+    }
+    let before = allocations();
+    for k in 0..480 {
+        if k % 60 == 0 {
+            let speed = if k % 240 == 180 { 0.0 } else { 1.2 };
+            let turn = direction_of(k as f32 * 0.8);
+            character.set_goal(Some(Goal::towards(turn * speed, k as f32 * 0.8)));
+        }
+        character.advance(TICK).unwrap();
+    }
+    assert_eq!(allocations() - before, 0);
+}
