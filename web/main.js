@@ -3,7 +3,7 @@
 import * as THREE from "three";
 import init, { WebCharacter } from "./pkg/motion_web.js";
 
-const status = { ready: false, poses: 0, finite: true, action: null, error: null };
+const status = { ready: false, poses: 0, finite: true, action: null, source: null, error: null };
 window.motionStatus = status;
 const $ = (id) => document.getElementById(id);
 
@@ -95,15 +95,25 @@ function start() {
   // ?seed=N in the address makes a run repeatable.
   const fixed = new URLSearchParams(location.search).get("seed");
   const seed = BigInt(fixed ?? Math.floor(Math.random() * 2 ** 32));
+  const source = $("source").value;
   try {
     character?.free();
-    character = seedSource.bvh
-      ? WebCharacter.from_bvh(seedSource.bvh, seedSource.name, action, seed)
-      : WebCharacter.walk(action, seed);
+    if (source === "matching") {
+      // The shipped motion-matching database plays on its own (CMU) rig; it has no actions.
+      character = seedSource.bvh
+        ? WebCharacter.from_bvh_matching(seedSource.bvh, seedSource.name)
+        : WebCharacter.walk_matching();
+    } else {
+      character = seedSource.bvh
+        ? WebCharacter.from_bvh(seedSource.bvh, seedSource.name, action, seed)
+        : WebCharacter.walk(action, seed);
+    }
+    $("action").disabled = source === "matching";
     parents = Array.from(character.parents());
     lift = character.floor_offset() + 0.02;
     buildSkeleton(parents.length);
-    status.action = action;
+    status.action = source === "matching" ? "motion matching" : action;
+    status.source = source;
     $("error").textContent = "";
   } catch (e) {
     fail(e);
@@ -111,7 +121,9 @@ function start() {
 }
 
 // --- steering: arrow keys or WASD (or a gamepad's left stick) set a goal velocity on the floor ---
-const SPEED = 0.5; // m/s: about the shipped model's own walking pace (the warp scales its stride ±30 %)
+// m/s: about the shipped model's own walking pace (the warp scales its stride ±30 %); the
+// database walks at a person's pace.
+const SPEED = { model: 0.5, matching: 1.2 };
 const held = new Set();
 window.addEventListener("keydown", (e) => held.add(e.key.toLowerCase()));
 window.addEventListener("keyup", (e) => held.delete(e.key.toLowerCase()));
@@ -130,7 +142,8 @@ function steer() {
   const length = Math.hypot(x, z);
   if (length > 0) {
     // yaw about +y: 0 faces +z, pi/2 faces +x
-    character.set_goal((SPEED * x) / length, (SPEED * z) / length, Math.atan2(x, z));
+    const speed = SPEED[status.source] ?? SPEED.model;
+    character.set_goal((speed * x) / length, (speed * z) / length, Math.atan2(x, z));
     steering = true;
   } else if (steering) {
     character.clear_goal();
@@ -167,7 +180,7 @@ function frame(now) {
 }
 
 // Time `n` model steps of a fresh character (µs per step), for the tests and the README numbers.
-window.motionDebug = () => ({ camera: camera.position.toArray(), lift, root: Array.from(character.positions().slice(0, 3)) });
+window.motionDebug = () => ({ camera: camera.position.toArray(), lift, joints: parents.length, root: Array.from(character.positions().slice(0, 3)) });
 window.motionBench = (n) => {
   const c = WebCharacter.walk("walking", 7n);
   c.step_model(10); // warm up
@@ -195,6 +208,7 @@ try {
     }
   });
   $("restart").addEventListener("click", start);
+  $("source").addEventListener("change", start);
   $("bvh").addEventListener("change", async (event) => {
     const file = event.target.files[0];
     if (!file) return;

@@ -1,5 +1,6 @@
 // The page in a real headless Chromium (Debian's /usr/bin/chromium, or $CHROMIUM): it must load
-// the wasm module and three.js, generate 200 finite poses live, switch action, and draw something.
+// the wasm module and three.js, generate 200 finite poses live, switch action, play the shipped
+// motion-matching database steered by the keyboard, and draw something.
 // Prints the per-step cost of the model in the browser. Usage: node test/browser.mjs [screenshot.png]
 import { createServer } from "node:http";
 import { readFile, writeFile } from "node:fs/promises";
@@ -60,6 +61,21 @@ try {
   await page.waitForFunction((n) => window.motionStatus.error || window.motionStatus.poses >= n, before + 50, { timeout: 60_000 });
   status = await page.evaluate(() => window.motionStatus);
   check(!status.error && status.action === "sitting" && status.finite, `action switched to ${status.action}, ${status.poses - before} more finite poses`);
+
+  // The shipped motion-matching database: its own rig, steered by the keyboard.
+  await page.selectOption("#source", "matching");
+  const switched = (await page.evaluate(() => window.motionStatus)).poses;
+  await page.waitForFunction((n) => window.motionStatus.error || window.motionStatus.poses >= n, switched + 30, { timeout: 60_000 });
+  const from = await page.evaluate(() => window.motionDebug());
+  await page.keyboard.down("ArrowUp");
+  await page.waitForTimeout(2000);
+  await page.keyboard.up("ArrowUp");
+  const to = await page.evaluate(() => window.motionDebug());
+  status = await page.evaluate(() => window.motionStatus);
+  const moved = Math.hypot(to.root[0] - from.root[0], to.root[2] - from.root[2]);
+  check(!status.error && status.source === "matching" && status.finite && from.joints > 15 && from.joints !== 32,
+    `motion matching plays on its ${from.joints}-joint CMU rig (${status.error ?? "no error"})`);
+  check(moved > 0.5, `steered by the keyboard, the database's character walked ${moved.toFixed(2)} m in 2 s`);
 
   const us = await page.evaluate(() => window.motionBench(500));
   check(Number.isFinite(us) && us > 0, `one model step in the browser: ${us.toFixed(1)} µs (500 steps, wasm32, one thread)`);

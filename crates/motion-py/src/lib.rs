@@ -5,6 +5,7 @@
 use pyo3::prelude::*;
 
 mod arrays;
+mod character;
 mod errors;
 mod evaluation;
 mod io;
@@ -18,6 +19,7 @@ fn _motion(m: &Bound<'_, PyModule>) -> PyResult<()> {
     metrics::register(m)?;
     io::register(m)?;
     model::register(m)?;
+    character::register(m)?;
     evaluation::register(m)?;
     m.add_function(wrap_pyfunction!(set_threads, m)?)?;
     m.add_function(wrap_pyfunction!(arrays::data_address, m)?)?;

@@ -1,4 +1,5 @@
-//! motion-core in a web page: the built-in model driving a character from JavaScript.
+//! motion-core in a web page: the built-in model, or the shipped motion-matching database,
+//! driving a character from JavaScript.
 //!
 //! Built for `wasm32-unknown-unknown` thread-free (motion-core without its `parallel` feature:
 //! no rayon, one thread, the portable kernels) and bound by `wasm-bindgen`; `web/` is the page
@@ -11,6 +12,7 @@
 //! character.advance(1 / 60);                        // the clock moves 1/60 s
 //! const xyz = character.positions();                // Float32Array, 3 per joint, metres
 //! character.set_action("eating");                   // from the next model frame on
+//! const matched = WebCharacter.walk_matching();      // the CMU motion-matching database
 //! ```
 //!
 //! Conventions are motion-core's engine ones ([`motion_core::pose`]): metres, +y up,
@@ -22,10 +24,13 @@ use std::sync::Arc;
 use glam::{Quat, Vec3};
 use motion_core::formats::bvh::parse_bvh;
 use motion_core::formats::expmap_bvh::ExpMapTarget;
+use motion_core::matching::MatchingDatabase;
 use motion_core::model::batch::Noise;
 use motion_core::model::builtin::game_model;
 use motion_core::model::{Character, MotionModel};
 use motion_core::seed::seed_from_bvh;
+use motion_core::takes::seed_poses_on_rig;
+use motion_core::weights::WeightStore;
 use motion_core::Skeleton;
 use wasm_bindgen::prelude::*;
 
@@ -40,6 +45,24 @@ thread_local! {
         Some(Err(e)) => Err(e.to_string()),
         None => Err("this build has no built-in weights (weights/ was empty at build time)".into()),
     };
+}
+
+/// The shipped motion-matching database (`weights/matching_cmu.safetensors`: CMU takes, free for
+/// products), built into the module.
+pub const MATCHING_DATABASE: &[u8] = include_bytes!("../../../weights/matching_cmu.safetensors");
+
+thread_local! {
+    /// The built-in database, parsed once per thread and shared by its characters.
+    static DATABASE: Result<Arc<MatchingDatabase>, String> =
+        WeightStore::from_bytes(MATCHING_DATABASE, "matching_cmu.safetensors")
+            .map_err(|e| e.to_string())
+            .and_then(|store| MatchingDatabase::from_store(&store).map_err(|e| e.to_string()))
+            .map(Arc::new);
+}
+
+/// The built-in motion-matching database (shared).
+pub fn builtin_database() -> Result<Arc<MatchingDatabase>, String> {
+    DATABASE.with(Clone::clone)
 }
 
 /// The built-in model (shared).
@@ -75,6 +98,27 @@ impl Animator {
         character
             .start_from_clip(seed.frames.view(), Some(action), Noise::Seed(rng_seed))
             .map_err(|e| e.to_string())?;
+        Self::around(character, action)
+    }
+
+    /// A character of the built-in motion-matching database seeded from the BVH text `bvh` (any
+    /// rig the built-in maps fit, retargeted onto the database's CMU rig): it plays on that rig
+    /// and has no actions.
+    pub fn from_bvh_matching(bvh: &str, label: &str) -> Result<Self, String> {
+        let db = builtin_database()?;
+        let path = Path::new(label);
+        let parsed = parse_bvh(bvh, path).map_err(|e| e.to_string())?;
+        let seed = seed_poses_on_rig(parsed, db.skeleton(), db.mm_per_unit(), db.fps(), None)
+            .map_err(|e| format!("{label}: {e}"))?;
+        let mut character = Character::new(db).map_err(|e| e.to_string())?;
+        character
+            .start_poses(&seed)
+            .map_err(|e| format!("{label}: {e}"))?;
+        Self::around(character, "motion matching")
+    }
+
+    /// The animator of a started character.
+    fn around(character: Character, action: &str) -> Result<Self, String> {
         let skeleton = Arc::clone(character.skeleton());
         let joints = skeleton.len();
         let mut animator = Animator {
@@ -92,6 +136,11 @@ impl Animator {
         animator.advance(0.0)?;
         animator.poses = 0;
         Ok(animator)
+    }
+
+    /// Whether the motion-matching database drives it.
+    pub fn is_database(&self) -> bool {
+        self.character.is_database()
     }
 
     /// The actions the built-in model knows.
@@ -139,8 +188,14 @@ impl Animator {
         &self.action
     }
 
-    /// Switches the action from the next model frame on.
+    /// Switches the action from the next model frame on (refused for the database, which has
+    /// no actions).
     pub fn set_action(&mut self, action: &str) -> Result<(), String> {
+        if self.is_database() {
+            return Err(format!(
+                "{action}: the motion-matching database has no actions (it plays its takes)"
+            ));
+        }
         self.character
             .set_action(action, 0)
             .map_err(|e| e.to_string())?;
@@ -169,8 +224,16 @@ impl Animator {
         self.character.set_goal(None);
     }
 
-    /// Runs `n` model steps directly (no pose, no resampling): what a benchmark times.
+    /// Runs `n` model steps directly (no pose, no resampling): what a benchmark times. The
+    /// database's character plays `n` of its frames (searches, blends and grounding included).
     pub fn step_model(&mut self, n: u32) -> Result<(), String> {
+        if self.is_database() {
+            let dt = 1.0 / self.character.source_fps();
+            for _ in 0..n {
+                self.character.advance(dt).map_err(|e| e.to_string())?;
+            }
+            return Ok(());
+        }
         for _ in 0..n {
             self.character
                 .generator_mut()
@@ -211,6 +274,25 @@ impl WebCharacter {
         Ok(WebCharacter {
             inner: Animator::from_bvh(bvh, label, action, rng_seed).map_err(js)?,
         })
+    }
+
+    /// A character of the built-in motion-matching database (CMU takes on their own rig, free
+    /// for products) seeded from the bundled walk seed, retargeted onto its rig.
+    pub fn walk_matching() -> Result<WebCharacter, JsError> {
+        Self::from_bvh_matching(WALK_SEED_BVH, "walk_seed.bvh")
+    }
+
+    /// A character of the built-in motion-matching database seeded from BVH text (any rig the
+    /// built-in maps fit).
+    pub fn from_bvh_matching(bvh: &str, label: &str) -> Result<WebCharacter, JsError> {
+        Ok(WebCharacter {
+            inner: Animator::from_bvh_matching(bvh, label).map_err(js)?,
+        })
+    }
+
+    /// Whether the motion-matching database drives it.
+    pub fn is_database(&self) -> bool {
+        self.inner.is_database()
     }
 
     /// The actions of the built-in model.
@@ -303,6 +385,26 @@ mod tests {
             let (now, then) = ((p(j) - p(parent)).length(), (p0(j) - p0(parent)).length());
             assert!((now - then).abs() < 1e-4, "bone {j}: {now} vs {then}");
         }
+    }
+
+    #[test]
+    fn the_database_walks_where_it_is_steered_on_its_own_rig() {
+        let mut a = Animator::from_bvh_matching(WALK_SEED_BVH, "walk_seed.bvh").unwrap();
+        assert!(a.is_database());
+        let joints = a.parents().len();
+        assert!(joints > 15 && joints != 32, "{joints} joints");
+        assert!(a.set_action("sitting").is_err());
+        let start = Vec3::from_slice(&a.positions()[..3]);
+        a.set_goal(1.2, 0.0, std::f32::consts::FRAC_PI_2).unwrap();
+        for _ in 0..240 {
+            a.advance(1.0 / 60.0).unwrap();
+            assert!(a.positions().iter().all(|v| v.is_finite()));
+        }
+        let end = Vec3::from_slice(&a.positions()[..3]);
+        assert!(end.x - start.x > 2.5, "{start} -> {end}");
+        a.step_model(30).unwrap();
+        let e = Animator::from_bvh_matching("HIERARCHY\nROOT", "bad.bvh").unwrap_err();
+        assert!(e.contains("bad.bvh"), "{e}");
     }
 
     #[test]

@@ -18,6 +18,14 @@ Generate one::
     model = motion.Model.default()
     walks = model.predict("examples/walk_seed.bvh", action="walking", frames=250, samples=4)
 
+Drive a character, from the shipped motion-matching database (CMU takes, free for products)
+or a learned model, at any tick rate::
+
+    c = motion.Character("weights/matching_cmu.safetensors")   # None: the game default model
+    c.start("examples/walk_seed.bvh")                          # a BVH on any rig
+    c.set_goal((1.2, 0.0))                                     # m/s along +x
+    root, rotations = c.advance(1 / 60)                        # metres; joints x 4 (x, y, z, w)
+
 Arrays are float64 numpy arrays (others are converted once); a float64 array is read in place
 whatever its strides. Computation runs without the GIL, split over cores
 (``motion.set_threads(n)`` before the first call to change how many). Bad input raises
@@ -25,6 +33,7 @@ whatever its strides. Computation runs without the GIL, split over cores
 """
 
 from ._motion import (  # noqa: F401
+    Character,
     Generator,
     Model,
     NdmsDatabase,
@@ -42,6 +51,7 @@ from ._motion import (  # noqa: F401
 )
 
 __all__ = [
+    "Character",
     "Generator",
     "Model",
     "NdmsDatabase",

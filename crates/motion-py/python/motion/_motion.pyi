@@ -131,3 +131,30 @@ class Generator:
     def set_action(self, action: str, crossfade: int = 0) -> None: ...
     def set_control(self, control: list[float]) -> None:
         """``[forward, side, turn]`` for a ``goal-gru`` model (m/s, m/s, rad over the next second)."""
+
+class Character:
+    """One engine character: a learned model or a motion-matching database.
+
+    ``start(seed)``, then ``advance(dt)`` at the engine's rate for the root's world position
+    (metres) and every joint's local rotation (``joints x 4``, ``x, y, z, w``; joint 0 the
+    root's world rotation), steered by ``set_goal``. A database
+    (``weights/matching_cmu.safetensors``) plays on its own rig (``joint_names``) and has no
+    actions.
+
+    >>> c = motion.Character("weights/matching_cmu.safetensors")
+    >>> c.start("examples/walk_seed.bvh")
+    >>> c.set_goal((1.2, 0.0))
+    >>> root, rotations = c.advance(1 / 60)
+    """
+
+    is_database: bool
+    joint_names: list[str]
+    fps: float
+    def __init__(self, weights: Optional[Path] = None, grounding: bool = True) -> None: ...
+    def start(self, seed: Path, action: Optional[str] = None, rng_seed: int = 0) -> None: ...
+    def set_goal(self, velocity: tuple[float, float], facing: Optional[float] = None) -> None: ...
+    def clear_goal(self) -> None: ...
+    def set_action(self, action: str, crossfade: int = 0) -> None: ...
+    def advance(
+        self, dt: float
+    ) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.float32]]: ...

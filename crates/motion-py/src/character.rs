@@ -1,0 +1,173 @@
+//! One engine character, as `motion_core::model::Character` is: a learned model or a
+//! motion-matching database, seeded from a file, steered by goals, advanced at any rate.
+use std::path::PathBuf;
+
+use motion_core::formats::bvh::read_bvh;
+use motion_core::formats::expmap_bvh::ExpMapTarget;
+use motion_core::grounding::GroundingConfig;
+use motion_core::model::builtin::BuiltIn;
+use motion_core::model::{Character as CoreCharacter, MotionSource, Noise};
+use motion_core::seed::load_seed;
+use motion_core::steering::{Goal, Vec2};
+use motion_core::takes::seed_poses_on_rig;
+use numpy::{IntoPyArray, PyArray1, PyArray2};
+use pyo3::prelude::*;
+
+use crate::errors::{format, seed as seed_error, value, weights};
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<Character>()
+}
+
+/// One character: `start(seed)`, then `advance(dt)` at the engine's rate for the root's world
+/// position (metres) and every joint's local rotation (`x, y, z, w`; joint 0 the root's world
+/// rotation), steered by `set_goal`.
+#[pyclass(module = "motion._motion")]
+pub struct Character {
+    inner: CoreCharacter,
+    source: MotionSource,
+    /// The pelvis heading of the last pose (what a stop without a facing keeps).
+    heading: f32,
+}
+
+#[pymethods]
+impl Character {
+    /// A character driven by `weights` (a learned model or a motion-matching database file, e.g.
+    /// `weights/matching_cmu.safetensors`; `None`: the built-in game default), grounded unless
+    /// `grounding=False`.
+    #[new]
+    #[pyo3(signature = (weights = None, grounding = true))]
+    fn new(py: Python<'_>, weights: Option<PathBuf>, grounding: bool) -> PyResult<Character> {
+        let source = match weights {
+            Some(path) => py
+                .detach(|| MotionSource::load(&path))
+                .map_err(|e| value(format!("{e}")))?,
+            None => match BuiltIn::Game.model() {
+                Some(Ok(model)) => MotionSource::from(std::sync::Arc::new(model)),
+                Some(Err(e)) => return Err(self::weights(e)),
+                None => return Err(value("this build has no built-in weights")),
+            },
+        };
+        let config = if grounding {
+            GroundingConfig::default()
+        } else {
+            GroundingConfig::off()
+        };
+        let inner = CoreCharacter::with_grounding(source.clone(), config).map_err(value)?;
+        Ok(Character {
+            inner,
+            source,
+            heading: 0.0,
+        })
+    }
+
+    /// Whether a motion-matching database drives it (it plays on the database's rig and has no
+    /// actions).
+    #[getter]
+    fn is_database(&self) -> bool {
+        self.inner.is_database()
+    }
+
+    /// The joint names of the poses, in order.
+    #[getter]
+    fn joint_names(&self) -> Vec<String> {
+        let skeleton = self.inner.skeleton();
+        (0..skeleton.len())
+            .map(|j| skeleton.joint(j).name.clone())
+            .collect()
+    }
+
+    /// The source's frame rate (frames per second; `advance` takes any `dt`).
+    #[getter]
+    fn fps(&self) -> f64 {
+        self.source.fps()
+    }
+
+    /// Seeds it from a file: a BVH on any rig the built-in maps fit (or exp-map text / `.npy`
+    /// for a learned model), doing `action` (learned models with actions), drawing noise from
+    /// `rng_seed`. A database continues the take in its coordinates.
+    #[pyo3(signature = (seed, action = None, rng_seed = 0))]
+    fn start(
+        &mut self,
+        py: Python<'_>,
+        seed: PathBuf,
+        action: Option<&str>,
+        rng_seed: u64,
+    ) -> PyResult<()> {
+        match &self.source {
+            MotionSource::Database(db) => {
+                let db = db.clone();
+                let poses = py.detach(|| {
+                    let bvh = read_bvh(&seed).map_err(format)?;
+                    seed_poses_on_rig(bvh, db.skeleton(), db.mm_per_unit(), db.fps(), None)
+                        .map_err(|e| value(format!("{}: {e}", seed.display())))
+                })?;
+                self.inner.start_poses(&poses).map_err(value)?;
+            }
+            MotionSource::Model(model) => {
+                let fps = model.config().fps;
+                let loaded = py
+                    .detach(|| load_seed(&seed, ExpMapTarget::H36m, fps, 50.0, None))
+                    .map_err(seed_error)?;
+                self.inner
+                    .start_from_clip(loaded.frames.view(), action, Noise::Seed(rng_seed))
+                    .map_err(|e| value(format!("{}: {e}", seed.display())))?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Steers toward `velocity` (`(x, z)` on the floor, m/s) facing `facing` (yaw about +y,
+    /// radians: 0 faces +z; default: where the velocity goes, or, standing, the way it faces),
+    /// from the next frame on.
+    #[pyo3(signature = (velocity, facing = None))]
+    fn set_goal(&mut self, velocity: (f32, f32), facing: Option<f32>) -> PyResult<()> {
+        let v = Vec2::new(velocity.0, velocity.1);
+        if !(v.is_finite() && facing.is_none_or(f32::is_finite)) {
+            return Err(value("a goal's velocity and facing must be finite"));
+        }
+        let mut goal = Goal::towards(v, facing.unwrap_or(self.heading));
+        if let Some(facing) = facing {
+            goal.facing = facing;
+        }
+        self.inner.set_goal(Some(goal));
+        Ok(())
+    }
+
+    /// Lets the source go where it goes (no goal).
+    fn clear_goal(&mut self) {
+        self.inner.set_goal(None);
+    }
+
+    /// Switches the action without re-seeding (ignored by a database).
+    #[pyo3(signature = (action, crossfade = 0))]
+    fn set_action(&mut self, action: &str, crossfade: usize) -> PyResult<()> {
+        self.inner.set_action(action, crossfade).map_err(value)
+    }
+
+    /// Moves the clock by `dt` seconds: `(root_position, rotations)`, the root's world position
+    /// (3 floats, metres) and every joint's local rotation (`joints x 4`, `x, y, z, w`).
+    #[allow(clippy::type_complexity)]
+    fn advance<'py>(
+        &mut self,
+        py: Python<'py>,
+        dt: f64,
+    ) -> PyResult<(Bound<'py, PyArray1<f32>>, Bound<'py, PyArray2<f32>>)> {
+        if !(dt.is_finite() && dt >= 0.0) {
+            return Err(value(format!("dt {dt}: give a finite time step >= 0")));
+        }
+        let pose = self.inner.advance(dt).map_err(value)?.clone();
+        self.heading = self.inner.heading_of(&pose);
+        let root = pose.root_translation.to_array().to_vec().into_pyarray(py);
+        let joints = pose.local_rotations.len();
+        let flat: Vec<f32> = pose
+            .local_rotations
+            .iter()
+            .flat_map(|q| q.to_array())
+            .collect();
+        let rotations = ndarray::Array2::from_shape_vec((joints, 4), flat)
+            .map_err(value)?
+            .into_pyarray(py);
+        Ok((root, rotations))
+    }
+}
