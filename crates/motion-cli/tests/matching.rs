@@ -14,9 +14,9 @@ fn in_metres(text: &str) -> String {
     let mut motion = false;
     for line in text.lines() {
         let t = line.trim_start();
-        if t.starts_with("OFFSET") {
+        if let Some(values) = t.strip_prefix("OFFSET") {
             let indent = &line[..line.len() - t.len()];
-            let v: Vec<f64> = t[6..]
+            let v: Vec<f64> = values
                 .split_whitespace()
                 .map(|x| x.parse().unwrap())
                 .collect();
