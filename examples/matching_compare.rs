@@ -70,6 +70,7 @@ use motion_core::steering::{direction_of, wrap_angle, Goal, Steering, Waypoints}
 use motion_core::takes::{read_takes, seed_poses_on_rig, smoothed_trajectory, TakeOptions};
 use motion_metrics::ndms::{NdmsConfig, NdmsDatabase, NnMethod, WordFrame};
 use motion_metrics::plausibility::{SKATING_HEIGHT_MM, SKATING_SPEED_MM_S};
+use motion_metrics::posture::{PostureJoints, PostureReference};
 use motion_metrics::responsiveness::{
     positions_of, HEADING_TOLERANCE_DEG, HOLD_S, SPEED_TOLERANCE, SPEED_WINDOW_S,
 };
@@ -249,6 +250,27 @@ fn main() -> Result<(), BoxError> {
         real_h36m_skating
     );
 
+    // Posture realism: references of the test takes' postures on each rig, and real-vs-real
+    // (the training takes measured against them).
+    let cmu_posture = PostureReference::from_takes(
+        &PostureJoints::find(&cmu.skeleton)?,
+        &tests
+            .iter()
+            .map(|t| t.cmu.positions.view())
+            .collect::<Vec<_>>(),
+    )?;
+    let h36m_posture = PostureReference::from_takes(
+        &PostureJoints::find(&h36m.skeleton)?,
+        &tests
+            .iter()
+            .map(|t| t.h36m.positions.view())
+            .collect::<Vec<_>>(),
+    )?;
+    let real_cmu_posture =
+        cmu_posture.measure(&train_cmu.iter().map(|p| p.view()).collect::<Vec<_>>())?;
+    let real_h36m_posture =
+        h36m_posture.measure(&train_h36m.iter().map(|p| p.view()).collect::<Vec<_>>())?;
+
     // The controllers.
     let mut controllers = vec![Controller {
         label: "motion matching (CMU database)".into(),
@@ -312,6 +334,14 @@ fn main() -> Result<(), BoxError> {
         let (square, positions) =
             pool.install(|| square(controller, rig, &tests[walk], real_of(&tests[walk])))?;
         let square_ndms = ndms_of(words, std::iter::once(positions.view()))?;
+        let (reference, real_posture) = if rig.name == "CMU" {
+            (&cmu_posture, &real_cmu_posture)
+        } else {
+            (&h36m_posture, &real_h36m_posture)
+        };
+        let mut all: Vec<ArrayView3<'_, f64>> = generated.iter().map(|p| p.view()).collect();
+        all.push(positions.view());
+        let posture = reference.measure(&all)?;
         let square_skating = pooled_skating(rig, std::iter::once(positions.view()));
         let row = Row {
             controller: controller.label.clone(),
@@ -333,6 +363,16 @@ fn main() -> Result<(), BoxError> {
             square,
             square_ndms,
             square_skating,
+            posture: [
+                posture.frechet,
+                posture.arm_elevation_emd_deg,
+                posture.arms_above_real_p99,
+            ],
+            real_posture: [
+                real_posture.frechet,
+                real_posture.arm_elevation_emd_deg,
+                real_posture.arms_above_real_p99,
+            ],
             held_bytes: controller.held_bytes,
             file_bytes: controller.file_bytes,
         };
@@ -346,6 +386,7 @@ fn main() -> Result<(), BoxError> {
     }
     println!();
     print_tables(&rows, &real_skating);
+    print_posture(&rows);
     let db = &rows[0];
     let heading90 = db.scenarios[0].heading_s;
     println!(
@@ -931,8 +972,32 @@ struct Row {
     square: Square,
     square_ndms: f64,
     square_skating: f64,
+    /// Posture realism against the test takes: Fréchet distance, upper-arm elevation EMD
+    /// (degrees), share of frames with an upper arm above the test takes' 99th percentile.
+    posture: [f64; 3],
+    /// The same of the training takes (real-vs-real).
+    real_posture: [f64; 3],
     held_bytes: usize,
     file_bytes: usize,
+}
+
+fn print_posture(rows: &[Row]) {
+    println!("\nPosture realism against the test takes' postures on the same rig (`motion_metrics::posture`; real-vs-real: the training takes):\n");
+    println!("| controller | rig | Fréchet, leg lengths² (real-vs-real) | upper-arm elevation EMD, degrees (real-vs-real) | frames with an upper arm above the real p99 (real-vs-real) |");
+    println!("|---|---|---|---|---|");
+    for r in rows {
+        println!(
+            "| {} | {} | {:.3} ({:.3}) | {:.1} ({:.1}) | {:.3} ({:.3}) |",
+            r.controller,
+            r.rig,
+            r.posture[0],
+            r.real_posture[0],
+            r.posture[1],
+            r.real_posture[1],
+            r.posture[2],
+            r.real_posture[2]
+        );
+    }
 }
 
 fn print_tables(rows: &[Row], real_skating: &[(f64, f64)]) {
