@@ -2,8 +2,9 @@
 //! on the shipped model walking after the example seed: the heading convention is the direction
 //! it walks, 90 and 180 degree turns are done within 1.2 s, a stop goal holds the root, and ticks
 //! allocate nothing with or without a goal. The square course on a steady walker is a unit test
-//! of `motion_core::steering`. The motion-matching baseline (`motion_core::matching`) steps
-//! without allocating and, on the training walks (data tests), answers every goal change.
+//! of `motion_core::steering`. Motion matching (`motion_core::matching`) steps without
+//! allocating, plays a database built from takes through `Character`, and, on the training walks
+//! (data tests), answers every goal change.
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -364,7 +365,7 @@ fn dataset() -> Option<PathBuf> {
         Some(dataset)
     } else {
         eprintln!(
-            "SKIPPED: the motion-matching baseline needs the H3.6M data at {} (set MOTION_DATA_DIR)",
+            "SKIPPED: motion matching on the H3.6M walks needs the H3.6M data at {} (set MOTION_DATA_DIR)",
             dataset.display()
         );
         None
