@@ -72,7 +72,7 @@ use motion_metrics::ndms::{NdmsConfig, NdmsDatabase, NnMethod, WordFrame};
 use motion_metrics::plausibility::{SKATING_HEIGHT_MM, SKATING_SPEED_MM_S};
 use motion_metrics::posture::{PostureJoints, PostureReference};
 use motion_metrics::responsiveness::{
-    positions_of, HEADING_TOLERANCE_DEG, HOLD_S, SPEED_TOLERANCE, SPEED_WINDOW_S,
+    positions_of, Hold, HEADING_TOLERANCE_DEG, SPEED_TOLERANCE, SPEED_WINDOW_S,
 };
 
 type BoxError = Box<dyn Error + Send + Sync>;
@@ -765,27 +765,6 @@ impl Scenario {
     }
 }
 
-/// The first time from which a condition held for [`HOLD_S`] (as `responsiveness` counts).
-#[derive(Default)]
-struct Hold {
-    since: Option<f64>,
-    reached: Option<f64>,
-}
-
-impl Hold {
-    fn offer(&mut self, now: f64, ok: bool) {
-        if self.reached.is_some() {
-            return;
-        }
-        match (ok, self.since) {
-            (true, None) => self.since = Some(now),
-            (true, Some(since)) if now - since >= HOLD_S - 1e-9 => self.reached = Some(since),
-            (false, _) => self.since = None,
-            _ => {}
-        }
-    }
-}
-
 struct Answer {
     scenario: Scenario,
     heading_s: Option<f64>,
@@ -843,8 +822,8 @@ fn respond(
     Ok((
         Answer {
             scenario,
-            heading_s: heading.reached,
-            speed_s: speed.reached,
+            heading_s: heading.reached(),
+            speed_s: speed.reached(),
             late_speed,
         },
         positions_of(&rig.skeleton, &poses),

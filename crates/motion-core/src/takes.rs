@@ -338,6 +338,13 @@ pub fn read_take_files(
 /// A BVH file read and checked for what every later step assumes.
 fn read_checked(path: &Path) -> Result<Bvh, String> {
     let bvh = read_bvh(path).map_err(|e| e.to_string())?;
+    check_frames(&bvh)?;
+    Ok(bvh)
+}
+
+/// A BVH's frame time and frames checked for what every later step assumes: a usable rate, at
+/// least one frame, every value finite and not huge.
+fn check_frames(bvh: &Bvh) -> Result<(), String> {
     crate::motion::check_frame_time(bvh.frame_time)?;
     if let Some((t, _)) = bvh
         .frames
@@ -351,7 +358,7 @@ fn read_checked(path: &Path) -> Result<Bvh, String> {
     if bvh.frames.nrows() == 0 {
         return Err("no frames".into());
     }
-    Ok(bvh)
+    Ok(())
 }
 
 /// The millimetres per unit of a rig (see [`UNITS`]): the unit that makes its longer leg
@@ -648,19 +655,7 @@ pub fn seed_poses_on_rig(
     fps: f64,
     joint_map: Option<&Path>,
 ) -> Result<Vec<Pose>, String> {
-    crate::motion::check_frame_time(bvh.frame_time)?;
-    if let Some((t, _)) = bvh
-        .frames
-        .rows()
-        .into_iter()
-        .enumerate()
-        .find(|(_, r)| r.iter().any(|v| !v.is_finite() || v.abs() > 1e9))
-    {
-        return Err(format!("frame {t} holds a non-finite or huge value"));
-    }
-    if bvh.frames.nrows() == 0 {
-        return Err("the seed has no frames".into());
-    }
+    check_frames(&bvh).map_err(|e| format!("the seed: {e}"))?;
     let rig_parts = find_body_parts(rig).map_err(|e| e.to_string())?;
     let mm = if same_rig(&bvh.skeleton, rig) && joint_map.is_none() {
         let parts = find_body_parts(&bvh.skeleton).map_err(|e| e.to_string())?;

@@ -232,8 +232,8 @@ where
         scenarios.push(ScenarioReport {
             scenario,
             goal_speed_m_s: goal_speed,
-            heading_s: heading_at.reached,
-            speed_s: speed_at.reached,
+            heading_s: heading_at.reached(),
+            speed_s: speed_at.reached(),
             skating: skating as f64 / skating_frames.max(1) as f64,
             late_speed_m_s: late_speed(&roots),
         });
@@ -323,15 +323,17 @@ impl BodySpeed {
     }
 }
 
-/// The first time from which a condition held for [`HOLD_S`].
-#[derive(Default)]
-struct Hold {
+/// The first time from which a condition held for [`HOLD_S`] (how every scenario's heading and
+/// speed times are counted; other harnesses count theirs with it too).
+#[derive(Debug, Default, Clone, Copy)]
+pub struct Hold {
     since: Option<f64>,
     reached: Option<f64>,
 }
 
 impl Hold {
-    fn offer(&mut self, now: f64, ok: bool) {
+    /// Whether the condition holds at `now` (seconds, increasing).
+    pub fn offer(&mut self, now: f64, ok: bool) {
         if self.reached.is_some() {
             return;
         }
@@ -341,6 +343,11 @@ impl Hold {
             (false, _) => self.since = None,
             _ => {}
         }
+    }
+
+    /// When the condition began to hold for [`HOLD_S`] (`None`: not yet).
+    pub fn reached(&self) -> Option<f64> {
+        self.reached
     }
 }
 
