@@ -25,6 +25,24 @@ checkpoints written every ``--val-every`` iterations; ``--export`` writes that o
     python -m training.locomotion --run-dir runs/goal --iterations 20000
     python -m training.locomotion --run-dir runs/goal --resume
     python -m training.locomotion --export weights/goal_gru_h36m.safetensors --from runs/goal/best.pt
+
+**Any rig's takes** (``--takes DIR``): a folder of BVH takes on any rig (read by the project's take reader,
+``motion-cli takes export``: one rig, ``--fps``, ``--joint-map`` and ``--exclude`` as ``matching build`` takes them;
+``training/takes.py``) or a folder that command wrote. The model works on the rig's own exp-map frames (``3 + 3 *
+joints`` values, the root as per-frame deltas) at the takes' rate; its file holds the rig (``config.rig_bvh``,
+``skeleton: "rig"``), so engines play it on that rig. Controls are measured over ``--control-seconds`` with the rig's
+rest forward (``training/takes.py`` ``controls_of``). Training windows are ``--seed`` teacher-forced frames and a
+closed loop of 15, 30 or ``--horizon`` frames (drawn per iteration among those the takes are long enough for), each
+window in a take drawn uniformly. Validation (the rule fixed before any run was scored): the takes
+``training/takes.py validation_names`` picks (every 6th by name) are left out of training; each is seeded with its
+first ``--seed`` frames and run closed loop for 10 s reading its true controls, then its last control held. ``score``
+= forward + side + turn / 2 control errors over the take's real frames + 2 * max(0, 0.6 - speed ratio) over the real
+frames + 2 * max(0, 0.6 - late speed ratio) + 2 * max(0, late speed ratio - 1.6), the late ratio over seconds 5-10
+against the take's real speed; the lowest is kept as ``best.pt``.
+
+    python -m training.locomotion --takes ../shared/data/cmu_locomotion \\
+        --exclude 16_16,16_18,16_24,16_30,16_38,16_43,131_01,131_02 --run-dir runs/goal_cmu --iterations 6000
+    python -m training.locomotion --export weights/goal_gru_cmu.safetensors --from runs/goal_cmu/best.pt
 """
 
 from __future__ import annotations
@@ -204,13 +222,27 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--rng-seed", type=int, default=0)
     p.add_argument("--resume", action="store_true")
     p.add_argument("--data-dir", type=Path, default=None)
+    p.add_argument("--takes", type=Path, metavar="DIR",
+                   help="train on a folder of BVH takes on any rig (or one motion-cli takes export wrote)")
+    p.add_argument("--joint-map", type=Path, metavar="F", help="with --takes: a JSON joint map for the takes' rigs")
+    p.add_argument("--exclude", metavar="NAME,...", help="with --takes: takes to leave out (e.g. test takes)")
+    p.add_argument("--fps", type=float, default=30.0, help="with --takes: the rate the takes are brought to")
+    p.add_argument("--control-seconds", type=float, default=1.0, help="with --takes: the control's horizon")
+    p.add_argument("--licence", help="with --export of a --takes run: the takes' licence, stored in the file")
     p.add_argument("--export", type=Path, metavar="OUT")
     p.add_argument("--from", dest="from_", type=Path, metavar="CKPT")
     return p
 
 
-def export(out: Path, ckpt: Path) -> None:
+def export(out: Path, ckpt: Path, licence: str | None = None) -> None:
     state = torch.load(ckpt, map_location="cpu", weights_only=False)
+    if state["config"].get("skeleton") == "rig":
+        from .locomotion_rig import export_rig
+
+        if not licence:
+            raise SystemExit("--export of a --takes run needs --licence TEXT: the takes' licence")
+        export_rig(out, state, licence)
+        return
     model = GoalGRU(state["config"])
     model.load_state_dict(state["model"])
     provenance = {
@@ -232,7 +264,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.export:
         if not args.from_:
             raise SystemExit("--export needs --from CKPT")
-        export(args.export, args.from_)
+        export(args.export, args.from_, args.licence)
         return 0
     if not args.run_dir:
         raise SystemExit("--run-dir is required to train")
@@ -249,6 +281,10 @@ def main(argv: list[str] | None = None) -> int:
         log_file.write(line + "\n")
         log_file.flush()
 
+    if args.takes:
+        from .locomotion_rig import train_rig
+
+        return train_rig(args, argv, log)
     dataset_dir = args.data_dir
     all_seqs = h36m.load_sequences(
         Path(dataset_dir) if dataset_dir else h36m.default_dataset_dir(), h36m.TRAIN_SUBJECTS, h36m.ACTIONS, log=log

@@ -73,7 +73,7 @@ def make_config(architecture: str, dims_used: list[int], **overrides) -> dict:
         # first layer also reads the control (root velocity forward / sideways in m/s and heading change in
         # radians over the next `control_frames`).
         config.update(derivative_order=0, residual=True, hidden=256, control_dims=3, control_frames=25)
-    unknown = set(overrides) - set(config) - {"plan_hidden"}
+    unknown = set(overrides) - set(config) - {"plan_hidden", "rig_bvh", "mm_per_unit"}
     if unknown:
         raise ValueError(f"unknown config fields {sorted(unknown)}")
     config.update(overrides)

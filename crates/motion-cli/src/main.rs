@@ -43,6 +43,9 @@ enum Command {
     /// Motion matching on your own takes: `matching build` makes a database from a folder of BVH
     /// takes on any rig (play it with `predict --model DB.safetensors`).
     Matching(commands::matching::Args),
+    /// Takes as training data: `takes export` writes a folder of BVH takes (any rig) as exp-map
+    /// frames on their rig for `training/locomotion.py --takes`.
+    Takes(commands::takes::Args),
 }
 
 /// `text` with its control characters escaped (`\u{7}`), so that a name a user typed is never
@@ -123,6 +126,7 @@ fn main() -> ExitCode {
         Command::Render(args) => commands::render::run(args),
         Command::Bench(args) => commands::bench::run(args),
         Command::Matching(args) => commands::matching::run(args),
+        Command::Takes(args) => commands::takes::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

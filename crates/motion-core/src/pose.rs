@@ -33,8 +33,8 @@ use glam::{DQuat, DVec3, Quat, Vec3};
 
 use crate::kinematics::ExpMapFk;
 use crate::motion::{FrameScalar, RootEncoding};
-use crate::root::{RootIntegrator, RootPose};
-use crate::rotation::{h36m_joint_quat, row_mat3_to_quat};
+use crate::root::{root_deltas, RootIntegrator, RootPose};
+use crate::rotation::{h36m_joint_expmap, h36m_joint_quat, quat_to_row_mat3, row_mat3_to_quat};
 use crate::skeleton::Skeleton;
 
 /// Metres per millimetre: [`Pose`] lengths are metres, the crate's data millimetres.
@@ -274,6 +274,42 @@ impl PoseDecoder {
     }
 }
 
+/// Poses on `skeleton` as exp-map frames with the root stored as deltas, each frame spanning
+/// `step` source frames: the inverse of [`PoseDecoder`] with [`RootEncoding::Deltas`] (decoding
+/// the result gives the poses back, the root integrated from the origin at the first frame).
+/// Joint rotations of angle π or more come back as the same rotation by a smaller angle. Whole
+/// clips: allocates the frames.
+///
+/// # Panics
+/// If a pose has another joint count than `skeleton`.
+pub fn encode_poses(skeleton: &Skeleton, poses: &[Pose], step: usize) -> ndarray::Array2<f64> {
+    let offset = DVec3::from_array(skeleton.joint(0).offset);
+    let roots: Vec<RootPose> = poses
+        .iter()
+        .map(|pose| {
+            assert_eq!(pose.local_rotations.len(), skeleton.len(), "joint count");
+            let translation = pose.root_translation.as_dvec3() / METRES_PER_MM - offset;
+            RootPose {
+                rotation: quat_to_row_mat3(pose.root_rotation().as_dquat().normalize()),
+                translation: translation.to_array(),
+            }
+        })
+        .collect();
+    let mut frames = ndarray::Array2::zeros((poses.len(), skeleton.expmap_width()));
+    frames
+        .slice_mut(ndarray::s![.., 0..6])
+        .assign(&root_deltas(&roots, step));
+    for (pose, mut row) in poses.iter().zip(frames.rows_mut()) {
+        for (j, q) in pose.local_rotations.iter().enumerate().skip(1) {
+            let r = h36m_joint_expmap(q.as_dquat().normalize());
+            for k in 0..3 {
+                row[3 + 3 * j + k] = r[k];
+            }
+        }
+    }
+    frames
+}
+
 /// The twist of `q` about +y (the heading), as a unit quaternion.
 pub fn yaw_of(q: DQuat) -> DQuat {
     let twist = DQuat::from_xyzw(0.0, q.y, 0.0, q.w);
@@ -334,6 +370,25 @@ mod tests {
             5 => 0.003,
             _ => 0.6 * ((t as f64) * 0.17 + d as f64 * 0.7).sin(),
         })
+    }
+
+    #[test]
+    fn encoding_poses_is_the_inverse_of_decoding() {
+        let skeleton = Arc::new(Skeleton::h36m());
+        let frames = frames(40);
+        for step in [1, 2] {
+            let poses = PoseDecoder::new(Arc::clone(&skeleton), RootEncoding::Deltas, step)
+                .decode_all(frames.view());
+            let encoded = encode_poses(&skeleton, &poses, step);
+            let again = PoseDecoder::new(Arc::clone(&skeleton), RootEncoding::Deltas, step)
+                .decode_all(encoded.view());
+            for (a, b) in poses.iter().zip(&again) {
+                assert!((a.root_translation - b.root_translation).length() < 1e-5);
+                for (qa, qb) in a.local_rotations.iter().zip(&b.local_rotations) {
+                    assert!(qa.dot(*qb).abs() > 1.0 - 1e-6, "{qa} vs {qb}");
+                }
+            }
+        }
     }
 
     #[test]

@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use motion_core::matching::{MatchingDatabase, DEFAULT_WEIGHTS};
-use motion_core::takes::{bvh_files, read_take_files, unit_name, TakeOptions, Takes};
+use motion_core::takes::{unit_name, Takes};
 use serde_json::json;
 
 use super::UsageError;
@@ -54,27 +54,11 @@ pub enum Command {
 #[derive(clap::Args, Debug)]
 #[command(after_long_help = BUILD_HELP)]
 pub struct BuildArgs {
-    /// Folder of BVH takes (every *.bvh in it, not recursive).
-    #[arg(long, value_name = "DIR")]
-    pub takes: PathBuf,
+    #[command(flatten)]
+    pub source: super::takes::TakeArgs,
     /// The database file to write (.safetensors).
     #[arg(long, value_name = "FILE.safetensors")]
     pub out: PathBuf,
-    /// A BVH whose rig every take goes onto (default: the first readable take's).
-    #[arg(long, value_name = "FILE.bvh")]
-    pub rig: Option<PathBuf>,
-    /// A JSON joint map (H3.6M joint -> rig joint names) for rigs the built-in maps do not know.
-    #[arg(long, value_name = "FILE.json")]
-    pub joint_map: Option<PathBuf>,
-    /// The rate every take is resampled to (Hz).
-    #[arg(long, value_name = "HZ", default_value_t = motion_core::takes::DEFAULT_FPS)]
-    pub fps: f64,
-    /// Takes shorter than this after resampling are skipped (seconds).
-    #[arg(long, value_name = "S", default_value_t = motion_core::takes::DEFAULT_MIN_SECONDS)]
-    pub min_seconds: f64,
-    /// Takes to leave out, by name (file name without .bvh), comma-separated.
-    #[arg(long, value_name = "NAME,...", value_delimiter = ',')]
-    pub exclude: Vec<String>,
     /// The licence of the takes, stored in the file's `licence` entry.
     #[arg(long, value_name = "TEXT")]
     pub licence: Option<String>,
@@ -91,55 +75,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 
 fn build(args: BuildArgs) -> anyhow::Result<()> {
     check_database_output(&args.out)?;
-    let mut inputs: Vec<&Path> = vec![&args.takes];
-    inputs.extend(
-        [&args.rig, &args.joint_map]
-            .into_iter()
-            .flatten()
-            .map(PathBuf::as_path),
-    );
-    motion_core::clip::check_not_an_input(&args.out, &inputs)?;
+    motion_core::clip::check_not_an_input(&args.out, &args.source.inputs())?;
     if let Some(licence) = &args.licence {
         if licence.trim().is_empty() {
             return Err(UsageError("--licence is empty: state the takes' licence".into()).into());
         }
     }
-    let files = bvh_files(&args.takes)?;
-    let stem = |p: &PathBuf| {
-        p.file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_default()
-    };
-    let mut excluded: Vec<String> = Vec::new();
-    for name in args
-        .exclude
-        .iter()
-        .map(|n| n.trim())
-        .filter(|n| !n.is_empty())
-    {
-        let name = name.strip_suffix(".bvh").unwrap_or(name);
-        if !files.iter().any(|f| stem(f) == name) {
-            return Err(UsageError(format!(
-                "--exclude {name}: {} holds no take {name}.bvh",
-                args.takes.display()
-            ))
-            .into());
-        }
-        if !excluded.iter().any(|e| e == name) {
-            excluded.push(name.to_string());
-        }
-    }
-    let files: Vec<PathBuf> = files
-        .into_iter()
-        .filter(|f| !excluded.contains(&stem(f)))
-        .collect();
-    let options = TakeOptions {
-        fps: args.fps,
-        rig: args.rig.clone(),
-        joint_map: args.joint_map.clone(),
-        min_seconds: args.min_seconds,
-    };
-    let takes = read_take_files(&files, &options, &args.takes)?;
+    let (takes, excluded) = args.source.read()?;
     let mut notices = Vec::new();
     for skipped in &takes.skipped {
         let notice = format!("skipped {}: {}", skipped.path.display(), skipped.reason);
@@ -263,10 +205,10 @@ pub fn check_database_output(out: &Path) -> anyhow::Result<()> {
 fn provenance(args: &BuildArgs, takes: &Takes, excluded: &[String]) -> Vec<(&'static str, String)> {
     let none = |v: String| if v.is_empty() { "none".to_string() } else { v };
     let mut entries = vec![
-        ("takes_folder", args.takes.display().to_string()),
+        ("takes_folder", args.source.takes.display().to_string()),
         ("rig_file", takes.rig.source.display().to_string()),
         ("fps", format!("{}", takes.fps)),
-        ("min_seconds", format!("{}", args.min_seconds)),
+        ("min_seconds", format!("{}", args.source.min_seconds)),
         ("excluded_takes", none(excluded.join(", "))),
         (
             "skipped_takes",
@@ -290,7 +232,7 @@ fn provenance(args: &BuildArgs, takes: &Takes, excluded: &[String]) -> Vec<(&'st
         ),
         ("build_date", build_date()),
     ];
-    if let Some(map) = &args.joint_map {
+    if let Some(map) = &args.source.joint_map {
         entries.push(("joint_map", map.display().to_string()));
     }
     entries

@@ -11,6 +11,7 @@ pub mod plausibility;
 pub mod predict;
 pub mod render;
 pub mod score;
+pub mod takes;
 
 pub use crate::usage::UsageError;
 

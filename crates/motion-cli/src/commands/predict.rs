@@ -199,8 +199,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         return Err(UsageError("--frames must be at least 1".into()).into());
     }
     steered::check_seconds(args.seconds)?;
-    if let Some(store) = steered::open_database(args.model.as_deref()) {
-        return steered::run_database(&args, &store);
+    if let Some(store) = steered::open_rig_source(args.model.as_deref()) {
+        return steered::run_rig_source(&args, &store);
     }
     if args.samples == 0 {
         return Err(UsageError("--samples must be at least 1".into()).into());

@@ -19,10 +19,10 @@ use super::source::MotionSource;
 use crate::grounding::{Grounder, GroundingConfig, GroundingError};
 use crate::matching::Matcher;
 use crate::motion::FrameScalar;
-use crate::pose::Pose;
+use crate::pose::{encode_poses, Pose};
 use crate::resample::PoseResampler;
 use crate::resample::ResampleError;
-use crate::skeleton::{Skeleton, H36M_SOURCE_FPS};
+use crate::skeleton::Skeleton;
 use crate::steering::{Goal, Steerable};
 
 /// Why a [`Character`] could not start or advance.
@@ -108,12 +108,12 @@ impl Character {
             }
         };
         let config = model.config();
-        if config.skeleton != "h36m-32" {
-            return Err(CharacterError::Skeleton(config.skeleton.clone()));
-        }
-        // H3.6M root deltas are per 50 Hz source frame: a 25 Hz model frame spans 2.
-        let step = ((H36M_SOURCE_FPS / config.fps).round() as usize).max(1);
-        let mut stream = PoseStream::new(Arc::new(Skeleton::h36m()), config.fps, step, grounding)?;
+        let mut stream = PoseStream::new(
+            Arc::clone(model.skeleton()),
+            config.fps,
+            config.root_step(),
+            grounding,
+        )?;
         stream.use_control_of(config);
         Ok(Character {
             driver: Driver::Model {
@@ -189,11 +189,23 @@ impl Character {
         action: Option<&str>,
         noise: Noise<'_>,
     ) -> Result<&Pose, CharacterError> {
+        self.start_model_frames(seed, seed, action, noise)
+    }
+
+    /// Starts the model on `seed` and the pose stream on `shown` (the same motion, whose first
+    /// row may hold the absolute root the model never reads).
+    fn start_model_frames<T: FrameScalar, U: FrameScalar>(
+        &mut self,
+        seed: ArrayView2<'_, T>,
+        shown: ArrayView2<'_, U>,
+        action: Option<&str>,
+        noise: Noise<'_>,
+    ) -> Result<&Pose, CharacterError> {
         let Driver::Model { generator, stream } = &mut self.driver else {
             return Err(CharacterError::NeedsPoses);
         };
         generator.start(seed, action, noise)?;
-        stream.start(seed, action)?;
+        stream.start(shown, action)?;
         if let Some(control) = stream.control_vector() {
             // A model told where to go reads its first control over the seed too (as in
             // training): seeded again with the control the seed and the goal give.
@@ -203,17 +215,64 @@ impl Character {
         Ok(stream.current())
     }
 
-    /// Seeds a database's character with `seed` (poses on its rig at its rate, oldest first,
-    /// e.g. [`crate::takes::seed_poses_on_rig`]): the motion continues from the last one, in the
-    /// seed's coordinates. Learned models start from exp-map frames ([`start`](Self::start)).
+    /// Seeds the character with `seed`: poses on its skeleton ([`skeleton`](Self::skeleton): a
+    /// database's or a rig model's rig, e.g. from [`crate::takes::seed_poses_on_rig`]) at its
+    /// rate, oldest first. The motion continues from the last one, in the seed's coordinates. A
+    /// learned model reads the last `seed_frames` of them as exp-map frames
+    /// ([`crate::pose::encode_poses`]; too few are refused) with `action`.
     pub fn start_poses(&mut self, seed: &[Pose]) -> Result<&Pose, CharacterError> {
+        self.start_poses_with(seed, None, Noise::Seed(0))
+    }
+
+    /// [`start_poses`](Self::start_poses) with a learned model's action and noise (a database
+    /// has neither).
+    pub fn start_poses_with(
+        &mut self,
+        seed: &[Pose],
+        action: Option<&str>,
+        noise: Noise<'_>,
+    ) -> Result<&Pose, CharacterError> {
+        if let Driver::Model { generator, stream } = &self.driver {
+            let config = generator.model().config();
+            let needed = config.seed_frames.max(2);
+            if seed.len() < needed {
+                return Err(GenerateError::TooFewSeedFrames {
+                    needed,
+                    got: seed.len(),
+                }
+                .into());
+            }
+            let skeleton = stream.skeleton();
+            if seed
+                .iter()
+                .any(|p| p.local_rotations.len() != skeleton.len())
+            {
+                return Err(CharacterError::Seed(format!(
+                    "the seed's poses are not on the model's {}-joint skeleton",
+                    skeleton.len()
+                )));
+            }
+            let shown = encode_poses(skeleton, &seed[seed.len() - needed..], config.root_step());
+            // The decoder reads the first row as the absolute root (the seed's coordinates); the
+            // model reads deltas only: its first row repeats the second's root delta.
+            let mut frames = shown.clone();
+            let first_delta = shown.slice(ndarray::s![1, 0..6]);
+            frames.slice_mut(ndarray::s![0, 0..6]).assign(&first_delta);
+            let skip = needed - config.seed_frames;
+            return self.start_model_frames(
+                frames.slice(ndarray::s![skip.., ..]),
+                shown.view(),
+                action,
+                noise,
+            );
+        }
         let Driver::Matching {
             matcher,
             resampler,
             grounding,
         } = &mut self.driver
         else {
-            return Err(CharacterError::NeedsFrames);
+            unreachable!("a learned model returned above")
         };
         if *matcher.grounder().config() != *grounding {
             let goal = matcher.goal();

@@ -11,6 +11,7 @@ use super::net::Net;
 use super::norm::Normalization;
 use super::weights::{WeightStore, WeightsError};
 use crate::nn::{Linear, LinearConfig};
+use crate::skeleton::Skeleton;
 use std::any::Any;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -29,6 +30,7 @@ pub struct MotionModel {
     network: Network,
     decoder: Linear,
     stored_dtype: String,
+    skeleton: Arc<Skeleton>,
 }
 
 impl MotionModel {
@@ -47,6 +49,15 @@ impl MotionModel {
             Some(json) => parse_provenance(json, &path)?,
             None => Provenance::new(),
         };
+        let skeleton = Arc::new(
+            config
+                .skeleton()
+                .map_err(|problem| WeightsError::BadConfig {
+                    path: path.clone(),
+                    key: "config".into(),
+                    problem,
+                })?,
+        );
         let norm = Normalization::load(store, config.frame_dims, &config.dims_used)?;
         let network = Network(config.arch.load(store, &config)?);
         let decoder = Linear::load(
@@ -68,6 +79,7 @@ impl MotionModel {
             network,
             decoder,
             stored_dtype,
+            skeleton,
         })
     }
 
@@ -79,6 +91,11 @@ impl MotionModel {
     /// The `config` metadata.
     pub fn config(&self) -> &ModelConfig {
         &self.config
+    }
+
+    /// The skeleton its frames are on (H3.6M's, or the rig the file holds).
+    pub fn skeleton(&self) -> &Arc<Skeleton> {
+        &self.skeleton
     }
 
     /// The `provenance` metadata (empty if the file has none).

@@ -13,7 +13,7 @@ use crate::weights::{WeightStore, WeightsError};
 /// A learned model or a motion-matching database (shared, immutable).
 #[derive(Debug, Clone)]
 pub enum MotionSource {
-    /// A learned predictor on the H3.6M skeleton.
+    /// A learned predictor (on H3.6M's skeleton or a rig).
     Model(Arc<MotionModel>),
     /// A motion-matching database on its takes' rig.
     Database(Arc<MatchingDatabase>),
@@ -57,11 +57,21 @@ impl MotionSource {
         }
     }
 
-    /// The skeleton the poses are on (H3.6M's for learned models, the rig for databases).
+    /// The skeleton the poses are on (a learned model's: H3.6M's or the rig its file holds; a
+    /// database's rig).
     pub fn skeleton(&self) -> Arc<Skeleton> {
         match self {
-            MotionSource::Model(_) => Arc::new(Skeleton::h36m()),
+            MotionSource::Model(m) => Arc::clone(m.skeleton()),
             MotionSource::Database(db) => db.skeleton().clone(),
+        }
+    }
+
+    /// Millimetres per unit of the rig's files (a database's or a rig model's; 1 for H3.6M's
+    /// skeleton): BVH written on the rig use them.
+    pub fn rig_mm_per_unit(&self) -> f64 {
+        match self {
+            MotionSource::Model(m) => m.config().mm_per_unit.unwrap_or(1.0),
+            MotionSource::Database(db) => db.mm_per_unit(),
         }
     }
 

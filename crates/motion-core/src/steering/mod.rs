@@ -99,6 +99,29 @@ pub trait Steerable {
     fn heading_of(&self, pose: &Pose) -> f32;
 }
 
+/// The pelvis's forward direction in the root's rest frame (unit, on the floor): across the
+/// rest hips, turned to face +z when the hip with the larger rest x is on the left (H3.6M and
+/// most rigs face +z at rest with their left on +x). A pose's heading is
+/// `facing_of(root_rotation * rest_forward)` ([`Steering::heading_of`]; `training/locomotion.py`
+/// reads the same vector for a rig's controls).
+///
+/// # Errors
+/// A skeleton without two legs (no hips to face by).
+pub fn rest_forward(skeleton: &Skeleton) -> Result<Vec3, crate::grounding::LegsError> {
+    let parts = find_body_parts(skeleton)?;
+    let rest = crate::grounding::legs::rest_positions(skeleton);
+    let hip = |leg: usize| {
+        let p = rest[parts.legs[leg].hip];
+        Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32)
+    };
+    let (a, b) = (hip(0), hip(1));
+    let across = if a.x > b.x { a - b } else { b - a };
+    let forward = across.cross(Vec3::Y);
+    Ok(Vec3::new(forward.x, 0.0, forward.z)
+        .try_normalize()
+        .unwrap_or(Vec3::Z))
+}
+
 /// Root-motion warping toward a [`Goal`] (see the module docs), one model frame at a time.
 #[derive(Debug, Clone)]
 pub struct Steering {
@@ -130,22 +153,8 @@ impl Steering {
         skeleton: &Skeleton,
         frame_time: f32,
     ) -> Result<Steering, crate::grounding::LegsError> {
-        let parts = find_body_parts(skeleton)?;
-        let rest = crate::grounding::legs::rest_positions(skeleton);
-        let hip = |leg: usize| {
-            let p = rest[parts.legs[leg].hip];
-            Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32)
-        };
-        // The first leg has the lower rest x; which one is the left is told by the rest pose's
-        // forward: H3.6M and most rigs face +z at rest with their left on +x.
-        let (a, b) = (hip(0), hip(1));
-        let across = if a.x > b.x { a - b } else { b - a };
-        let forward = across.cross(Vec3::Y);
-        let forward_rest = Vec3::new(forward.x, 0.0, forward.z)
-            .try_normalize()
-            .unwrap_or(Vec3::Z);
         Ok(Steering {
-            forward_rest,
+            forward_rest: rest_forward(skeleton)?,
             frame_time,
             goal: None,
             command: Vec2::ZERO,

@@ -13,8 +13,8 @@ use motion_core::formats::pose_bvh::poses_to_bvh;
 use motion_core::formats::FileFormat;
 use motion_core::grounding::GroundingConfig;
 use motion_core::limits::check_clip;
-use motion_core::matching::{Matcher, MatchingDatabase};
-use motion_core::model::{Character, Noise, WeightStore};
+use motion_core::matching::Matcher;
+use motion_core::model::{Character, MotionSource, Noise, WeightStore};
 use motion_core::pose::{Pose, PoseDecoder};
 use motion_core::resample::{resample_bvh, resampled_len};
 use motion_core::root::RootEncoding;
@@ -32,11 +32,18 @@ pub const DEFAULT_STEERED_SECONDS: f64 = 10.0;
 /// The longest `--seconds` asked for (a day).
 const MAX_SECONDS: f64 = 86_400.0;
 
-/// Whether `--model` names a motion-matching database (an unreadable file is left to the
-/// learned-model loader, which names the problem).
-pub(super) fn open_database(model: Option<&Path>) -> Option<WeightStore> {
+/// Whether `--model` names a source that plays on a rig: a motion-matching database, or a
+/// learned model whose file holds its rig (`skeleton: "rig"`). An unreadable file is left to
+/// the learned-model loader, which names the problem.
+pub(super) fn open_rig_source(model: Option<&Path>) -> Option<WeightStore> {
     let store = WeightStore::open(model?).ok()?;
-    motion_core::matching::is_database(&store).then_some(store)
+    let rig_model = store.metadata("config").is_some_and(|config| {
+        serde_json::from_str::<Value>(config)
+            .ok()
+            .and_then(|c| c.get("skeleton").and_then(Value::as_str).map(str::to_owned))
+            .is_some_and(|name| name == motion_core::model::config::RIG_SKELETON)
+    });
+    (motion_core::matching::is_database(&store) || rig_model).then_some(store)
 }
 
 /// `--seconds`, checked.
@@ -275,10 +282,17 @@ fn report(args: &Args, model: &str, kind: &str, done: &Written) -> anyhow::Resul
     Ok(())
 }
 
-/// `predict --model DB.safetensors`: the seed BVH (any rig) onto the database's rig, played
-/// on by a [`Matcher`] (along `--path` when given), written as BVH on the rig in its units.
-pub(super) fn run_database(args: &Args, store: &WeightStore) -> anyhow::Result<()> {
-    let what = "a motion-matching database";
+/// `predict --model FILE` of a source on a rig (a motion-matching database, or a learned model
+/// that holds its rig): the seed BVH (any rig) onto that rig, played on by a [`Matcher`] or a
+/// [`Character`] (along `--path` when given), written as BVH on the rig in its units.
+pub(super) fn run_rig_source(args: &Args, store: &WeightStore) -> anyhow::Result<()> {
+    let source = MotionSource::from_store(store)?;
+    let database = source.database().cloned();
+    let what = if database.is_some() {
+        "a motion-matching database"
+    } else {
+        "a model on a rig"
+    };
     check_steered_args(args, what)?;
     if FileFormat::from_path(&args.seed)? != FileFormat::Bvh {
         return Err(UsageError(format!(
@@ -287,31 +301,26 @@ pub(super) fn run_database(args: &Args, store: &WeightStore) -> anyhow::Result<(
         ))
         .into());
     }
-    if args.action.is_some() || args.classifier.is_some() {
+    if database.is_some() && (args.action.is_some() || args.classifier.is_some()) {
         return Err(UsageError(format!(
             "--action/--classifier: {what} has no actions; it plays its takes where --path steers"
         ))
         .into());
     }
-    let db = Arc::new(MatchingDatabase::from_store(store)?);
+    let skeleton = source.skeleton();
+    let mm_per_unit = source.rig_mm_per_unit();
     let path = path_of(args)?;
-    let fps = db.fps();
+    let fps = source.fps();
     let bvh = read_bvh(&args.seed)?;
-    let channels = db.skeleton().channel_count();
+    let channels = skeleton.channel_count();
     check_clip(
         resampled_len(bvh.frames.nrows(), bvh.fps(), fps),
         channels.max(bvh.skeleton.channel_count()),
         "give a shorter seed",
     )
     .map_err(|e| UsageError(format!("{}: {e}", args.seed.display())))?;
-    let mut seed = seed_poses_on_rig(
-        bvh,
-        db.skeleton(),
-        db.mm_per_unit(),
-        fps,
-        args.joint_map.as_deref(),
-    )
-    .map_err(|problem| UsageError(format!("{}: {problem}", args.seed.display())))?;
+    let mut seed = seed_poses_on_rig(bvh, &skeleton, mm_per_unit, fps, args.joint_map.as_deref())
+        .map_err(|problem| UsageError(format!("{}: {problem}", args.seed.display())))?;
     if let Some(end) = args.seed_end {
         if end == 0 || end > seed.len() {
             return Err(UsageError(format!(
@@ -328,18 +337,9 @@ pub(super) fn run_database(args: &Args, store: &WeightStore) -> anyhow::Result<(
     } else {
         GroundingConfig::default()
     };
-    let mut matcher = Matcher::with_grounding(db.clone(), grounding);
     let last = seed.last().expect("a seed has frames").clone();
     let start = Vec2::new(last.root_translation.x, last.root_translation.z);
-    let heading = matcher.heading_of(&last);
     let mut follower = path.as_ref().map(PathFollower::new);
-    if let Some(follower) = &mut follower {
-        matcher.set_goal(follower.goal(0.0, start, heading));
-    }
-    let first = matcher
-        .start(&seed)
-        .with_context(|| format!("{}", args.seed.display()))?
-        .clone();
     let frames = frames_to_make(args, fps, path.as_ref(), start, DEFAULT_STEERED_SECONDS);
     check_clip(
         seed.len() + frames,
@@ -347,15 +347,45 @@ pub(super) fn run_database(args: &Args, store: &WeightStore) -> anyhow::Result<(
         "ask for fewer --frames or --seconds",
     )
     .map_err(|e| UsageError(format!("--frames/--seconds: {e}")))?;
-    let poses = follow(&mut matcher, &first, follower.as_mut(), frames, fps)?;
+    let (heading, poses) = match database {
+        Some(db) => {
+            let mut matcher = Matcher::with_grounding(db, grounding);
+            let heading = matcher.heading_of(&last);
+            if let Some(follower) = &mut follower {
+                matcher.set_goal(follower.goal(0.0, start, heading));
+            }
+            let first = matcher
+                .start(&seed)
+                .with_context(|| format!("{}", args.seed.display()))?
+                .clone();
+            (
+                heading,
+                follow(&mut matcher, &first, follower.as_mut(), frames, fps)?,
+            )
+        }
+        None => {
+            let mut character = Character::with_grounding(source.clone(), grounding)?;
+            let heading = character.heading_of(&last);
+            if let Some(follower) = &mut follower {
+                character.set_goal(follower.goal(0.0, start, heading));
+            }
+            let first = character
+                .start_poses_with(&seed, args.action.as_deref(), Noise::Seed(args.rng_seed))
+                .with_context(|| format!("{}", args.seed.display()))?
+                .clone();
+            (
+                heading,
+                follow(&mut character, &first, follower.as_mut(), frames, fps)?,
+            )
+        }
+    };
     let from = if args.prediction_only { seed.len() } else { 0 };
     let all: Vec<Pose> = seed.into_iter().chain(poses).skip(from).collect();
-    let mm = bvh_of_poses(db.skeleton(), &all, fps)
-        .with_context(|| format!("{}", args.out.display()))?;
+    let mm =
+        bvh_of_poses(&skeleton, &all, fps).with_context(|| format!("{}", args.out.display()))?;
     let on_rig =
-        motion_core::seed::rescale_bvh(&mm, 1.0 / db.mm_per_unit()).map_err(anyhow::Error::msg)?;
+        motion_core::seed::rescale_bvh(&mm, 1.0 / mm_per_unit).map_err(anyhow::Error::msg)?;
     write_output(args, &on_rig)?;
-    let skeleton = db.skeleton();
     let done = Written {
         seed_frames: all.len() - frames,
         frames,
@@ -363,10 +393,15 @@ pub(super) fn run_database(args: &Args, store: &WeightStore) -> anyhow::Result<(
         start,
         heading,
         rig: format!(
-            "the database's rig: {} joints, root {}, {}",
+            "the {} rig: {} joints, root {}, {}",
+            if source.database().is_some() {
+                "database's"
+            } else {
+                "model's"
+            },
             skeleton.body_joint_names().len(),
             skeleton.joint(0).name,
-            unit_name(db.mm_per_unit())
+            unit_name(mm_per_unit)
         ),
         path: path.zip(follower),
         notices: Vec::new(),
@@ -379,7 +414,11 @@ pub(super) fn run_database(args: &Args, store: &WeightStore) -> anyhow::Result<(
             .unwrap_or(Path::new(""))
             .display()
             .to_string(),
-        "motion-matching",
+        if source.database().is_some() {
+            "motion-matching"
+        } else {
+            "learned"
+        },
         &done,
     )
 }
@@ -428,11 +467,6 @@ pub(super) fn run_model_path(args: &Args, job: &Job, model_name: &str) -> anyhow
     }
     let start = Vec2::new(first.root_translation.x, first.root_translation.z);
     let heading = character.heading_of(&first);
-    eprintln!(
-        "DEBUG first {:?} decoded {:?}",
-        first.root_translation,
-        seed_poses.last().unwrap().root_translation
-    );
     let mut follower = PathFollower::new(&path);
     let frames = frames_to_make(args, fps, Some(&path), start, DEFAULT_STEERED_SECONDS);
     let skeleton: Arc<Skeleton> = character.skeleton().clone();

@@ -1,6 +1,8 @@
 //! The `config` and `provenance` metadata of a motion-weights file (schema: weights/README.md).
+use crate::formats::bvh::parse_bvh;
 use crate::nn::GruConvention;
-use crate::skeleton::{H36M_ACTIONS, H36M_DIMS_USED, H36M_FRAME_DIMS};
+use crate::seed::rescale_bvh;
+use crate::skeleton::{Skeleton, H36M_ACTIONS, H36M_DIMS_USED, H36M_FRAME_DIMS};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -11,6 +13,11 @@ use super::{ArchConfig, Architecture};
 pub const FORMAT_NAME: &str = "motion-weights";
 /// The one `format_version` this crate reads.
 pub const FORMAT_VERSION: u32 = 1;
+/// The `skeleton` of a model on H3.6M's 32 joints.
+pub const H36M_SKELETON: &str = "h36m-32";
+/// The `skeleton` of a model on the rig its file holds (`rig_bvh`).
+pub const RIG_SKELETON: &str = "rig";
+
 /// The only derivative padding defined by the schema.
 pub const DERIVATIVE_PADDING: &str = "repeat-first";
 
@@ -46,8 +53,16 @@ pub struct ModelConfig {
     pub derivative_padding: String,
     /// Frame rate the model was trained at.
     pub fps: f64,
-    /// Skeleton name (`h36m-32`).
+    /// Skeleton name: `h36m-32` (H3.6M's 32 joints, 99 values per frame) or `rig` (the BVH
+    /// hierarchy in [`rig_bvh`](Self::rig_bvh), `3 + 3 * joints` values per frame, the root as
+    /// per-frame deltas: `motion_core::takes::training`'s layout).
     pub skeleton: String,
+    /// With `skeleton: "rig"`: the rig as BVH text (hierarchy in the rig file's units, one frame).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rig_bvh: Option<String>,
+    /// With `skeleton: "rig"`: millimetres per unit of [`rig_bvh`](Self::rig_bvh).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mm_per_unit: Option<f64>,
     /// Action labels in one-hot order (empty for unconditioned models). VGRU-d feeds the one-hot
     /// to its plan GRU, DAE-LSTM appends it to the first LSTM layer's input.
     #[serde(default)]
@@ -164,6 +179,7 @@ impl ModelConfig {
             ));
         }
         self.arch.validate(self)?;
+        self.skeleton()?;
         if !matches!(self.normalization.as_str(), "standard" | "min-max") {
             return Err(format!(
                 "normalization {:?} is neither \"standard\" nor \"min-max\"",
@@ -171,6 +187,57 @@ impl ModelConfig {
             ));
         }
         Ok(())
+    }
+
+    /// The skeleton the frames are on: H3.6M's, or the rig the file holds; its exp-map width
+    /// must be `frame_dims`.
+    ///
+    /// # Errors
+    /// An unknown skeleton name, a rig that is missing or unreadable, or a frame width that is
+    /// not the skeleton's.
+    pub fn skeleton(&self) -> Result<Skeleton, String> {
+        let skeleton = match self.skeleton.as_str() {
+            H36M_SKELETON => Skeleton::h36m(),
+            RIG_SKELETON => {
+                let text = self
+                    .rig_bvh
+                    .as_deref()
+                    .ok_or("skeleton \"rig\" without rig_bvh (the rig as BVH text)")?;
+                let mm = self.mm_per_unit.unwrap_or(1.0);
+                if !(mm.is_finite() && mm > 0.0) {
+                    return Err(format!("mm_per_unit {mm:e} is not a positive length"));
+                }
+                let rig = parse_bvh(text, Path::new("config.rig_bvh"))
+                    .map_err(|e| format!("rig_bvh: {e}"))?;
+                rescale_bvh(&rig, mm)
+                    .map_err(|e| format!("rig_bvh: {e}"))?
+                    .skeleton
+            }
+            other => {
+                return Err(format!(
+                    "unknown skeleton {other:?}: this crate knows \"{H36M_SKELETON}\" and \"{RIG_SKELETON}\" (a BVH rig in rig_bvh)"
+                ))
+            }
+        };
+        if skeleton.expmap_width() != self.frame_dims {
+            return Err(format!(
+                "frame_dims {} is not the {} skeleton's {} (3 + 3 per joint)",
+                self.frame_dims,
+                self.skeleton,
+                skeleton.expmap_width()
+            ));
+        }
+        Ok(skeleton)
+    }
+
+    /// Source frames each frame's root delta spans: H3.6M's deltas are per 50 Hz source frame
+    /// (2 at 25 Hz); a rig model's per frame (1).
+    pub fn root_step(&self) -> usize {
+        if self.skeleton == H36M_SKELETON {
+            ((crate::skeleton::H36M_SOURCE_FPS / self.fps).round() as usize).max(1)
+        } else {
+            1
+        }
     }
 
     /// Model output width `O` (= number of used dims).
@@ -207,7 +274,9 @@ impl ModelConfig {
             derivative_order: 0,
             derivative_padding: DERIVATIVE_PADDING.into(),
             fps: 25.0,
-            skeleton: "h36m-32".into(),
+            skeleton: H36M_SKELETON.into(),
+            rig_bvh: None,
+            mm_per_unit: None,
             actions: Vec::new(),
             seed_frames: 50,
             horizon: 100,
@@ -364,6 +433,8 @@ mod tests {
             derivative_padding: DERIVATIVE_PADDING.into(),
             fps: 25.0,
             skeleton: "h36m-32".into(),
+            rig_bvh: None,
+            mm_per_unit: None,
             actions: vec!["walking".into()],
             seed_frames: 50,
             horizon: 100,

@@ -38,6 +38,9 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
+pub mod training;
+pub use training::{write_training_folder, TrainingManifest};
+
 use glam::{DQuat, Quat, Vec2, Vec3};
 use ndarray::Array2;
 
@@ -240,6 +243,41 @@ pub fn bvh_files(dir: &Path) -> Result<Vec<PathBuf>, TakesError> {
     }
     files.sort();
     Ok(files)
+}
+
+/// `files` (takes of `dir`) without those named in `exclude` (file names without `.bvh`, blank
+/// entries ignored), and the names left out, each once.
+///
+/// # Errors
+/// A name that no file of `files` has.
+pub fn exclude_takes(
+    dir: &Path,
+    files: Vec<PathBuf>,
+    exclude: &[String],
+) -> Result<(Vec<PathBuf>, Vec<String>), TakesError> {
+    let stem = |p: &PathBuf| {
+        p.file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default()
+    };
+    let mut excluded: Vec<String> = Vec::new();
+    for name in exclude.iter().map(|n| n.trim()).filter(|n| !n.is_empty()) {
+        let name = name.strip_suffix(".bvh").unwrap_or(name);
+        if !files.iter().any(|f| stem(f) == name) {
+            return Err(TakesError::Options(format!(
+                "--exclude {name}: {} holds no take {name}.bvh",
+                dir.display()
+            )));
+        }
+        if !excluded.iter().any(|e| e == name) {
+            excluded.push(name.to_string());
+        }
+    }
+    let files = files
+        .into_iter()
+        .filter(|f| !excluded.contains(&stem(f)))
+        .collect();
+    Ok((files, excluded))
 }
 
 /// Reads every BVH take of `dir` onto one rig (see the module docs).
