@@ -23,6 +23,7 @@
 //!
 //! The predictions can be kept ([`EvalOptions::save_predictions`]), written piece by piece
 //! ([`motion_core::formats::npy_stream`]).
+pub mod posture;
 pub mod published;
 pub mod report;
 pub mod selection;
@@ -30,7 +31,7 @@ pub mod selection;
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use ndarray::{s, Array3, Array4};
+use ndarray::{s, Array3, Array4, ArrayView2};
 
 use motion_core::formats::expmap_bvh::ExpMapTarget;
 use motion_core::formats::npy_stream::NpyStream;
@@ -47,6 +48,8 @@ use motion_core::skeleton::{H36M_FRAME_DIMS, H36M_PROTOCOL_FPS};
 use motion_core::FormatError;
 
 use crate::error::MetricError;
+use crate::posture::PostureReference;
+use posture::{action_posture, action_posture_reference, windows_posture, PostureWindow};
 use crate::ndms::NdmsReport;
 use crate::plausibility::reference::ReferenceError;
 use crate::plausibility::{
@@ -297,6 +300,9 @@ pub fn evaluate(
         drop(others);
         let reference = action_reference(dataset, action)
             .map_err(|source| EvalError::Reference { action, source })?;
+        let (posture_reference, real_vs_real) =
+            action_posture_reference(dataset, action, TEST_SUBJECT)
+                .map_err(|source| EvalError::Reference { action, source })?;
 
         progress(stage("predicting"));
         let predictions = predict(
@@ -320,10 +326,48 @@ pub fn evaluate(
             .iter()
             .map(|w| (w.root_before, w.seed.view(), w.ground_truth.view()))
             .collect();
+        let (grounded, grounded_clips) =
+            grounded_plausibility(&truth, &predictions, action, &reference)?;
+        let posture_of = |clips: &[(Option<RootPose>, ArrayView2<'_, f64>, usize)]| {
+            windows_posture(&posture_reference, clips, H36M_PROTOCOL_FPS).map_err(|source| {
+                EvalError::Metric {
+                    what: format!("{action}: posture"),
+                    source,
+                }
+            })
+        };
+        let real_clips: Vec<ndarray::Array2<f64>> = real_pairs
+            .iter()
+            .map(|(_, seed, motion)| {
+                ndarray::concatenate(ndarray::Axis(0), &[*seed, *motion]).expect("same width")
+            })
+            .collect();
+        let posture = action_posture(
+            &posture_reference,
+            real_vs_real,
+            [
+                posture_of(
+                    &grounded_clips
+                        .iter()
+                        .map(|(c, n)| (None, c.view(), *n))
+                        .collect::<Vec<_>>(),
+                )?,
+                prediction_posture(&truth, &predictions, &posture_reference, action)?,
+                prediction_posture(&truth, &baseline, &posture_reference, action)?,
+                posture_of(
+                    &real_clips
+                        .iter()
+                        .zip(&real_pairs)
+                        .map(|(c, (root, seed, _))| (*root, c.view(), seed.nrows()))
+                        .collect::<Vec<_>>(),
+                )?,
+            ],
+        );
+        drop(grounded_clips);
         let mut measured = Plausibility {
             classifier: None,
             model: plausibility_of(&truth, &predictions, &reference, "the model's predictions")?,
-            grounded: grounded_plausibility(&truth, &predictions, action, &reference)?,
+            grounded,
             zero_velocity: plausibility_of(&truth, &baseline, &reference, "zero-velocity")?,
             real: PlausibilityReport::new(&measure(&real_pairs, action)?, horizon, &reference),
         };
@@ -359,6 +403,7 @@ pub fn evaluate(
             horizon,
         );
         result.ground_truth.real_motion_ndms = real_motion_ndms.as_ref().map(ndms_scores);
+        result.posture = Some(posture);
         results.push(result);
     }
     let saved = match (saver, &options.save_predictions) {
@@ -552,7 +597,7 @@ fn grounded_plausibility(
     predictions: &Array4<f64>,
     action: &'static str,
     reference: &ActionReference,
-) -> Result<PlausibilityReport, EvalError> {
+) -> Result<(PlausibilityReport, Vec<(ndarray::Array2<f64>, usize)>), EvalError> {
     let (_, samples, horizon, _) = predictions.dim();
     let mut clips = Vec::with_capacity(truth.windows().len() * samples);
     for (w, window) in truth.windows().iter().enumerate() {
@@ -589,7 +634,43 @@ fn grounded_plausibility(
             what: "the grounded predictions".to_string(),
             source,
         })?;
-    Ok(PlausibilityReport::new(&measured, horizon, reference))
+    Ok((PlausibilityReport::new(&measured, horizon, reference), clips))
+}
+
+/// The posture windows of `8 x K x horizon x 99` predictions after their windows' seeds.
+fn prediction_posture(
+    truth: &ActionTruth,
+    predictions: &Array4<f64>,
+    reference: &PostureReference,
+    action: &'static str,
+) -> Result<Vec<PostureWindow>, EvalError> {
+    let samples = predictions.dim().1;
+    let clips: Vec<ndarray::Array2<f64>> = truth
+        .windows()
+        .iter()
+        .enumerate()
+        .flat_map(|(w, window)| {
+            (0..samples).map(move |k| {
+                ndarray::concatenate(
+                    ndarray::Axis(0),
+                    &[window.seed.view(), predictions.slice(s![w, k, .., ..])],
+                )
+                .expect("same width")
+            })
+        })
+        .collect();
+    let views: Vec<_> = clips
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let window = &truth.windows()[i / samples];
+            (window.root_before, c.view(), window.seed.nrows())
+        })
+        .collect();
+    windows_posture(reference, &views, H36M_PROTOCOL_FPS).map_err(|source| EvalError::Metric {
+        what: format!("{action}: posture"),
+        source,
+    })
 }
 
 fn coverage_report(coverage: Coverage) -> CoverageReport {
@@ -696,6 +777,7 @@ fn action_result(
             real_motion_ndms: None, // set by the caller: the other subjects' takes
         },
         published: published::for_action(planned.action),
+        posture: None, // set by the caller
     }
 }
 
@@ -769,5 +851,6 @@ const METHOD: Method = Method {
     mean_joint_speed_last_1s: "mean displacement per 25 Hz frame (mm) of the 12 NDMS joints over the last 25 frame steps; world = with the root trajectory, pose = root deltas zeroed (body motion only)",
     zero_velocity: "the last seed pose repeated with the root held (root deltas 0: no translation, no turning); its joint angles are the protocol's repeated last frame, so its Euler error and NPSS are Gopalakrishnan et al. 2019 Table 6's zero-velocity baseline",
     ground_truth_coverage: "horizons past 100 frames: a window's ground truth ends with its S5 file; Euler error per frame = mean over the windows covering the frame (dims chosen over each window's covered frames); NPSS whole over the frames all windows cover (npss_whole_frames), each NPSS window over the windows covering it completely (npss_windows); windows_per_second = windows covering each second of the horizon",
+    posture: "posture realism (motion_metrics::posture: Fréchet distance of body-frame pose features, upper-arm and thigh elevation histogram EMD, share of frames with an upper arm above the real p99) per plausibility window, the frames after the seed of all 8 x K sequences pooled per window, against the action's takes of S1, S6, S7, S8, S9, S11 from frame 50; real_vs_real = the test subject S5's takes of the action (from frame 50) against the same reference",
     plausibility: "speed_ratio, drift, foot_contact (motion_metrics::plausibility) per window 0-2, 2-4, 4-8, 8-12 s for model (all 8 x K), zero_velocity and ground_truth (the real continuation; each window counts the test windows whose file covers it); speed reference = mean root-frame joint speed over the action's S5 files; drift p95 over real 12 s windows of the action, every subject, seeded by the 50 frames before each",
 };

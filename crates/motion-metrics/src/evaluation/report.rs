@@ -81,6 +81,8 @@ pub struct Protocol {
 /// How each number is computed, in words (one sentence per key).
 #[derive(Debug, Clone, Serialize)]
 pub struct Method {
+    /// Posture realism and its reference.
+    pub posture: &'static str,
     /// How samples are combined per metric.
     pub samples: &'static str,
     /// The two NPSS variants.
@@ -129,6 +131,9 @@ pub struct ActionResult {
     pub ground_truth: GroundTruth,
     /// Every published number for the action.
     pub published: published::ForAction,
+    /// Posture realism per window (model grounded and raw, zero-velocity, real continuation)
+    /// and the real-vs-real value.
+    pub posture: Option<super::posture::ActionPosture>,
 }
 
 /// How much of the horizon the test windows' ground truth covers.

@@ -515,6 +515,11 @@ impl PostureReference {
         })
     }
 
+    /// The real p99 of the per-frame higher upper-arm elevation (degrees).
+    pub fn arm_p99_deg(&self) -> f64 {
+        self.arm_p99_deg
+    }
+
     /// The real frames' statistics.
     pub fn stats(&self) -> &PostureStats {
         &self.stats

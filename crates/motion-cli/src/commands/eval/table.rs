@@ -224,7 +224,7 @@ fn plausibility_rows(a: &ActionResult) -> String {
         _ => String::new(),
     };
     format!(
-        "{classifier}{}{}",
+        "{classifier}{}{}{}",
         super::super::plausibility::comparison_rows(
             &a.model.plausibility.0,
             &a.zero_velocity.plausibility.0,
@@ -234,8 +234,57 @@ fn plausibility_rows(a: &ActionResult) -> String {
             &a.model.plausibility.0,
             &a.model_grounded.0,
             &a.ground_truth.plausibility.0,
-        )
+        ),
+        posture_rows(a)
     )
+}
+
+/// The posture-realism rows of one action (`motion_metrics::posture`): per window, the Fréchet
+/// distance and the share of frames with an upper arm above the real p99, for the model raw
+/// and grounded, zero-velocity and the real continuation, under the real-vs-real values.
+fn posture_rows(a: &ActionResult) -> String {
+    let Some(p) = &a.posture else {
+        return String::new();
+    };
+    let real = p.real_vs_real.map_or("no S5 takes".to_string(), |r| {
+        format!(
+            "Fréchet {:.3}, arm EMD {:.1} deg, arms above p99 {:.2}",
+            r.frechet, r.arm_elevation_emd_deg, r.arms_above_real_p99
+        )
+    });
+    let mut out = format!(
+        "  posture (real vs real, S5 takes: {real}; real arm p99 {:.0} deg)\n  {:<28} {:>8} {:>9} {:>9} {:>8}\n",
+        p.real_arm_elevation_p99_deg, "", "model", "grounded", "zero-vel", "real"
+    );
+    type Pick = fn(&motion_metrics::evaluation::posture::PostureSummary) -> f64;
+    let rows: [(&str, Pick, usize); 2] = [
+        ("Fréchet", |s| s.frechet, 3),
+        ("arms above p99", |s| s.arms_above_real_p99, 2),
+    ];
+    for (label, pick, decimals) in rows {
+        for (i, w) in p.model.iter().enumerate() {
+            if w.posture.is_none() {
+                continue;
+            }
+            let at = |ws: &[motion_metrics::evaluation::posture::PostureWindow]| {
+                ws.get(i)
+                    .and_then(|w| w.posture.as_ref())
+                    .map(|s| format!("{:.*}", decimals, pick(s)))
+                    .unwrap_or_else(|| "-".into())
+            };
+            let line = format!(
+                "  {:<28} {:>8} {:>9} {:>9} {:>8}",
+                format!("{label} {} s", w.window),
+                at(&p.model),
+                at(&p.model_grounded),
+                at(&p.zero_velocity),
+                at(&p.ground_truth)
+            );
+            out.push_str(line.trim_end());
+            out.push('\n');
+        }
+    }
+    out
 }
 
 /// The report as text.
