@@ -48,19 +48,19 @@ use motion_core::skeleton::{H36M_FRAME_DIMS, H36M_PROTOCOL_FPS};
 use motion_core::FormatError;
 
 use crate::error::MetricError;
-use crate::posture::PostureReference;
-use posture::{action_posture, action_posture_reference, windows_posture, PostureWindow};
 use crate::ndms::NdmsReport;
 use crate::plausibility::reference::ReferenceError;
 use crate::plausibility::{
     action_reference, measure_sequences_after, measure_sequences_in_floor_frame, ActionReference,
     SequenceMeasures, MAX_HORIZON_FRAMES,
 };
+use crate::posture::PostureReference;
 use crate::protocol::{ActionTruth, Coverage, NpssScores, ProtocolError, Scores, Speed};
 use crate::{
     classifier_curve_pairs, classifier_protocol, euler_error_at_horizons, protocol_hop,
     ClassifierCurve, PlausibilityReport,
 };
+use posture::{action_posture, action_posture_reference, windows_posture, PostureWindow};
 use report::{
     ActionResult, ActionScores, CoverageReport, EvalReport, GroundTruth, Means, MeansOverActions,
     Method, ModelInfo, NdmsScores, NpssReport, PlausibilityKeys, Protocol, RealMotionMeans,
@@ -634,7 +634,10 @@ fn grounded_plausibility(
             what: "the grounded predictions".to_string(),
             source,
         })?;
-    Ok((PlausibilityReport::new(&measured, horizon, reference), clips))
+    Ok((
+        PlausibilityReport::new(&measured, horizon, reference),
+        clips,
+    ))
 }
 
 /// The posture windows of `8 x K x horizon x 99` predictions after their windows' seeds.

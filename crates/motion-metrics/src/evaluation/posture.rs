@@ -85,14 +85,12 @@ pub fn action_posture_reference(
     let real = match h36m_take_positions(dataset, action, &[test_subject]) {
         Ok(takes) => {
             let views: Vec<_> = takes.iter().map(|(_, p)| p.view()).collect();
-            Some(
-                reference
-                    .measure(&views)
-                    .map_err(|source| crate::plausibility::ReferenceError::Metric {
-                        path: dataset.to_path_buf(),
-                        source,
-                    })?,
-            )
+            Some(reference.measure(&views).map_err(|source| {
+                crate::plausibility::ReferenceError::Metric {
+                    path: dataset.to_path_buf(),
+                    source,
+                }
+            })?)
         }
         Err(crate::plausibility::ReferenceError::NoData { .. }) => None,
         Err(e) => return Err(e),
@@ -173,3 +171,48 @@ pub fn action_posture(
     }
 }
 
+/// Posture realism of any H3.6M predictions of `action` ([`score_posture`]): per window after
+/// the seed, beside the real-vs-real value.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PostureScore {
+    /// The action whose takes are the reference.
+    pub action: String,
+    /// The subjects whose takes make the reference.
+    pub reference_subjects: Vec<&'static str>,
+    /// Real frames in the reference.
+    pub reference_frames: usize,
+    /// The real p99 of the higher upper arm's elevation (degrees).
+    pub real_arm_elevation_p99_deg: f64,
+    /// The test subject's (S5) takes against the reference (`None`: none in the data).
+    pub real_vs_real: Option<PostureSummary>,
+    /// The predictions, per window after the seed (cut at their length).
+    pub windows: Vec<PostureWindow>,
+}
+
+/// Posture realism of `clips` (25 Hz H3.6M exp-map clips, each with the absolute root pose of
+/// the frame before it, `None`: integrated from the identity, and the number of its frames that
+/// are seed) against `action`'s reference in `dataset`: what `motion-cli score --metric posture`
+/// and Python's `motion.posture` report.
+///
+/// # Errors
+/// No data for the action; a clip the measure rejects.
+pub fn score_posture(
+    dataset: &std::path::Path,
+    action: &str,
+    clips: &[(Option<RootPose>, ArrayView2<'_, f64>, usize)],
+) -> Result<PostureScore, crate::plausibility::ReferenceError> {
+    let (reference, real_vs_real) = action_posture_reference(dataset, action, "S5")?;
+    let windows = windows_posture(&reference, clips, motion_core::skeleton::H36M_PROTOCOL_FPS)
+        .map_err(|source| crate::plausibility::ReferenceError::Metric {
+            path: dataset.to_path_buf(),
+            source,
+        })?;
+    Ok(PostureScore {
+        action: action.to_string(),
+        reference_subjects: REFERENCE_SUBJECTS.to_vec(),
+        reference_frames: reference.stats().frames(),
+        real_arm_elevation_p99_deg: reference.arm_p99_deg(),
+        real_vs_real,
+        windows,
+    })
+}

@@ -41,6 +41,7 @@ pub fn compute(
         euler_error_ms: None,
         foot_contact: None,
         frames,
+        posture: None,
         input_space: *space,
         ndms: None,
         npss: None,
@@ -91,6 +92,13 @@ pub fn compute(
         let curve = score_classifier(&classifier, action, pred, seed.as_ref())?;
         report.action = Some(action.to_string());
         report.classifier = Some(curve);
+    }
+    if metrics.contains(&Metric::Posture) {
+        let action = action.expect("checked by the caller");
+        let dataset = motion_metrics::evaluation::resolve_dataset(args.data.as_deref())
+            .map_err(|e| super::super::UsageError(e.to_string()))?;
+        report.action = Some(action.to_string());
+        report.posture = Some(score_posture(&dataset, action, pred, seed.as_ref())?);
     }
     if metrics.iter().any(|m| m.is_plausibility()) {
         let (action, seed) = (
@@ -467,4 +475,54 @@ fn score_plausibility(
         .collect();
     let measures = super::super::plausibility::measure(&pairs, &pred.what)?;
     Ok(super::super::plausibility::report(&measures, t, &reference))
+}
+
+// ---------- posture realism ----------
+
+/// Posture realism of every prediction sample after its sequence's seed (when given).
+fn score_posture(
+    dataset: &Path,
+    action: &str,
+    pred: &Batch,
+    seed: Option<&Batch>,
+) -> Result<motion_metrics::evaluation::posture::PostureScore> {
+    for batch in std::iter::once(pred).chain(seed) {
+        if batch.joints.is_some() || batch.data.dim().3 != H36M_FRAME_DIMS {
+            return Err(usage(format!(
+                "posture reads H3.6M exp-map frames (99 dims, 25 Hz); {} has shape {:?}",
+                batch.what,
+                batch.data.shape()
+            )));
+        }
+    }
+    let (n, s, _, _) = pred.data.dim();
+    if let Some(seed) = seed {
+        if seed.data.dim().0 != n || seed.has_samples {
+            return Err(usage(format!(
+                "--seed {} must hold one sequence per --pred sequence ({n}); found shape {:?}",
+                seed.what,
+                seed.data.shape()
+            )));
+        }
+    }
+    let clips: Vec<(ndarray::Array2<f64>, usize)> = (0..n)
+        .flat_map(|i| (0..s).map(move |k| (i, k)))
+        .map(|(i, k)| {
+            let motion = pred.data.slice(s![i, k, .., ..]);
+            match seed {
+                Some(seed) => {
+                    let seed = seed.data.slice(s![i, 0, .., ..]);
+                    (
+                        ndarray::concatenate(ndarray::Axis(0), &[seed, motion])
+                            .expect("same width"),
+                        seed.nrows(),
+                    )
+                }
+                None => (motion.to_owned(), 0),
+            }
+        })
+        .collect();
+    let views: Vec<_> = clips.iter().map(|(c, n)| (None, c.view(), *n)).collect();
+    motion_metrics::evaluation::posture::score_posture(dataset, action, &views)
+        .map_err(|e| usage(format!("posture: {e}")))
 }

@@ -73,6 +73,12 @@ percentile over real 12 s windows of the action (every subject) and the fraction
 within it;
   foot_contact  fraction of frames with both feet (ankle and toe joints) more than 100 mm above \
 the seed's lowest foot joint.
+Posture realism (--metric posture --action NAME, H3.6M exp-map frames at 25 Hz; definitions in \
+motion_metrics::posture): per window after the seed (0-2, 2-4, 4-8, 8-12, 12-20 ... 50-60 s, cut at \
+the horizon), the Fréchet distance of body-frame pose features, the upper-arm and thigh elevation \
+histograms' EMD and the share of frames with an upper arm above the real p99, against the action's \
+takes of S1, S6-S9, S11 (from frame 50); beside them the real-vs-real values of the test subject \
+S5's takes. --seed or --seed-frames places the windows after the seed (else from the first frame).
 The reference statistics are read from the H3.6M data (--data, $MOTION_DATA_DIR, ../shared/data). \
 The seed gives the drift's starting frame and the floor of foot_contact: --seed holds one \
 sequence (N x T_s x 99) per --pred sequence, e.g. the 50 frames `predict` was seeded with.
@@ -81,6 +87,7 @@ Examples:
   motion-cli score --gt gt.npy --pred pred.npy --metric npss,euler --json
   motion-cli score --pred pred.npy --seed seed.npy --action walking --metric classifier --plot walking.svg
   motion-cli score --pred pred.npy --seed seed.npy --action walking --metric speed_ratio,drift,foot_contact
+  motion-cli score --pred pred.bvh --seed-frames 50 --action walking --metric posture
   motion-cli score --pred pred.npy --seed seed.npy --db S5/walking_1.txt.gz --action walking   # all
 
 Exit status 2 for bad input (unreadable file, shapes, unknown action or metric, missing data).";
@@ -97,8 +104,8 @@ pub struct Args {
     #[arg(long, required = true, num_args = 1..)]
     pub pred: Vec<PathBuf>,
     /// Comma list of npss, npss-reference, euler, ndms, apd, classifier, speed_ratio, drift,
-    /// foot_contact, or all (= every metric the inputs allow; classifier when --action is given,
-    /// the last three when --action and --seed are given).
+    /// foot_contact, posture, or all (= every metric the inputs allow; classifier and posture
+    /// when --action is given, speed_ratio, drift and foot_contact when --action and --seed are).
     #[arg(
         long,
         value_enum,
@@ -181,11 +188,13 @@ pub enum Metric {
     /// Fraction of frames with both feet off the floor.
     #[value(name = "foot_contact", alias = "foot-contact")]
     FootContact,
+    /// Posture realism against the action's real takes (motion_metrics::posture).
+    Posture,
     /// Every metric the inputs allow.
     All,
 }
 
-const ALL_METRICS: [Metric; 9] = [
+const ALL_METRICS: [Metric; 10] = [
     Metric::Npss,
     Metric::NpssReference,
     Metric::Euler,
@@ -195,6 +204,7 @@ const ALL_METRICS: [Metric; 9] = [
     Metric::SpeedRatio,
     Metric::Drift,
     Metric::FootContact,
+    Metric::Posture,
 ];
 
 impl Metric {
@@ -209,6 +219,7 @@ impl Metric {
             Metric::SpeedRatio => "speed_ratio",
             Metric::Drift => "drift",
             Metric::FootContact => "foot_contact",
+            Metric::Posture => "posture",
             Metric::All => "all",
         }
     }
@@ -278,7 +289,7 @@ fn chosen_metrics(
         Metric::Npss | Metric::NpssReference | Metric::Euler => gt.is_some(),
         Metric::Ndms => !args.db.is_empty(),
         Metric::Apd => pred.has_samples,
-        Metric::Classifier => action.is_some(),
+        Metric::Classifier | Metric::Posture => action.is_some(),
         m if m.is_plausibility() => action.is_some() && seed.is_some(),
         _ => unreachable!("every metric is listed"),
     };
@@ -291,6 +302,7 @@ fn chosen_metrics(
                         Metric::Ndms => "--db reference sequences",
                         Metric::Apd => "samples in --pred (N x S x T x D)",
                         Metric::Classifier => "--action NAME (the action whose probability is reported)",
+                        Metric::Posture => "--action NAME (the action whose real takes are the reference)",
                         m if m.is_plausibility() && action.is_none() => {
                             "--action NAME (the action whose real data is the reference)"
                         }

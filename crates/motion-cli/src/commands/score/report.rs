@@ -42,6 +42,9 @@ pub struct ScoreReport {
     pub foot_contact: Option<FootContactReport>,
     /// Frames per prediction.
     pub frames: usize,
+    /// Posture realism per window after the seed (when asked for).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub posture: Option<motion_metrics::evaluation::posture::PostureScore>,
     /// How the numbers were read.
     pub input_space: InputSpace,
     /// NDMS against the `--db` words.
@@ -165,6 +168,9 @@ pub fn human_table(report: &ScoreReport) -> String {
         report.frames,
         report.input_space.name()
     ));
+    if let Some(p) = &report.posture {
+        out.push_str(&posture_rows(p));
+    }
     let windows = report.npss_windows.as_ref();
     for (value, per_window, label) in [
         (
@@ -286,4 +292,38 @@ mod tests {
             "{table}"
         );
     }
+}
+
+/// The posture rows of `score` (per window after the seed, under the real-vs-real values).
+fn posture_rows(p: &motion_metrics::evaluation::posture::PostureScore) -> String {
+    let mut out = format!(
+        "posture realism against {} takes of {} ({} frames; real arm p99 {:.0} deg)\n",
+        p.action,
+        p.reference_subjects.join(", "),
+        p.reference_frames,
+        p.real_arm_elevation_p99_deg
+    );
+    out.push_str(&format!(
+        "  {:<20} {:>9} {:>13} {:>15} {:>15}\n",
+        "", "Fréchet", "arm EMD deg", "thigh EMD deg", "arms above p99"
+    ));
+    let mut line = |label: &str, s: &motion_metrics::evaluation::posture::PostureSummary| {
+        out.push_str(&format!(
+            "  {:<20} {:>9.3} {:>13.1} {:>15.1} {:>15.2}\n",
+            label,
+            s.frechet,
+            s.arm_elevation_emd_deg,
+            s.thigh_elevation_emd_deg,
+            s.arms_above_real_p99
+        ));
+    };
+    if let Some(real) = &p.real_vs_real {
+        line("real vs real (S5)", real);
+    }
+    for w in &p.windows {
+        if let Some(s) = &w.posture {
+            line(&format!("{} s", w.window), s);
+        }
+    }
+    out
 }
