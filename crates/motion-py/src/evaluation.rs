@@ -17,6 +17,7 @@ use crate::model::{BuiltIn, Model};
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(evaluate, m)?)?;
+    m.add_function(wrap_pyfunction!(posture, m)?)?;
     Ok(())
 }
 
@@ -106,4 +107,95 @@ fn builtin_classifier() -> PyResult<Option<Arc<ActionClassifier>>> {
         Some(Err(e)) => Err(weights(e)),
         None => Ok(None),
     }
+}
+
+/// Posture realism (`motion_metrics::posture`) of H3.6M predictions of `action`: `predictions`
+/// (`T x 99`, `N x T x 99` or `N x S x T x 99` exp-map frames at 25 Hz), each after its seed in
+/// `seeds` (`N x T_s x 99`, one per sequence; `None`: windows from the first frame), measured per
+/// window after the seed (0-2 s ... 50-60 s) against the action's takes of S1, S6-S9 and S11 in
+/// `data`, beside the real-vs-real value of S5's takes. Returns the dict `motion-cli score
+/// --metric posture --json` prints under `posture`.
+#[pyfunction]
+#[pyo3(signature = (predictions, action, seeds = None, data = None))]
+fn posture<'py>(
+    py: Python<'py>,
+    predictions: &Bound<'py, PyAny>,
+    action: &str,
+    seeds: Option<&Bound<'py, PyAny>>,
+    data: Option<PathBuf>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let bad = |m: String| pyo3::exceptions::PyValueError::new_err(m);
+    let pred = crate::arrays::f64_array(predictions, "predictions")?;
+    let pred = pred.as_array();
+    let pred = match pred.ndim() {
+        2 => pred
+            .insert_axis(ndarray::Axis(0))
+            .insert_axis(ndarray::Axis(0)),
+        3 => pred.insert_axis(ndarray::Axis(1)),
+        4 => pred,
+        _ => {
+            return Err(bad(format!(
+                "predictions: shape {:?}, expected T x 99, N x T x 99 or N x S x T x 99",
+                pred.shape()
+            )))
+        }
+    }
+    .into_dimensionality::<ndarray::Ix4>()
+    .map_err(|e| bad(e.to_string()))?;
+    let (n, s, _, d) = pred.dim();
+    if d != motion_core::skeleton::H36M_FRAME_DIMS {
+        return Err(bad(format!(
+            "predictions: {d} values per frame, posture reads 99-dim H3.6M exp-map frames"
+        )));
+    }
+    let seed_array = seeds
+        .map(|s| crate::arrays::f64_array(s, "seeds"))
+        .transpose()?;
+    let seed_view = match &seed_array {
+        Some(a) => {
+            let v = a.as_array();
+            let v = if v.ndim() == 2 {
+                v.insert_axis(ndarray::Axis(0))
+            } else {
+                v
+            };
+            let v = v
+                .into_dimensionality::<ndarray::Ix3>()
+                .map_err(|e| bad(format!("seeds: {e}")))?;
+            if v.dim().0 != n || v.dim().2 != d {
+                return Err(bad(format!(
+                    "seeds: shape {:?}, expected {n} x T_s x {d}",
+                    v.shape()
+                )));
+            }
+            Some(v)
+        }
+        None => None,
+    };
+    let clips: Vec<(ndarray::Array2<f64>, usize)> = (0..n)
+        .flat_map(|i| (0..s).map(move |k| (i, k)))
+        .map(|(i, k)| {
+            let motion = pred.slice(ndarray::s![i, k, .., ..]);
+            match &seed_view {
+                Some(seed) => {
+                    let seed = seed.slice(ndarray::s![i, .., ..]);
+                    (
+                        ndarray::concatenate(ndarray::Axis(0), &[seed, motion])
+                            .expect("same width"),
+                        seed.nrows(),
+                    )
+                }
+                None => (motion.to_owned(), 0),
+            }
+        })
+        .collect();
+    let dataset = resolve_dataset(data.as_deref()).map_err(eval_error)?;
+    let report = py
+        .detach(|| {
+            let views: Vec<_> = clips.iter().map(|(c, n)| (None, c.view(), *n)).collect();
+            motion_metrics::evaluation::posture::score_posture(&dataset, action, &views)
+        })
+        .map_err(value)?;
+    let json = serde_json::to_string(&report).map_err(value)?;
+    py.import("json")?.call_method1("loads", (json,))
 }

@@ -45,3 +45,24 @@ def test_evaluate_refuses_bad_requests():
         motion.evaluate(data=ROOT, horizon=0)
     with pytest.raises(ValueError, match="no H3.6M exp-map data|does not exist"):
         motion.evaluate(data=ROOT / "no-such-dir")
+
+
+def test_posture_is_the_cli_score(cli, tmp_path):
+    if not (DATA / "h3.6m" / "dataset" / "S5").is_dir():
+        pytest.skip(f"SKIPPED: no H3.6M data at {DATA}")
+    import numpy as np
+
+    seed = motion.read_expmap(DATA / "h3.6m" / "dataset" / "S5" / "walking_1.txt.gz")[::2][:150]
+    pred, truth = seed[100:], seed[:100]
+    np.save(tmp_path / "pred.npy", pred[None])
+    np.save(tmp_path / "seed.npy", truth[None])
+    ours = motion.posture(pred[None], "walking", seeds=truth[None], data=DATA)
+    theirs = cli(
+        "score", "--pred", tmp_path / "pred.npy", "--seed", tmp_path / "seed.npy", "--action", "walking",
+        "--metric", "posture", "--data", DATA, "--json",
+    )["posture"]  # fmt: skip
+    assert ours == theirs
+    assert ours["windows"][0]["window"] == "0-2" and ours["windows"][0]["posture"]["frames"] == 50
+    assert ours["real_vs_real"]["frechet"] < 2.0
+    with pytest.raises(ValueError, match="99"):
+        motion.posture(np.zeros((10, 3)), "walking", data=DATA)

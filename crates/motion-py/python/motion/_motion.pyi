@@ -60,6 +60,17 @@ class NdmsDatabase:
     ) -> dict[str, Any]:
         """``{"mean", "per_word", "bins", "first_word_end"}`` of the forecasts' NDMS."""
 
+def posture(
+    predictions: ArrayLike,
+    action: str,
+    seeds: Optional[ArrayLike] = None,
+    data: Optional[Path] = None,
+) -> dict[str, Any]:
+    """Posture realism of H3.6M predictions (``T x 99``, ``N x T x 99`` or ``N x S x T x 99`` exp-map frames at
+    25 Hz) of ``action`` per window after their seeds (``N x T_s x 99``), against the action's real takes,
+    beside the real-vs-real value: the ``posture`` of ``motion-cli score --metric posture --json``."""
+    ...
+
 def evaluate(
     model: Optional["Model"] = None,
     data: Optional[Path] = None,
