@@ -124,6 +124,19 @@ fn text_summary(model: &MotionModel) -> String {
             c.skeleton
         ),
     );
+    if c.skeleton == motion_core::model::config::RIG_SKELETON {
+        let rig = model.skeleton();
+        line(
+            "rig",
+            format!(
+                "{} joints ({} with End Sites), root {}, written in {} (the file holds it as BVH; poses and BVH output are on it)",
+                rig.body_joint_names().len(),
+                rig.len(),
+                rig.joint(0).name,
+                motion_core::takes::unit_name(c.mm_per_unit.unwrap_or(1.0))
+            ),
+        );
+    }
     line("fps", format!("{}", c.fps));
     line(
         "actions",

@@ -442,6 +442,36 @@ mod tests {
     }
 
     #[test]
+    fn unknown_skeletons_and_rigs_that_do_not_fit_are_refused() {
+        let mut c = vgru();
+        c.skeleton = "cmu".into();
+        assert!(c
+            .validate()
+            .unwrap_err()
+            .contains("unknown skeleton \"cmu\""));
+        c.skeleton = RIG_SKELETON.into();
+        assert!(c.validate().unwrap_err().contains("without rig_bvh"));
+        let rig = "HIERARCHY\nROOT hips\n{\n OFFSET 0 0 0\n CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n JOINT knee\n {\n  OFFSET 0 -40 0\n  CHANNELS 3 Zrotation Xrotation Yrotation\n  End Site\n  {\n   OFFSET 0 -40 0\n  }\n }\n}\nMOTION\nFrames: 1\nFrame Time: 0.04\n0 0 0 0 0 0 0 0 0\n";
+        c.rig_bvh = Some(rig.into());
+        c.mm_per_unit = Some(10.0);
+        assert!(c
+            .validate()
+            .unwrap_err()
+            .contains("frame_dims 99 is not the rig skeleton's 12"));
+        c.frame_dims = 12;
+        c.dims_used = (0..12).collect();
+        assert_eq!(c.validate(), Ok(()));
+        assert_eq!(c.skeleton().unwrap().joint(1).offset, [0.0, -400.0, 0.0]);
+        assert_eq!(c.root_step(), 1);
+        c.mm_per_unit = Some(f64::NAN);
+        assert!(c.validate().unwrap_err().contains("mm_per_unit"));
+        c.rig_bvh = Some("HIERARCHY\nROOT".into());
+        c.mm_per_unit = None;
+        assert!(c.validate().unwrap_err().contains("rig_bvh"));
+        assert_eq!(vgru().root_step(), 2);
+    }
+
+    #[test]
     fn sizes_beyond_the_limits_are_refused_by_validate() {
         assert_eq!(vgru().validate(), Ok(()));
         type Break = fn(&mut ModelConfig);
