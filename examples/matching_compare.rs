@@ -6,8 +6,11 @@
 //! `goal_gru_h36m` steered by its control, all seeded from the test takes retargeted onto H3.6M.
 //!
 //! ```text
-//! cargo run --release --example matching_compare -- [--takes DIR] [--db FILE] [--json OUT.json]
+//! cargo run --release --example matching_compare -- [--takes DIR] [--db FILE] [--rig-model FILE] [--json OUT.json]
 //! ```
+//! `--rig-model` (default `weights/goal_gru_cmu.safetensors`) is a learned model on the CMU rig
+//! (`training/locomotion.py --takes`, trained without the test takes), seeded with the test
+//! take's poses and steered by its control like `goal_gru_h36m`, measured on the CMU rig.
 //! `--takes` defaults to `$MOTION_DATA_DIR/cmu_locomotion`, then `../shared/data/cmu_locomotion`.
 //! Without `--db` the database is built here from the takes (rig `16_15.bvh`, 30 Hz,
 //! `DEFAULT_WEIGHTS`) minus the test takes; with `--db FILE` (e.g.
@@ -297,11 +300,37 @@ fn main() -> Result<(), BoxError> {
         });
     }
 
+    let rig_model = repo.join("weights/goal_gru_cmu.safetensors");
+    let rig_model = value("--rig-model").map(PathBuf::from).unwrap_or(rig_model);
+    if rig_model.exists() {
+        let model = Arc::new(MotionModel::load(&rig_model)?);
+        if model.skeleton().len() != cmu.skeleton.len() {
+            return Err(format!(
+                "{}: its rig has {} joints, the CMU rig {}",
+                rig_model.display(),
+                model.skeleton().len(),
+                cmu.skeleton.len()
+            )
+            .into());
+        }
+        controllers.push(Controller {
+            label: format!(
+                "{} (control)",
+                rig_model.file_stem().unwrap_or_default().to_string_lossy()
+            ),
+            held_bytes: model.parameter_count() * 4,
+            file_bytes: std::fs::metadata(&rig_model)?.len() as usize,
+            source: Source::RigModel(model),
+        });
+    } else {
+        println!("{} not found: its row is left out", rig_model.display());
+    }
+
     let mut rows = Vec::new();
     for controller in &controllers {
         let t0 = Instant::now();
         let (rig, words) = match controller.source {
-            Source::Database(_) => (&cmu, &cmu_words),
+            Source::Database(_) | Source::RigModel(_) => (&cmu, &cmu_words),
             Source::Model { .. } => (&h36m, &h36m_words),
         };
         let real_of = |t| real_for(controller, t);
@@ -633,7 +662,7 @@ fn path_length(poses: &[Pose]) -> f32 {
 /// H3.6M for a model.
 fn real_for<'a>(controller: &Controller, take: &'a TestTake) -> &'a RealTake {
     match controller.source {
-        Source::Database(_) => &take.cmu,
+        Source::Database(_) | Source::RigModel(_) => &take.cmu,
         Source::Model { .. } => &take.h36m,
     }
 }
@@ -652,6 +681,8 @@ enum Source {
         model: Arc<MotionModel>,
         action: Option<&'static str>,
     },
+    /// A learned model on the CMU rig (`skeleton: "rig"`), seeded with poses like the database.
+    RigModel(Arc<MotionModel>),
 }
 
 struct Controller {
@@ -700,6 +731,13 @@ fn start(
         Source::Database(db) => {
             let mut c = Character::new(MotionSource::Database(db.clone()))?;
             let p = c.start_poses(&take.cmu.poses[..=SEED_END])?.clone();
+            (c, p)
+        }
+        Source::RigModel(model) => {
+            let mut c = Character::new(model.clone())?;
+            let p = c
+                .start_poses_with(&take.cmu.poses[..=SEED_END], None, Noise::Seed(NOISE_SEED))?
+                .clone();
             (c, p)
         }
         Source::Model { model, action } => {

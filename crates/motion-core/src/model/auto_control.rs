@@ -15,7 +15,6 @@ use super::goal_gru::steerable_control_frames;
 use super::predictor::MotionModel;
 use crate::motion::{FrameScalar, RootEncoding};
 use crate::pose::PoseDecoder;
-use crate::skeleton::{Skeleton, H36M_SOURCE_FPS};
 use crate::steering::Steering;
 
 /// One row's decoder and control.
@@ -37,12 +36,12 @@ pub(crate) struct AutoControl {
 
 impl AutoControl {
     /// Controls for `batch` rows of `model`, or `None` when it reads no control this crate can
-    /// make (3 values on the H3.6M skeleton).
+    /// make (3 values, [`steerable_control_frames`]) or its skeleton has no legs to face by.
     pub(crate) fn for_model(model: &MotionModel, batch: usize) -> Option<AutoControl> {
         let config = model.config();
         let control_frames = steerable_control_frames(config)?;
-        let skeleton = Arc::new(Skeleton::h36m());
-        let step = ((H36M_SOURCE_FPS / config.fps).round() as usize).max(1);
+        let skeleton = Arc::clone(model.skeleton());
+        let step = config.root_step();
         let frame_time = (1.0 / config.fps) as f32;
         let rows = (0..batch)
             .map(|_| {

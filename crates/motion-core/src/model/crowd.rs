@@ -47,7 +47,7 @@ use super::Character;
 use crate::grounding::GroundingConfig;
 use crate::motion::FrameScalar;
 use crate::pose::Pose;
-use crate::skeleton::{Skeleton, H36M_SOURCE_FPS};
+use crate::skeleton::Skeleton;
 use crate::steering::Goal;
 
 /// A member of a [`Crowd`] (unique within it, never reused).
@@ -125,7 +125,7 @@ impl Crowd {
     /// An empty crowd of `source`'s characters (a learned model, or a motion-matching database).
     ///
     /// # Errors
-    /// A learned model whose skeleton is not the H3.6M one.
+    /// None today (the `Result` is kept for sources that cannot make a crowd).
     pub fn new(source: impl Into<MotionSource>) -> Result<Crowd, CharacterError> {
         let source = source.into();
         let Some(model) = source.model().cloned() else {
@@ -141,17 +141,13 @@ impl Crowd {
                 next_id: 0,
             });
         };
-        let config = model.config();
-        if config.skeleton != "h36m-32" {
-            return Err(CharacterError::Skeleton(config.skeleton.clone()));
-        }
-        // H3.6M root deltas are per 50 Hz source frame: a 25 Hz model frame spans 2.
-        let root_step = ((H36M_SOURCE_FPS / config.fps).round() as usize).max(1);
+        let root_step = model.config().root_step();
+        let skeleton = Arc::clone(model.skeleton());
         Ok(Crowd {
             source,
             model: Some(model),
             players: Vec::new(),
-            skeleton: Arc::new(Skeleton::h36m()),
+            skeleton,
             root_step,
             members: Vec::new(),
             batch: None,

@@ -126,13 +126,11 @@ impl ArchFields for GoalGruFields {
 }
 
 /// The control horizon (frames) of a model whose control this crate makes: a `goal-gru` of 3
-/// control values on the H3.6M skeleton (the steering's `[forward, side, turn]`); `None` for
-/// any other model.
+/// control values (the steering's `[forward, side, turn]`, on H3.6M's skeleton or a rig, the
+/// heading by the skeleton's rest forward); `None` for any other model.
 pub fn steerable_control_frames(config: &ModelConfig) -> Option<usize> {
     match &config.arch {
-        ArchConfig::GoalGru(f) if f.control_dims == 3 && config.skeleton == "h36m-32" => {
-            Some(f.control_frames)
-        }
+        ArchConfig::GoalGru(f) if f.control_dims == 3 => Some(f.control_frames),
         _ => None,
     }
 }
