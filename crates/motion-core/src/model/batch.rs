@@ -114,6 +114,10 @@ struct Shard {
     features: Vec<f32>,
     out_norm: Vec<f32>,
     state: Box<dyn NetState>,
+    /// Each row's action index (the pose prior's group).
+    actions: Vec<usize>,
+    /// The pose prior's scratch values.
+    prior_scratch: Vec<f32>,
 }
 
 impl Shard {
@@ -130,6 +134,8 @@ impl Shard {
             features: vec![0.0; rows * i],
             out_norm: vec![0.0; rows * o],
             state,
+            actions: vec![0; rows],
+            prior_scratch: vec![0.0; model.prior().map_or(0, |p| p.scratch_len())],
         }
     }
 
@@ -157,6 +163,15 @@ impl Shard {
             }
         }
         net.filter(self.state.as_mut(), &mut self.out_norm, rows);
+        if let Some(prior) = model.prior() {
+            for (b, &action) in self.actions.iter().enumerate() {
+                prior.apply(
+                    action,
+                    &mut self.out_norm[b * o..(b + 1) * o],
+                    &mut self.prior_scratch,
+                );
+            }
+        }
         let norm = model.normalization();
         for b in 0..rows {
             norm.unnormalize(
@@ -303,6 +318,7 @@ impl BatchGenerator {
         let teacher_forcing = net.teacher_forced();
         for (k, shard) in self.shards.iter_mut().enumerate() {
             let rows = k * self.shard_rows..k * self.shard_rows + shard.rows;
+            shard.actions.copy_from_slice(&action_indices[rows.clone()]);
             net.begin(
                 shard.state.as_mut(),
                 Begin {
@@ -470,7 +486,9 @@ impl BatchGenerator {
         // The next advance runs body step `body_steps` (the first step after start hands out
         // the prediction already made, and the same holds then).
         let t = self.body_steps;
-        let rows = self.shards[row / self.shard_rows].rows;
+        let shard = &mut self.shards[row / self.shard_rows];
+        shard.actions[row % self.shard_rows] = index;
+        let rows = shard.rows;
         let (state, local) = self.row_state(row);
         model
             .network()

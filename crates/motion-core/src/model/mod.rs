@@ -46,6 +46,7 @@ pub mod net;
 pub mod norm;
 pub mod pose_stream;
 pub mod predictor;
+pub mod prior;
 pub mod random;
 pub mod samples;
 pub mod source;

@@ -9,6 +9,7 @@
 use super::config::{check_format, parse_provenance, ModelConfig, Provenance};
 use super::net::Net;
 use super::norm::Normalization;
+use super::prior::PosePrior;
 use super::weights::{WeightStore, WeightsError};
 use crate::nn::{Linear, LinearConfig};
 use crate::skeleton::Skeleton;
@@ -31,6 +32,7 @@ pub struct MotionModel {
     decoder: Linear,
     stored_dtype: String,
     skeleton: Arc<Skeleton>,
+    prior: Option<PosePrior>,
 }
 
 impl MotionModel {
@@ -68,6 +70,15 @@ impl MotionModel {
                 outputs: config.output_dims(),
             },
         )?;
+        let prior = match config.prior_radius {
+            Some(radius) => Some(PosePrior::load(
+                store,
+                radius,
+                config.actions.len(),
+                config.output_dims(),
+            )?),
+            None => None,
+        };
         let stored_dtype = store
             .dtype_name("decoder.weight")
             .unwrap_or_else(|| "F32".into());
@@ -80,6 +91,7 @@ impl MotionModel {
             decoder,
             stored_dtype,
             skeleton,
+            prior,
         })
     }
 
@@ -91,6 +103,11 @@ impl MotionModel {
     /// The `config` metadata.
     pub fn config(&self) -> &ModelConfig {
         &self.config
+    }
+
+    /// The pose prior of its closed loop, if the file has one ([`crate::model::prior`]).
+    pub fn prior(&self) -> Option<&PosePrior> {
+        self.prior.as_ref()
     }
 
     /// The skeleton its frames are on (H3.6M's, or the rig the file holds).

@@ -63,6 +63,10 @@ pub struct ModelConfig {
     /// With `skeleton: "rig"`: millimetres per unit of [`rig_bvh`](Self::rig_bvh).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mm_per_unit: Option<f64>,
+    /// A pose prior in the closed loop (`prior.*` tensors, [`crate::model::prior`]): its radius
+    /// in standard deviations; `None`: no prior.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub prior_radius: Option<f64>,
     /// Action labels in one-hot order (empty for unconditioned models). VGRU-d feeds the one-hot
     /// to its plan GRU, DAE-LSTM appends it to the first LSTM layer's input.
     #[serde(default)]
@@ -277,6 +281,7 @@ impl ModelConfig {
             skeleton: H36M_SKELETON.into(),
             rig_bvh: None,
             mm_per_unit: None,
+            prior_radius: None,
             actions: Vec::new(),
             seed_frames: 50,
             horizon: 100,
@@ -435,6 +440,7 @@ mod tests {
             skeleton: "h36m-32".into(),
             rig_bvh: None,
             mm_per_unit: None,
+            prior_radius: None,
             actions: vec!["walking".into()],
             seed_frames: 50,
             horizon: 100,
