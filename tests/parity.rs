@@ -243,8 +243,21 @@ fn vgru_d() {
 /// `set_control` before `start` and before each step reproduces `GoalGRU`'s closed loop.
 #[test]
 fn goal_gru_follows_its_control_step_by_step() {
-    let model = Arc::new(MotionModel::load(fixture("goal_gru.safetensors")).unwrap());
-    let expected = WeightStore::open(fixture("goal_gru.expected.safetensors")).unwrap();
+    goal_gru_parity("goal_gru");
+}
+
+/// The same with a pose prior in the closed loop (`motion_core::model::prior`, PyTorch's
+/// `PosePrior`): every generated and teacher-forced frame pulled to its radius as PyTorch does.
+#[test]
+fn goal_gru_with_a_pose_prior_matches_pytorch() {
+    let model = MotionModel::load(fixture("goal_gru_prior.safetensors")).unwrap();
+    assert!(model.prior().is_some_and(|p| (p.radius() - 0.6).abs() < 1e-6));
+    goal_gru_parity("goal_gru_prior");
+}
+
+fn goal_gru_parity(stem: &str) {
+    let model = Arc::new(MotionModel::load(fixture(&format!("{stem}.safetensors"))).unwrap());
+    let expected = WeightStore::open(fixture(&format!("{stem}.expected.safetensors"))).unwrap();
     let (ss, seed) = get(&expected, "seed");
     let (_, teacher) = get(&expected, "teacher_forced");
     let (cs, closed) = get(&expected, "closed_loop");
@@ -260,7 +273,7 @@ fn goal_gru_follows_its_control_step_by_step() {
             tf[t * width..(t + 1) * width].copy_from_slice(frame)
         })
         .unwrap();
-    assert_close("goal_gru teacher_forced", &tf, &teacher);
+    assert_close(&format!("{stem} teacher_forced"), &tf, &teacher);
     for k in 0..cs[0] {
         if k > 0 {
             let t = s + k - 1;
@@ -268,7 +281,7 @@ fn goal_gru_follows_its_control_step_by_step() {
         }
         let frame = generator.step().unwrap();
         assert_close(
-            &format!("goal_gru closed_loop[{k}]"),
+            &format!("{stem} closed_loop[{k}]"),
             frame,
             &closed[k * width..(k + 1) * width],
         );

@@ -377,12 +377,28 @@ GOAL_SIZES = {"hidden": 8, "layers": 2}
 GOAL_HORIZON = 10  # closed-loop frames of the goal fixture (small: every fixture together stays under 1 MB)
 
 
-def goal_fixture(stem: str, gen: torch.Generator) -> tuple[Fixture, Fixture]:
-    """``goal_gru.safetensors`` and its expected closed loop under a per-step control (``control [S + H, 3]``)."""
-    config = make_config("goal-gru", H36M_DIMS_USED, seed_frames=SEED_FRAMES, horizon=GOAL_HORIZON, **GOAL_SIZES)
+def goal_fixture(stem: str, gen: torch.Generator, prior_radius: float | None = None) -> tuple[Fixture, Fixture]:
+    """``goal_gru.safetensors`` and its expected closed loop under a per-step control (``control [S + H, 3]``);
+    with ``prior_radius`` the model has a random pose prior (``PosePrior``: orthonormal axes off the root's dims)."""
+    extra = {"prior_radius": prior_radius} if prior_radius else {}
+    config = make_config("goal-gru", H36M_DIMS_USED, seed_frames=SEED_FRAMES, horizon=GOAL_HORIZON, **GOAL_SIZES,
+                         **extra)
     model = build_model(config)
     hidden = config["hidden"]
     _randomize(model, gen, {"decoder.weight": 0.3 * hidden**-0.5, "decoder.bias": 0.02})
+    if model.prior is not None:
+        o = model.output_size
+        body = torch.tensor([d >= 6 for d in config["dims_used"]])
+        k = int(body.sum())
+        q, _ = torch.linalg.qr(torch.randn(k, k, generator=gen, dtype=torch.float64))
+        comps = torch.zeros(1, o, o, dtype=torch.float64)
+        comps[0, :k][:, body] = q.T
+        inv = torch.zeros(1, o, dtype=torch.float64)
+        inv[0, :k] = _uniform(gen, (k,), 1.0).double().abs() + 0.5
+        with torch.no_grad():
+            model.prior.mean.copy_(_uniform(gen, (1, o), 0.5))
+            model.prior.components.copy_(comps.float())
+            model.prior.inv_std.copy_(inv.float())
     mean, std = _random_norm(model, gen)
     tensors = weights_tensors(model, torch.float32)
     weights = (tensors, weights_metadata(model, PROVENANCE))
@@ -425,6 +441,10 @@ def build_all() -> dict[str, Fixture]:
     weights, expected = goal_fixture("goal_gru", gen)
     files["goal_gru.safetensors"] = weights
     files["goal_gru.expected.safetensors"] = expected
+    # Drawn after the goal fixture.
+    weights, expected = goal_fixture("goal_gru_prior", gen, prior_radius=0.6)
+    files["goal_gru_prior.safetensors"] = weights
+    files["goal_gru_prior.expected.safetensors"] = expected
     return files
 
 

@@ -73,7 +73,7 @@ def make_config(architecture: str, dims_used: list[int], **overrides) -> dict:
         # first layer also reads the control (root velocity forward / sideways in m/s and heading change in
         # radians over the next `control_frames`).
         config.update(derivative_order=0, residual=True, hidden=256, control_dims=3, control_frames=25)
-    unknown = set(overrides) - set(config) - {"plan_hidden", "rig_bvh", "mm_per_unit"}
+    unknown = set(overrides) - set(config) - {"plan_hidden", "rig_bvh", "mm_per_unit", "prior_radius"}
     if unknown:
         raise ValueError(f"unknown config fields {sorted(unknown)}")
     config.update(overrides)
@@ -104,6 +104,28 @@ class Norm(nn.Module):
             self.std.copy_(torch.as_tensor(std))
 
 
+class PosePrior(nn.Module):
+    """The pose prior of a closed loop (``training/pose_prior.py``, ``motion_core::model::prior``): buffers
+    ``mean [A, O]``, ``components [A, O, O]``, ``inv_std [A, O]``; frames beyond ``radius`` are pulled back to it."""
+
+    def __init__(self, radius: float, groups: int, dims: int):
+        super().__init__()
+        self.radius = float(radius)
+        self.register_buffer("mean", torch.zeros(groups, dims))
+        self.register_buffer("components", torch.zeros(groups, dims, dims))
+        self.register_buffer("inv_std", torch.zeros(groups, dims))
+
+    def forward(self, y: torch.Tensor, groups: torch.Tensor) -> torch.Tensor:
+        """``y [B, O]`` of rows doing actions ``groups [B]`` (clamped to the prior's) -> pulled frames."""
+        g = groups.clamp(max=self.mean.shape[0] - 1)
+        comps, inv = self.components[g], self.inv_std[g]
+        z = torch.einsum("bko,bo->bk", comps, y - self.mean[g])
+        axes = (inv > 0).sum(-1).clamp(min=1).to(y.dtype)
+        m = torch.sqrt(((z * inv) ** 2).sum(-1) / axes)
+        shrink = torch.where(m > self.radius, 1.0 - self.radius / m.clamp(min=1e-30), torch.zeros_like(m))
+        return y - torch.einsum("bk,bko->bo", shrink.unsqueeze(-1) * z, comps)
+
+
 class MotionModel(nn.Module):
     """What VGRU-d and GRU-d share: config, norm, decoder, residual output, derivative inputs,
     and the open-loop / closed-loop passes. Subclasses provide ``_begin`` and ``_run``."""
@@ -130,6 +152,8 @@ class MotionModel(nn.Module):
         # training only; the recurrent state itself is never dropped.
         self.input_dropout = nn.Dropout(dropout)
         self.output_dropout = nn.Dropout(dropout)
+        radius = config.get("prior_radius")
+        self.prior = PosePrior(radius, max(1, len(self.actions)), self.output_size) if radius else None
 
     # ---- subclass interface -------------------------------------------------------------------
     def _begin(self, batch: int, steps: int, action, eps, like: torch.Tensor, seed_len: int | None = None) -> dict:
@@ -169,6 +193,19 @@ class MotionModel(nn.Module):
             raise ValueError(f"action index {index} out of range 0..{len(self.actions)}")
         return index
 
+    def _prior_groups(self, action, batch: int, like: torch.Tensor) -> torch.Tensor | None:
+        """Each row's pose-prior group (its action index; 0 unconditioned), or None without a prior."""
+        if self.prior is None:
+            return None
+        idx = self.action_indices(action, batch, like.device) if self.actions else None
+        return idx if idx is not None else torch.zeros(batch, dtype=torch.long, device=like.device)
+
+    def _pulled(self, frames: torch.Tensor, groups: torch.Tensor | None) -> torch.Tensor:
+        """``frames [B, T, O]`` with the pose prior applied to each (unchanged without one)."""
+        if groups is None:
+            return frames
+        return torch.stack([self.prior(frames[:, t], groups) for t in range(frames.shape[1])], dim=1)
+
     def _decode(self, hidden: torch.Tensor, inputs: torch.Tensor) -> torch.Tensor:
         out = self.decoder(self.output_dropout(hidden))
         return inputs + out if self.residual else out
@@ -204,11 +241,15 @@ class MotionModel(nn.Module):
         if seed_len < 1 or horizon < 1:
             raise ValueError(f"need at least 1 seed frame and horizon >= 1, got {seed_len}, {horizon}")
         ctx = self._begin(batch, seed_len + horizon, action, eps, seed, seed_len=seed_len)
+        groups = None if isinstance(action, torch.Tensor) and action.dim() == 3 else self._prior_groups(action, batch, seed)
+        if self.prior is not None and groups is None:  # a control sequence, no action: one prior
+            groups = torch.zeros(batch, dtype=torch.long, device=seed.device)
         history = DerivativeHistory(self.derivative_order)
-        seed_out = self._teacher_force(ctx, history, seed)
+        seed_out = self._pulled(self._teacher_force(ctx, history, seed), groups)
         outputs = [seed_out[:, -1:]]
         for k in range(1, horizon):
-            outputs.append(self._feed_back(ctx, history, outputs[-1], seed_len + k - 1, feed_noise))
+            fed = self._feed_back(ctx, history, outputs[-1], seed_len + k - 1, feed_noise)
+            outputs.append(self._pulled(fed, groups))
         generated = torch.cat(outputs, dim=1)
         return (seed_out, generated) if return_seed_outputs else generated
 
@@ -649,6 +690,11 @@ class IntentionModel(MotionModel):
                 hs[k] = cell(inp, hs[k])
                 inp = hs[k]
             x = x + self.decoder(inp)
+            if self.prior is not None:
+                groups = (action.argmax(-1) if action is not None and action.dim() == 2 else
+                          action[:, j].argmax(-1) if action is not None else
+                          torch.zeros(x.shape[0], dtype=torch.long, device=x.device))
+                x = self.prior(x, groups)
             outputs.append(x)
         return torch.stack(outputs, 1), hs
 
