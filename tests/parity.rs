@@ -251,7 +251,9 @@ fn goal_gru_follows_its_control_step_by_step() {
 #[test]
 fn goal_gru_with_a_pose_prior_matches_pytorch() {
     let model = MotionModel::load(fixture("goal_gru_prior.safetensors")).unwrap();
-    assert!(model.prior().is_some_and(|p| (p.radius() - 0.6).abs() < 1e-6));
+    assert!(model
+        .prior()
+        .is_some_and(|p| (p.radius() - 0.6).abs() < 1e-6));
     goal_gru_parity("goal_gru_prior");
 }
 

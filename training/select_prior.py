@@ -71,11 +71,42 @@ def table(v: dict) -> str:
     return "\n".join(out)
 
 
+def combined_table(reports: list[dict]) -> str:
+    """Per action, each report's grounded Fréchet max and arms share max over the posture windows, beside the real
+    band and the real-vs-real value (S5's takes against the reference)."""
+    names = [Path(r["model"]["source"]).stem for r in reports]
+    rows = {}
+    real = {}
+    for r in reports:
+        for a, p in zip(r["actions"], posture_rows(r)):
+            rows.setdefault(p["action"], []).append(p)
+            rr = a["posture"]["real_vs_real"]
+            real[p["action"]] = (p["band"], rr["frechet"] if rr else float("nan"))
+    head = "| action | real band (real-vs-real) | " + " | ".join(f"{n}: Fréchet / arms above p99" for n in names) + " |"
+    out = [head, "|" + "---|" * (2 + len(names))]
+    within = [0] * len(names)
+    for action, ps in rows.items():
+        cells = []
+        for i, p in enumerate(ps):
+            within[i] += p["within"]
+            mark = "**" if p["within"] else ""
+            cells.append(f"{mark}{p['frechet']:.2f} / {p['arms']:.2f}{mark}")
+        band, rvr = real[action]
+        out.append(f"| {action} | {band:.2f} ({rvr:.2f}) | " + " | ".join(cells) + " |")
+    out.append("| **within the band** | | " + " | ".join(f"**{w} of {len(rows)}**" for w in within) + " |")
+    return "\n".join(out)
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("reports", nargs="+", type=Path, help="the model without a prior first, then the candidates")
     p.add_argument("--radii", help="the candidates' radii in report order (comma list; 'off' for none)")
+    p.add_argument("--table", action="store_true",
+                   help="print one posture table of the reports (any windows: the shipped files' test windows) and stop")
     args = p.parse_args(argv)
+    if args.table:
+        print(combined_table([json.loads(path.read_text()) for path in args.reports]))
+        return 0
     verdicts = []
     for path in args.reports:
         report = json.loads(path.read_text())

@@ -144,6 +144,14 @@ def cases(shared: dict[str, Path]) -> list[Case]:
     add(Case("weights-mean-3e38", wp, contains=["w.safetensors"], setup=weights(fill={"norm.mean": 3e38})))
     add(Case("weights-duplicate-actions", wp, contains=["w.safetensors"],
              setup=weights(edit=lambda c: c["actions"].__setitem__(1, c["actions"][0]))))
+    add(Case("weights-unknown-skeleton", wp, contains=["w.safetensors", "unknown skeleton"],
+             setup=weights(edit=lambda c: c.__setitem__("skeleton", "cmu"))))
+    add(Case("weights-unknown-skeleton-info", ["info", "w.safetensors"], contains=["w.safetensors", "unknown skeleton"],
+             setup=weights(edit=lambda c: c.__setitem__("skeleton", "cmu"))))
+    add(Case("weights-rig-without-bvh", wp, contains=["w.safetensors", "rig_bvh"],
+             setup=weights(edit=lambda c: c.__setitem__("skeleton", "rig"))))
+    add(Case("weights-prior-radius-without-tensors", wp, contains=["w.safetensors", "prior."],
+             setup=weights(edit=lambda c: c.__setitem__("prior_radius", 1.5))))
     add(Case("weights-seed-frames-0", wp, contains=["w.safetensors"], setup=weights(edit=lambda c: c.__setitem__("seed_frames", 0))))
     add(Case("weights-hidden-huge", wp, contains=["w.safetensors"], setup=weights(edit=lambda c: c.__setitem__("hidden", 1 << 40))))
     add(Case("weights-truncated", wp, contains=["w.safetensors"],

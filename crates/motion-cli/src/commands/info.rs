@@ -137,6 +137,17 @@ fn text_summary(model: &MotionModel) -> String {
             ),
         );
     }
+    if let Some(prior) = model.prior() {
+        line(
+            "pose prior",
+            format!(
+                "radius {} (standard deviations; {} action group{}): generated frames beyond it are pulled back before feedback",
+                prior.radius(),
+                c.actions.len().max(1),
+                if c.actions.len() > 1 { "s" } else { "" }
+            ),
+        );
+    }
     line("fps", format!("{}", c.fps));
     line(
         "actions",
