@@ -27,6 +27,7 @@ use std::path::Path;
 
 use motion_core::formats::bvh::read_bvh;
 use motion_core::grounding::GroundingConfig;
+use motion_core::model::config::RIG_SKELETON;
 use motion_core::model::{builtin, Character, MotionSource, Noise};
 use motion_core::seed::load_model_seed;
 use motion_core::steering::Goal;
@@ -309,13 +310,27 @@ pub unsafe extern "C" fn motion_generator_start_bvh(
             unsafe { text(bvh_path, "bvh_path") }?.ok_or_else(|| invalid("bvh_path is NULL"))?;
         let action = unsafe { text(action, "action") }?;
         let config = match &g.model {
-            MotionSource::Model(m) => m.config().clone(),
-            MotionSource::Database(db) => {
-                // A database plays on its rig: the seed goes onto it (the action is ignored).
+            MotionSource::Model(m) if m.config().skeleton != RIG_SKELETON => m.config().clone(),
+            source => {
+                // A database or a model on a rig plays on its rig: the seed goes onto it (a
+                // database ignores the action).
                 let bvh = read_bvh(path).map_err(bad)?;
-                let poses = seed_poses_on_rig(bvh, db.skeleton(), db.mm_per_unit(), db.fps(), None)
-                    .map_err(|e| bad(format!("{path}: {e}")))?;
-                g.character.start_poses(&poses).map_err(bad)?;
+                let poses = seed_poses_on_rig(
+                    bvh,
+                    &source.skeleton(),
+                    source.rig_mm_per_unit(),
+                    source.fps(),
+                    None,
+                )
+                .map_err(|e| bad(format!("{path}: {e}")))?;
+                let action = if source.database().is_some() {
+                    None
+                } else {
+                    action
+                };
+                g.character
+                    .start_poses_with(&poses, action, Noise::Seed(g.rng_seed))
+                    .map_err(bad)?;
                 g.started = true;
                 return Ok(0);
             }

@@ -6,6 +6,7 @@ use motion_core::formats::bvh::read_bvh;
 use motion_core::formats::expmap_bvh::ExpMapTarget;
 use motion_core::grounding::GroundingConfig;
 use motion_core::model::builtin::BuiltIn;
+use motion_core::model::config::RIG_SKELETON;
 use motion_core::model::{Character as CoreCharacter, MotionSource, Noise};
 use motion_core::seed::load_seed;
 use motion_core::steering::{Goal, Vec2};
@@ -94,16 +95,34 @@ impl Character {
         action: Option<&str>,
         rng_seed: u64,
     ) -> PyResult<()> {
+        let on_rig = match &self.source {
+            MotionSource::Database(_) => true,
+            MotionSource::Model(m) => m.config().skeleton == RIG_SKELETON,
+        };
         match &self.source {
-            MotionSource::Database(db) => {
-                let db = db.clone();
+            source if on_rig => {
+                let source = source.clone();
                 let poses = py.detach(|| {
                     let bvh = read_bvh(&seed).map_err(format)?;
-                    seed_poses_on_rig(bvh, db.skeleton(), db.mm_per_unit(), db.fps(), None)
-                        .map_err(|e| value(format!("{}: {e}", seed.display())))
+                    seed_poses_on_rig(
+                        bvh,
+                        &source.skeleton(),
+                        source.rig_mm_per_unit(),
+                        source.fps(),
+                        None,
+                    )
+                    .map_err(|e| value(format!("{}: {e}", seed.display())))
                 })?;
-                self.inner.start_poses(&poses).map_err(value)?;
+                let action = if source.database().is_some() {
+                    None
+                } else {
+                    action
+                };
+                self.inner
+                    .start_poses_with(&poses, action, Noise::Seed(rng_seed))
+                    .map_err(value)?;
             }
+            MotionSource::Database(_) => unreachable!("a database plays on its rig"),
             MotionSource::Model(model) => {
                 let fps = model.config().fps;
                 let loaded = py
