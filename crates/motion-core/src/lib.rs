@@ -96,6 +96,7 @@ pub mod pose;
 pub mod protocol;
 pub mod resample;
 pub mod retarget;
+pub mod rig_target;
 pub mod root;
 pub mod rotation;
 pub mod seed;

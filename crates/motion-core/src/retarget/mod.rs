@@ -346,7 +346,7 @@ pub enum RetargetError {
 #[derive(Debug, Clone, PartialEq)]
 pub struct JointMap {
     /// Rig joint index per entry of [`MAPPED_JOINTS`].
-    user: [Option<usize>; 21],
+    pub(crate) user: [Option<usize>; 21],
     /// What the map is (a built-in rig's name, or "joint map").
     pub name: String,
 }
@@ -597,18 +597,18 @@ fn frame(up: DVec3, side: DVec3) -> Option<DMat3> {
 pub struct Retargeter {
     model: Skeleton,
     rig: Skeleton,
-    map: JointMap,
+    pub(crate) map: JointMap,
     /// Rig world axes → model world axes.
-    g: DQuat,
+    pub(crate) g: DQuat,
     /// Per entry of [`MAPPED_JOINTS`]: the rest offset `Q_m`.
-    q: [DQuat; 21],
+    pub(crate) q: [DQuat; 21],
     /// Model index per entry of [`MAPPED_JOINTS`].
-    model_index: [usize; 21],
+    pub(crate) model_index: [usize; 21],
     /// Rig length units per millimetre of the model (body size ratio).
     scale: f64,
     rig_layouts: Vec<Layout>,
     /// For each rig joint, its entry in [`MAPPED_JOINTS`], if mapped.
-    rig_slot: Vec<Option<usize>>,
+    pub(crate) rig_slot: Vec<Option<usize>>,
     /// For each model joint, its entry in [`MAPPED_JOINTS`] and rig joint, if mapped.
     model_slot: Vec<Option<(usize, usize)>>,
     /// The rig joints from the hips up to the root (exclusive), whose offsets place the hips.
