@@ -49,6 +49,10 @@ pub struct Clips<'a> {
     /// The user's rig and its reference frames, when the seed was retargeted: BVH output goes
     /// back onto the rig.
     pub rig: Option<(&'a Retargeter, ArrayView2<'a, f64>)>,
+    /// A character's own rig (`--rig FILE.glb`): BVH output is written on it instead
+    /// ([`crate::rig_target::RigTarget::to_bvh`]: its joint names, its rest translations as
+    /// OFFSETs, metres).
+    pub rig_target: Option<&'a crate::rig_target::RigTarget>,
     /// Their skeleton.
     pub target: ExpMapTarget,
 }
@@ -155,9 +159,21 @@ pub fn write_clips(
                     path: path.clone(),
                     problem: format!("the prediction cannot be written as BVH: {e}"),
                 })?;
-                let bvh = match &clips.rig {
-                    Some((retargeter, references)) => retargeter.to_rig(&bvh, references.view()),
-                    None => bvh,
+                let bvh = match (&clips.rig_target, &clips.rig) {
+                    (Some(target), _) => {
+                        let poses = crate::takes::poses_of(&bvh.skeleton, &bvh.frames);
+                        let mut target = (*target).clone();
+                        target
+                            .to_bvh(&poses, bvh.fps())
+                            .map_err(|e| ClipError::Output {
+                                path: path.clone(),
+                                problem: format!("the motion cannot be written on the rig: {e}"),
+                            })?
+                    }
+                    (None, Some((retargeter, references))) => {
+                        retargeter.to_rig(&bvh, references.view())
+                    }
+                    (None, None) => bvh,
                 };
                 let bvh = match clips.out_fps {
                     Some(fps) => resample_bvh(&bvh, fps).map_err(|e| ClipError::Output {

@@ -131,6 +131,7 @@ pub fn exit_code(err: &anyhow::Error) -> u8 {
             || c.is::<motion_core::file_sets::FileSetError>()
             || c.is::<motion_core::matching::MatchingError>()
             || c.is::<motion_core::model::source::SourceError>()
+            || c.is::<motion_core::rig_target::RigTargetError>()
             || c.is::<motion_core::takes::TakesError>()
             || c.is::<motion_core::steering::path::PathError>()
             || c.is::<motion_metrics::MetricError>()

@@ -144,6 +144,15 @@ pub struct Args {
     /// built-in maps (CMU mocap BVH, Mixamo, Unreal mannequin) do not fit.
     #[arg(long, value_name = "FILE.json")]
     pub joint_map: Option<PathBuf>,
+    /// Write BVH output on this character's own skeleton: a glTF/GLB skin or a BVH rig (its joint
+    /// names, its rest translations as OFFSETs, metres; the built-in joint maps or --rig-map find
+    /// its joints). Blender then imports a file that matches the character.
+    #[arg(long, value_name = "FILE.glb|FILE.gltf|FILE.bvh")]
+    pub rig: Option<PathBuf>,
+    /// A JSON joint map for --rig's skeleton (H3.6M joint -> its joint names), when the built-in
+    /// maps do not fit it.
+    #[arg(long, value_name = "FILE.json", requires = "rig")]
+    pub rig_map: Option<PathBuf>,
     /// Write BVH output at this rate (any, >= 1; rotations by slerp, the root linearly) instead
     /// of the model's (25 Hz for H3.6M models).
     #[arg(long, value_name = "HZ")]
@@ -179,6 +188,8 @@ struct Job {
     out_fps: Option<f64>,
     /// `--joint-map`.
     joint_map: Option<PathBuf>,
+    /// `--rig`: the character BVH output is written on.
+    rig_target: Option<motion_core::rig_target::RigTarget>,
     /// Grounding of written predictions (off with `--no-grounding`).
     grounding: GroundingConfig,
 }
@@ -235,10 +246,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         // Every file the command reads: none may be overwritten.
         let mut inputs: Vec<&Path> = vec![&args.seed];
         inputs.extend(
-            [&args.joint_map, &args.model, &args.classifier]
-                .into_iter()
-                .flatten()
-                .map(PathBuf::as_path),
+            [
+                &args.joint_map,
+                &args.model,
+                &args.classifier,
+                &args.rig,
+                &args.rig_map,
+            ]
+            .into_iter()
+            .flatten()
+            .map(PathBuf::as_path),
         );
         check_not_an_input(&args.out, &inputs)?;
         if let Some(truth) = &args.truth {
@@ -279,6 +296,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             ))
         })?;
     }
+    let model_skeleton = Arc::clone(model.skeleton());
     let action = choose_action(model.config(), args.action.as_deref())?;
     let infer = if args.action.is_none() && model.config().actions.len() > 1 {
         inference_classifier(&model, args.classifier.as_deref())?
@@ -303,6 +321,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         seed_end: args.seed_end,
         out_fps: args.fps,
         joint_map: args.joint_map.clone(),
+        rig_target: rig_target_of(&args, &model_skeleton)?,
         grounding: if args.no_grounding {
             GroundingConfig::off()
         } else {
@@ -539,6 +558,7 @@ fn predict_one(
         out_fps: job.out_fps,
         target: job.target,
         rig,
+        rig_target: job.rig_target.as_ref(),
     };
     let mut outputs = write_clips(out, format, &clips(&samples))?;
     if let Some(truth) = truth {
@@ -559,6 +579,68 @@ fn predict_one(
         seed_frames: needed,
         notices,
     })
+}
+
+/// The character of `--rig` (with `--rig-map`), its joints mapped from `source`'s.
+fn rig_target_of(
+    args: &Args,
+    source: &motion_core::Skeleton,
+) -> anyhow::Result<Option<motion_core::rig_target::RigTarget>> {
+    use motion_core::rig_target::RigTarget;
+    let Some(rig) = &args.rig else {
+        return Ok(None);
+    };
+    let bvh_out = if args.seed.is_dir() {
+        args.format == "bvh"
+    } else {
+        check_output(&args.out)? == FileFormat::Bvh
+    };
+    if !bvh_out {
+        return Err(UsageError(format!(
+            "--rig {}: the motion is written on a rig as BVH: give an --out ending in .bvh",
+            rig.display()
+        ))
+        .into());
+    }
+    let map = match &args.rig_map {
+        Some(path) => Some(
+            std::fs::read_to_string(path)
+                .map_err(|e| UsageError(format!("--rig-map {}: {e}", path.display())))?,
+        ),
+        None => None,
+    };
+    let ext = rig
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    let target = match ext.as_str() {
+        "glb" | "gltf" => RigTarget::from_gltf(rig, map.as_deref(), source)?,
+        "bvh" => {
+            let bvh = motion_core::formats::bvh::read_bvh(rig)?;
+            let mm = motion_core::grounding::find_body_parts(&bvh.skeleton)
+                .ok()
+                .and_then(|parts| motion_core::takes::guess_mm_per_unit(&parts))
+                .ok_or_else(|| {
+                    UsageError(format!(
+                        "--rig {}: no legs of a person's length in any unit",
+                        rig.display()
+                    ))
+                })?;
+            let skeleton = motion_core::seed::rescale_bvh(&bvh, mm)
+                .map_err(|e| UsageError(format!("--rig {}: {e}", rig.display())))?
+                .skeleton;
+            RigTarget::from_skeleton(&skeleton, map.as_deref(), source)
+                .map_err(|e| UsageError(format!("--rig {}: {e}", rig.display())))?
+        }
+        _ => {
+            return Err(UsageError(format!(
+                "--rig {}: a character is read from .glb, .gltf or .bvh",
+                rig.display()
+            ))
+            .into())
+        }
+    };
+    Ok(Some(target))
 }
 
 /// `job.samples` predictions of `job.frames` frames each: `[samples, frames, frame_dims]`.
