@@ -93,7 +93,8 @@ impl PosePrior {
             sum += s * s;
         }
         let m = (sum / self.axes[g]).sqrt();
-        if !(m > self.radius) {
+        // A NaN `m` (a NaN frame) is left alone, like one inside the radius.
+        if m.is_nan() || m <= self.radius {
             return false;
         }
         let shrink = 1.0 - self.radius / m;

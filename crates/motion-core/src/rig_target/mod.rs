@@ -434,15 +434,15 @@ impl RigTarget {
         // Model (H3.6M) world rotation per mapped slot, and the hips in the model's axes.
         let hips_model = match &self.source {
             Source::H36m { index } => {
-                for s in 0..21 {
-                    self.slot_world[s] = Some(self.source_world[index[s]]);
+                for (slot, &j) in self.slot_world.iter_mut().zip(index) {
+                    *slot = Some(self.source_world[j]);
                 }
                 self.source_position[index[0]]
             }
             Source::Rig(r) => {
                 let g_inv = r.g.inverse();
-                for s in 0..21 {
-                    self.slot_world[s] = r.map.user[s]
+                for (s, slot) in self.slot_world.iter_mut().enumerate() {
+                    *slot = r.map.user[s]
                         .map(|u| (r.g * self.source_world[u] * g_inv * r.q[s]).normalize());
                 }
                 r.g * self.source_position[self.source_hips]

@@ -589,6 +589,9 @@ fn plausibility_of(
     ))
 }
 
+/// A grounded clip (seed, then prediction) and its seed frame count.
+type GroundedClip = (ndarray::Array2<f64>, usize);
+
 /// The plausibility report of the predictions grounded after their windows' seeds (the seed's
 /// floor, levelled; the lean limit of `action`): each window's seed and prediction are grounded
 /// as one clip, as `predict` writes it.
@@ -597,7 +600,7 @@ fn grounded_plausibility(
     predictions: &Array4<f64>,
     action: &'static str,
     reference: &ActionReference,
-) -> Result<(PlausibilityReport, Vec<(ndarray::Array2<f64>, usize)>), EvalError> {
+) -> Result<(PlausibilityReport, Vec<GroundedClip>), EvalError> {
     let (_, samples, horizon, _) = predictions.dim();
     let mut clips = Vec::with_capacity(truth.windows().len() * samples);
     for (w, window) in truth.windows().iter().enumerate() {

@@ -88,6 +88,7 @@ mod tests {
                 real_motion_ndms: None,
             },
             published: published::for_action("walking"),
+            posture: None,
         }];
         let charts = charts(&results);
         assert_eq!(charts.len(), 3);

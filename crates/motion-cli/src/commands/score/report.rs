@@ -233,6 +233,40 @@ pub fn human_table(report: &ScoreReport) -> String {
     out
 }
 
+/// The posture rows of `score` (per window after the seed, under the real-vs-real values).
+fn posture_rows(p: &motion_metrics::evaluation::posture::PostureScore) -> String {
+    let mut out = format!(
+        "posture realism against {} takes of {} ({} frames; real arm p99 {:.0} deg)\n",
+        p.action,
+        p.reference_subjects.join(", "),
+        p.reference_frames,
+        p.real_arm_elevation_p99_deg
+    );
+    out.push_str(&format!(
+        "  {:<20} {:>9} {:>13} {:>15} {:>15}\n",
+        "", "Fréchet", "arm EMD deg", "thigh EMD deg", "arms above p99"
+    ));
+    let mut line = |label: &str, s: &motion_metrics::evaluation::posture::PostureSummary| {
+        out.push_str(&format!(
+            "  {:<20} {:>9.3} {:>13.1} {:>15.1} {:>15.2}\n",
+            label,
+            s.frechet,
+            s.arm_elevation_emd_deg,
+            s.thigh_elevation_emd_deg,
+            s.arms_above_real_p99
+        ));
+    };
+    if let Some(real) = &p.real_vs_real {
+        line("real vs real (S5)", real);
+    }
+    for w in &p.windows {
+        if let Some(s) = &w.posture {
+            line(&format!("{} s", w.window), s);
+        }
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -258,6 +292,7 @@ mod tests {
             ),
             foot_contact: None,
             frames: 2,
+            posture: None,
             input_space: InputSpace::Expmap,
             ndms: None,
             npss: Some(0.0),
@@ -292,38 +327,4 @@ mod tests {
             "{table}"
         );
     }
-}
-
-/// The posture rows of `score` (per window after the seed, under the real-vs-real values).
-fn posture_rows(p: &motion_metrics::evaluation::posture::PostureScore) -> String {
-    let mut out = format!(
-        "posture realism against {} takes of {} ({} frames; real arm p99 {:.0} deg)\n",
-        p.action,
-        p.reference_subjects.join(", "),
-        p.reference_frames,
-        p.real_arm_elevation_p99_deg
-    );
-    out.push_str(&format!(
-        "  {:<20} {:>9} {:>13} {:>15} {:>15}\n",
-        "", "Fréchet", "arm EMD deg", "thigh EMD deg", "arms above p99"
-    ));
-    let mut line = |label: &str, s: &motion_metrics::evaluation::posture::PostureSummary| {
-        out.push_str(&format!(
-            "  {:<20} {:>9.3} {:>13.1} {:>15.1} {:>15.2}\n",
-            label,
-            s.frechet,
-            s.arm_elevation_emd_deg,
-            s.thigh_elevation_emd_deg,
-            s.arms_above_real_p99
-        ));
-    };
-    if let Some(real) = &p.real_vs_real {
-        line("real vs real (S5)", real);
-    }
-    for w in &p.windows {
-        if let Some(s) = &w.posture {
-            line(&format!("{} s", w.window), s);
-        }
-    }
-    out
 }
