@@ -163,7 +163,7 @@ INTENTION_SIZES = {
     "hidden": 24, "noise_dims": 6, "label_hidden": 10, "intentions": 4, "clusters": 7, "intention_features": 5,
     "layers": 2,
 }  # fmt: skip
-# The action-conditioned fixture is narrower (hidden 16), which keeps every fixture under 1 MB together.
+# The action-conditioned fixture is narrower (hidden 16), which keeps every fixture under 1.1 MB together.
 INTENTION_ACTIONS_SIZES = INTENTION_SIZES | {"hidden": 16}
 # Smallest gap between a seed frame's nearest and second-nearest centroid (squared distance in
 # normalized units), so that the engine's f32 labelling cannot pick another cluster.
@@ -374,7 +374,7 @@ def classifier_fixture(gen: torch.Generator) -> tuple[Fixture, Fixture]:
 # The goal-gru fixture (drawn after every other file): its sizes; its control is constant over the seed (as the
 # engine starts a character) and then changes every step.
 GOAL_SIZES = {"hidden": 8, "layers": 2}
-GOAL_HORIZON = 10  # closed-loop frames of the goal fixture (small: every fixture together stays under 1 MB)
+GOAL_HORIZON = 10  # closed-loop frames of the goal fixture (small: every fixture together stays under 1.1 MB)
 
 
 def goal_fixture(stem: str, gen: torch.Generator, prior_radius: float | None = None) -> tuple[Fixture, Fixture]:

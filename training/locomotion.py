@@ -61,6 +61,7 @@ from . import data as h36m
 from .checkpoint_io import atomic_save
 from .export import save_weights
 from .metrics_np import expmap2rotmat
+from .goal_loss import seed_controls, window_loss  # noqa: F401  (window_loss: the training loss)
 from .models import GoalGRU, make_config
 
 ACTIONS = ("walking", "walkingdog", "walkingtogether", "waiting", "directions")
@@ -145,25 +146,6 @@ class LocomotionSet:
             out_f[b] = frames[start : start + window]
             out_c[b] = controls[start : start + window]
         return out_f, out_c
-
-
-def seed_controls(controls: torch.Tensor, seed: int) -> torch.Tensor:
-    """The controls a run reads: the last seed frame's over the whole seed, then each frame's own."""
-    out = controls.clone()
-    out[:, :seed] = controls[:, seed - 1 : seed]
-    return out
-
-
-def window_loss(model: GoalGRU, frames: torch.Tensor, controls: torch.Tensor, seed: int, feed_noise: float):
-    """Mean squared error of the teacher-forced seed outputs and of the closed loop after them."""
-    horizon = frames.shape[1] - seed - 1
-    seed_out, generated = model.closed_loop(
-        frames[:, :seed], horizon + 1, action=seed_controls(controls, seed), return_seed_outputs=True,
-        feed_noise=feed_noise,
-    )
-    truth_seed = frames[:, 1 : seed + 1]
-    truth_gen = frames[:, seed : seed + horizon + 1]
-    return ((seed_out - truth_seed) ** 2).mean(), ((generated - truth_gen) ** 2).mean()
 
 
 VALIDATION_HORIZON = 100  # closed-loop frames of a validation window (4 s)

@@ -13,6 +13,7 @@ import torch
 from . import data as h36m
 from .checkpoint_io import atomic_save
 from .export import save_weights
+from .goal_loss import window_loss
 from .models import GoalGRU, make_config
 from .takes import TakeSet, controls_of, load_takes, validation_names
 
@@ -83,8 +84,6 @@ def validate_rig(model: GoalGRU, val: RigSet, seed: int, stats: h36m.NormStats, 
 
 
 def train_rig(args, argv: list[str], log) -> int:
-    from .locomotion import window_loss  # the same loss as the H3.6M model
-
     takes = load_takes(args.takes, args.run_dir / "takes", args.joint_map,
                        [n for n in (args.exclude or "").split(",") if n.strip()], args.fps, log)
     names = [t.name for t in takes.takes]
