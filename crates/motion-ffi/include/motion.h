@@ -31,6 +31,10 @@ typedef struct motion_generator motion_generator;
 // A loaded model (opaque): immutable weights shared by any number of generators.
 typedef struct motion_model motion_model;
 
+// A character's own rig (opaque; `motion_core::rig_target`): joint names, parents and rest
+// transforms from the engine, mapped from a generator's skeleton.
+typedef struct motion_rig motion_rig;
+
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
@@ -166,6 +170,50 @@ int motion_generator_advance_pose(struct motion_generator *generator,
                                   float *root_rotation,
                                   float *joint_rotations,
                                   size_t joint_count);
+
+// Makes a rig target for the poses of `generator` from the engine's skeleton: `joint_count`
+// joints, parents first (joint 0 the root): `names` (NUL-terminated), `parents` (-1 for the
+// root), `rest_rotations` (`4 * joint_count` floats, the rest local rotations `x, y, z, w`) and
+// `rest_translations` (`3 * joint_count`, rest local translations in metres), in this crate's
+// frame: +y up, right-handed, the character facing +z (convert from the engine's first,
+// `docs/embedding.md`). `joint_map_json` (NULL: the built-in maps, e.g. the Unreal names)
+// names the rig's joint for each H3.6M body joint. NULL on error (see `motion_last_error`).
+//
+// # Safety
+// `generator` is NULL or live; `names` NULL or `joint_count` valid strings; the arrays NULL or
+// of the sizes above; `joint_map_json` NULL or NUL-terminated.
+struct motion_rig *motion_rig_new(const struct motion_generator *generator,
+                                  const char *const *names,
+                                  const int32_t *parents,
+                                  const float *rest_rotations,
+                                  const float *rest_translations,
+                                  size_t joint_count,
+                                  const char *joint_map_json);
+
+// Frees a rig (NULL is a no-op).
+//
+// # Safety
+// `rig` is NULL or from `motion_rig_new`, freed once.
+void motion_rig_free(struct motion_rig *rig);
+
+// The rig's hips joint (the joint `motion_rig_pose`'s `hips_translation` moves); -1 for NULL.
+//
+// # Safety
+// `rig` is NULL or live.
+int32_t motion_rig_hips(const struct motion_rig *rig);
+
+// Fills the rig's pose for `generator`'s current pose (the one its last step or advance
+// returned): `rotations` gets `4 * joint_count` floats, the local rotation (`x, y, z, w`) to write
+// into each joint (unmapped joints: their rest rotation), `hips_translation` 3 floats, the hips'
+// local translation (metres, in the parent space of the hips). No allocation.
+//
+// # Safety
+// `rig` and `generator` NULL or live; `rotations` `4 * joint_count` floats, `hips_translation` 3.
+int motion_rig_pose(struct motion_rig *rig,
+                    const struct motion_generator *generator,
+                    float *rotations,
+                    size_t joint_count,
+                    float *hips_translation);
 
 #ifdef __cplusplus
 }  // extern "C"

@@ -29,6 +29,7 @@ use motion_core::formats::bvh::read_bvh;
 use motion_core::grounding::GroundingConfig;
 use motion_core::model::config::RIG_SKELETON;
 use motion_core::model::{builtin, Character, MotionSource, Noise};
+use motion_core::rig_target::{RigJoint, RigPose, RigTarget};
 use motion_core::seed::load_model_seed;
 use motion_core::steering::Goal;
 use motion_core::takes::seed_poses_on_rig;
@@ -554,4 +555,151 @@ pub unsafe extern "C" fn motion_generator_advance_pose(
 ) -> c_int {
     let outputs = (root_position, root_rotation, joint_rotations, joint_count);
     guard(|| advance_and_write(generator, Some(dt), outputs))
+}
+
+/// A character's own rig (opaque; `motion_core::rig_target`): joint names, parents and rest
+/// transforms from the engine, mapped from a generator's skeleton.
+pub struct motion_rig {
+    target: RigTarget,
+    out: RigPose,
+}
+
+/// Makes a rig target for the poses of `generator` from the engine's skeleton: `joint_count`
+/// joints, parents first (joint 0 the root): `names` (NUL-terminated), `parents` (-1 for the
+/// root), `rest_rotations` (`4 * joint_count` floats, the rest local rotations `x, y, z, w`) and
+/// `rest_translations` (`3 * joint_count`, rest local translations in metres), in this crate's
+/// frame: +y up, right-handed, the character facing +z (convert from the engine's first,
+/// `docs/embedding.md`). `joint_map_json` (NULL: the built-in maps, e.g. the Unreal names)
+/// names the rig's joint for each H3.6M body joint. NULL on error (see `motion_last_error`).
+///
+/// # Safety
+/// `generator` is NULL or live; `names` NULL or `joint_count` valid strings; the arrays NULL or
+/// of the sizes above; `joint_map_json` NULL or NUL-terminated.
+#[no_mangle]
+pub unsafe extern "C" fn motion_rig_new(
+    generator: *const motion_generator,
+    names: *const *const c_char,
+    parents: *const i32,
+    rest_rotations: *const f32,
+    rest_translations: *const f32,
+    joint_count: usize,
+    joint_map_json: *const c_char,
+) -> *mut motion_rig {
+    guard_ptr(|| {
+        let g = unsafe { generator.as_ref() }.ok_or("generator is NULL")?;
+        if names.is_null()
+            || parents.is_null()
+            || rest_rotations.is_null()
+            || rest_translations.is_null()
+        {
+            return Err("names, parents, rest_rotations or rest_translations is NULL".into());
+        }
+        if joint_count == 0 || joint_count > motion_core::rig_target::MAX_JOINTS {
+            return Err(format!(
+                "joint_count {joint_count}: a rig has 2 to {} joints",
+                motion_core::rig_target::MAX_JOINTS
+            ));
+        }
+        let map = unsafe { text(joint_map_json, "joint_map_json") }.map_err(|e| e.1)?;
+        let names = unsafe { std::slice::from_raw_parts(names, joint_count) };
+        let parents = unsafe { std::slice::from_raw_parts(parents, joint_count) };
+        let rotations = unsafe { std::slice::from_raw_parts(rest_rotations, 4 * joint_count) };
+        let translations =
+            unsafe { std::slice::from_raw_parts(rest_translations, 3 * joint_count) };
+        let mut joints = Vec::with_capacity(joint_count);
+        for j in 0..joint_count {
+            let name = unsafe { text(names[j], "a joint name") }
+                .map_err(|e| e.1)?
+                .ok_or_else(|| format!("joint {j}: its name is NULL"))?;
+            let parent = match parents[j] {
+                -1 => None,
+                p if p >= 0 => Some(p as usize),
+                p => return Err(format!("joint {j}: parent {p} (-1 for the root)")),
+            };
+            let r = &rotations[4 * j..4 * j + 4];
+            let t = &translations[3 * j..3 * j + 3];
+            joints.push(RigJoint {
+                name: name.to_string(),
+                parent,
+                rest_rotation: glam::Quat::from_xyzw(r[0], r[1], r[2], r[3]),
+                rest_translation: glam::Vec3::new(t[0], t[1], t[2]),
+            });
+        }
+        let target =
+            RigTarget::from_joints(joints, map, &g.model.skeleton()).map_err(|e| e.to_string())?;
+        let out = RigPose::for_target(&target);
+        Ok(Box::new(motion_rig { target, out }))
+    })
+}
+
+/// Frees a rig (NULL is a no-op).
+///
+/// # Safety
+/// `rig` is NULL or from `motion_rig_new`, freed once.
+#[no_mangle]
+pub unsafe extern "C" fn motion_rig_free(rig: *mut motion_rig) {
+    if !rig.is_null() {
+        drop(unsafe { Box::from_raw(rig) });
+    }
+}
+
+/// The rig's hips joint (the joint `motion_rig_pose`'s `hips_translation` moves); -1 for NULL.
+///
+/// # Safety
+/// `rig` is NULL or live.
+#[no_mangle]
+pub unsafe extern "C" fn motion_rig_hips(rig: *const motion_rig) -> i32 {
+    unsafe { rig.as_ref() }.map_or(-1, |r| r.target.hips() as i32)
+}
+
+/// Fills the rig's pose for `generator`'s current pose (the one its last step or advance
+/// returned): `rotations` gets `4 * joint_count` floats, the local rotation (`x, y, z, w`) to write
+/// into each joint (unmapped joints: their rest rotation), `hips_translation` 3 floats, the hips'
+/// local translation (metres, in the parent space of the hips). No allocation.
+///
+/// # Safety
+/// `rig` and `generator` NULL or live; `rotations` `4 * joint_count` floats, `hips_translation` 3.
+#[no_mangle]
+pub unsafe extern "C" fn motion_rig_pose(
+    rig: *mut motion_rig,
+    generator: *const motion_generator,
+    rotations: *mut f32,
+    joint_count: usize,
+    hips_translation: *mut f32,
+) -> c_int {
+    guard(|| {
+        let rig = unsafe { rig.as_mut() }.ok_or_else(|| invalid("rig is NULL"))?;
+        let g = unsafe { generator.as_ref() }.ok_or_else(|| invalid("generator is NULL"))?;
+        if rotations.is_null() || hips_translation.is_null() {
+            return Err(invalid("an output pointer is NULL"));
+        }
+        if !g.started {
+            return Err((
+                MotionStatus::State,
+                "a rig pose was asked for before a start: seed the generator first".into(),
+            ));
+        }
+        let joints = rig.target.joints().len();
+        if joint_count != joints {
+            return Err(invalid(&format!(
+                "joint_count is {joint_count}, the rig has {joints} joints"
+            )));
+        }
+        let pose = g.character.current();
+        if pose.local_rotations.len() != rig.target.source_skeleton().len() {
+            return Err(invalid(
+                "the generator's poses are not on the skeleton the rig was made for",
+            ));
+        }
+        rig.target.write(pose, &mut rig.out);
+        unsafe {
+            let out = std::slice::from_raw_parts_mut(rotations, 4 * joints);
+            for (dst, q) in out.chunks_exact_mut(4).zip(&rig.out.local_rotations) {
+                dst.copy_from_slice(&q.to_array());
+            }
+            std::slice::from_raw_parts_mut(hips_translation, 3)
+                .copy_from_slice(&rig.out.hips_translation.to_array());
+        }
+        Ok(0)
+    })
 }

@@ -328,6 +328,14 @@ impl Character {
         }
     }
 
+    /// The pose [`advance`](Self::advance) (or a start) last returned.
+    pub fn current(&self) -> &Pose {
+        match &self.driver {
+            Driver::Model { stream, .. } => stream.current(),
+            Driver::Matching { resampler, .. } => resampler.current(),
+        }
+    }
+
     /// Changes the action without re-seeding ([`Generator::set_action`]); the lean limit
     /// follows it. A database has no actions: it plays its takes whatever the action.
     pub fn set_action(&mut self, action: &str, crossfade: usize) -> Result<(), CharacterError> {

@@ -195,6 +195,24 @@ fn the_mannequin_reads_maps_and_walks_on_the_floor() {
         rest[head].y
     );
     assert_eq!(out.local_rotations[finger], joints[finger].rest_rotation);
+    // Walking swings the thighs: their local rotation moves by tens of degrees.
+    let thigh = target
+        .joints()
+        .iter()
+        .position(|j| j.name == "thigh_l")
+        .unwrap();
+    let rotations: Vec<Quat> = walk_poses(40)
+        .iter()
+        .map(|pose| {
+            target.write(pose, &mut out);
+            out.local_rotations[thigh]
+        })
+        .collect();
+    let swing = rotations
+        .iter()
+        .map(|q| q.angle_between(rotations[0]).to_degrees())
+        .fold(0.0f32, f32::max);
+    assert!(swing > 20.0, "thigh_l turns {swing:.1} degrees at most");
 }
 
 #[test]
