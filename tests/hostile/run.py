@@ -48,6 +48,19 @@ class Case:
     inputs: list[str] = field(default_factory=list)
 
 
+def root_1e308() -> str:
+    """The walk seed with every frame's root x position set to 1e308."""
+    text = WALK_SEED.read_text()
+    head, motion = text.split("MOTION", 1)
+    lines = motion.splitlines()
+    for i, line in enumerate(lines):
+        if line.strip() and not line.strip().startswith(("Frame", "MOTION")):
+            values = line.split()
+            values[0] = "1e308"
+            lines[i] = " ".join(values)
+    return head + "MOTION" + "\n".join(lines) + "\n"
+
+
 def shared_files(root: Path) -> dict[str, Path]:
     """The large files several cases read, written once."""
     root.mkdir(parents=True, exist_ok=True)
@@ -203,6 +216,20 @@ def cases(shared: dict[str, Path]) -> list[Case]:
                                       **{f"Right{p}": f"Left{p}" for p in ("Shoulder", "Arm", "ForeArm", "Hand")}})))
     add(Case("map-not-json", mp, contains=["map.json"], setup=bad_map("Hips = Hips")))
     add(Case("map-good", mp, expect="accept", setup=bad_map(lambda x: x)))
+    many = "{" + ", ".join(f'"k{i}": "v{i}"' for i in range(1_000_000)) + "}"
+    add(Case("map-a-million-keys", mp, contains=["map.json", "bytes"], setup=bad_map(many)))
+    add(Case("map-two-thousand-keys", mp, contains=["map.json", "entries"],
+             setup=bad_map("{" + ", ".join(f'"k{i}": "v{i}"' for i in range(2_000)) + "}")))
+    add(Case("map-with-npy-seed", predict + ["--seed", s["e_npy"], "--joint-map", "map.json", "--out", "p.bvh"],
+             contains=["--joint-map", "e.npy", "no rig"], setup=bad_map(lambda x: x)))
+    add(Case("map-with-expmap-seed", predict + ["--seed", s["expmap"], "--joint-map", "map.json", "--out", "p.bvh"],
+             contains=["--joint-map", "walk.txt", "no rig"], setup=bad_map(lambda x: x)))
+    add(Case("samples-overwrite-their-seed", ["predict", "--model", m, "--action", "walking", "--seed", "out_0.bvh",
+                                               "--out", "out.bvh", "--samples", "2"],
+             contains=["out_0.bvh", "input"], setup=lambda d: shutil.copy(WALK_SEED, d / "out_0.bvh"),
+             inputs=["out_0.bvh"]))
+    add(Case("bvh-root-1e308-to-npy", predict + ["--seed", "r.bvh", "--out", "p.npy"], contains=["finite"],
+             setup=lambda d: (d / "r.bvh").write_text(root_1e308())))
 
     # -- values that overflow, rates out of range, error lines
     add(Case("bvh-offset-1e308-positions", ["convert", "o.bvh", "o.npy", "--positions"], contains=["o.bvh"],

@@ -127,6 +127,21 @@ pub fn write_clips(
     clips: &Clips<'_>,
 ) -> Result<Vec<PathBuf>, ClipError> {
     let n = clips.samples.len();
+    // Nothing non-finite is written (a seed whose values are out of any range, e.g. a root
+    // position of 1e308, can overflow the integration): refused before any file is made.
+    for (i, frames) in clips.samples.iter().enumerate() {
+        if let Some((index, value)) = frames.indexed_iter().find(|(_, v)| !v.is_finite()) {
+            return Err(ClipError::Output {
+                path: out.to_path_buf(),
+                problem: format!(
+                    "sample {i}, frame {}, value {}: {} is not a finite number (the seed's values are out of range); nothing was written",
+                    index.0,
+                    index.1,
+                    crate::motion::compact_number(*value)
+                ),
+            });
+        }
+    }
     if format == FileFormat::Npy && n > 1 {
         let (frames, dims) = clips.samples[0].dim();
         let mut stacked = Array3::zeros((n, frames, dims));

@@ -17,7 +17,129 @@ use pyo3::prelude::*;
 use crate::errors::{format, seed as seed_error, value, weights};
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    m.add_class::<Character>()
+    m.add_class::<Character>()?;
+    m.add_class::<Rig>()
+}
+
+/// A character's own skeleton (`motion_core::rig_target`): joint names, parents (-1 for the
+/// root; parents first) and rest local rotations (`n x 4`, `x, y, z, w`) and translations (`n x
+/// 3`, metres), +y up, right-handed, facing +z, mapped from `character`'s skeleton by the built-in
+/// maps or `joint_map` (JSON text). `pose(character)` gives the local rotation to write into each
+/// joint for the character's current pose and the hips' translation in the hips' parent space.
+/// `Rig.from_gltf(path, character)` reads a `.glb`/`.gltf` skin.
+#[pyclass(module = "motion._motion")]
+pub struct Rig {
+    target: motion_core::rig_target::RigTarget,
+    out: motion_core::rig_target::RigPose,
+}
+
+#[pymethods]
+impl Rig {
+    #[new]
+    #[pyo3(signature = (names, parents, rest_rotations, rest_translations, character, joint_map = None))]
+    fn new(
+        names: Vec<String>,
+        parents: Vec<i64>,
+        rest_rotations: &Bound<'_, PyAny>,
+        rest_translations: &Bound<'_, PyAny>,
+        character: &Character,
+        joint_map: Option<&str>,
+    ) -> PyResult<Rig> {
+        use motion_core::rig_target::{RigJoint, RigTarget};
+        let n = names.len();
+        let rot = crate::arrays::f64_array(rest_rotations, "rest_rotations")?;
+        let tr = crate::arrays::f64_array(rest_translations, "rest_translations")?;
+        let (rot, tr) = (rot.as_array(), tr.as_array());
+        if parents.len() != n || rot.shape() != [n, 4] || tr.shape() != [n, 3] {
+            return Err(value(format!(
+                "{n} names need {n} parents, rest_rotations {n} x 4 and rest_translations {n} x 3; got {}, {:?} and {:?}",
+                parents.len(),
+                rot.shape(),
+                tr.shape()
+            )));
+        }
+        let mut joints = Vec::with_capacity(n);
+        for (j, name) in names.into_iter().enumerate() {
+            let parent = match parents[j] {
+                -1 => None,
+                p if p >= 0 => Some(p as usize),
+                p => return Err(value(format!("joint {j}: parent {p} (-1 for the root)"))),
+            };
+            let q = |k: usize| rot[[j, k]] as f32;
+            let t = |k: usize| tr[[j, k]] as f32;
+            joints.push(RigJoint {
+                name,
+                parent,
+                rest_rotation: glam::Quat::from_xyzw(q(0), q(1), q(2), q(3)),
+                rest_translation: glam::Vec3::new(t(0), t(1), t(2)),
+            });
+        }
+        let target =
+            RigTarget::from_joints(joints, joint_map, character.inner.skeleton()).map_err(value)?;
+        let out = motion_core::rig_target::RigPose::for_target(&target);
+        Ok(Rig { target, out })
+    }
+
+    /// A rig from the largest skin of a glTF/GLB file, mapped from `character`'s skeleton.
+    #[staticmethod]
+    #[pyo3(signature = (path, character, joint_map = None))]
+    fn from_gltf(path: PathBuf, character: &Character, joint_map: Option<&str>) -> PyResult<Rig> {
+        let target = motion_core::rig_target::RigTarget::from_gltf(
+            &path,
+            joint_map,
+            character.inner.skeleton(),
+        )
+        .map_err(value)?;
+        let out = motion_core::rig_target::RigPose::for_target(&target);
+        Ok(Rig { target, out })
+    }
+
+    /// The joint names, in the rig's order.
+    fn joint_names(&self) -> Vec<String> {
+        self.target
+            .joints()
+            .iter()
+            .map(|j| j.name.clone())
+            .collect()
+    }
+
+    /// The hips joint's index.
+    fn hips(&self) -> usize {
+        self.target.hips()
+    }
+
+    /// `(rotations, hips_translation)` for `character`'s current pose: every joint's local
+    /// rotation (`n x 4`, `x, y, z, w`) and the hips' local translation (3 floats, metres).
+    fn pose<'py>(
+        &mut self,
+        py: Python<'py>,
+        character: &Character,
+    ) -> PyResult<(Bound<'py, PyArray2<f32>>, Bound<'py, PyArray1<f32>>)> {
+        let pose = character.inner.current();
+        if pose.local_rotations.len() != self.target.source_skeleton().len() {
+            return Err(value(
+                "the character's poses are not on the skeleton this rig was made for",
+            ));
+        }
+        self.target.write(pose, &mut self.out);
+        let n = self.out.local_rotations.len();
+        let flat: Vec<f32> = self
+            .out
+            .local_rotations
+            .iter()
+            .flat_map(|q| q.to_array())
+            .collect();
+        let rotations = ndarray::Array2::from_shape_vec((n, 4), flat)
+            .map_err(value)?
+            .into_pyarray(py);
+        let hips = self
+            .out
+            .hips_translation
+            .to_array()
+            .to_vec()
+            .into_pyarray(py);
+        Ok((rotations, hips))
+    }
 }
 
 /// One character: `start(seed)`, then `advance(dt)` at the engine's rate for the root's world

@@ -45,3 +45,26 @@ def test_a_model_character_and_bad_input():
         motion.Character(ROOT / "missing.safetensors")
     with pytest.raises((ValueError, OSError), match="missing.bvh"):
         motion.Character(DATABASE).start(ROOT / "missing.bvh")
+
+
+def test_a_rig_from_the_mannequin_follows_the_character():
+    import numpy as np
+
+    glb = ROOT / "assets" / "mannequin.glb"
+    c = motion.Character()
+    c.start(ROOT / "examples" / "walk_seed.bvh", action="walking")
+    rig = motion.Rig.from_gltf(glb, c)
+    names = rig.joint_names()
+    assert len(names) == 66 and names[rig.hips()] == "pelvis"
+    thigh = names.index("thigh_l")
+    first, _ = rig.pose(c)
+    turns = []
+    for _ in range(50):
+        c.advance(1 / 30)
+        rotations, hips = rig.pose(c)
+        assert rotations.shape == (66, 4) and np.allclose(np.linalg.norm(rotations, axis=1), 1, atol=1e-4)
+        assert 0.5 < hips[1] < 1.2 or 0.5 < abs(hips[2]) < 1.2
+        turns.append(abs(float(np.dot(rotations[thigh], first[thigh]))))
+    assert min(turns) < 0.995  # the thigh turned by more than about 11 degrees
+    with pytest.raises(ValueError, match="parents"):
+        motion.Rig(["a", "b"], [-1], np.zeros((2, 4)), np.zeros((2, 3)), c)

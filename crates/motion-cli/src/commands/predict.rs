@@ -258,6 +258,28 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             .map(PathBuf::as_path),
         );
         check_not_an_input(&args.out, &inputs)?;
+        // With several samples every output is numbered (`OUT_0.bvh`, ...): none may be an input.
+        if args.samples > 1 && check_output(&args.out)? != FileFormat::Npy {
+            for i in 0..args.samples {
+                check_not_an_input(&motion_core::clip::numbered(&args.out, i), &inputs)?;
+            }
+        }
+        // A joint map maps a BVH seed's rig; other seeds have none.
+        if let Some(map) = &args.joint_map {
+            let seed_format = FileFormat::from_path(&args.seed)?;
+            if seed_format != FileFormat::Bvh {
+                return Err(UsageError(format!(
+                    "--joint-map {}: it maps a BVH seed's rig; {} is {} frames, which have no rig to map",
+                    map.display(),
+                    args.seed.display(),
+                    match seed_format {
+                        FileFormat::Npy => ".npy",
+                        _ => "exp-map text",
+                    }
+                ))
+                .into());
+            }
+        }
         if let Some(truth) = &args.truth {
             check_output(truth)?;
             inputs.push(&args.out);

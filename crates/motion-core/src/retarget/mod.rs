@@ -341,6 +341,11 @@ pub enum RetargetError {
     Degenerate(String),
 }
 
+/// The largest joint-map text read (bytes): 21 entries of names fit many times over.
+pub const MAX_MAP_BYTES: usize = 1 << 20;
+/// The most entries a joint map may have (it needs 21).
+pub const MAX_MAP_ENTRIES: usize = 1_000;
+
 /// Which rig joint stands for each of [`MAPPED_JOINTS`] (none for an unmapped one of
 /// [`OPTIONAL_JOINTS`]).
 #[derive(Debug, Clone, PartialEq)]
@@ -476,8 +481,20 @@ impl JointMap {
     /// no such bone (a `pelvis → thorax → head` spine maps `Spine1` only): the H3.6M joint then
     /// keeps an identity local rotation and turns with its nearest mapped ancestor.
     pub fn from_json(rig: &Skeleton, text: &str) -> Result<JointMap, RetargetError> {
+        if text.len() > MAX_MAP_BYTES {
+            return Err(RetargetError::MapSyntax(format!(
+                "{} bytes: a joint map names 21 joints and is read up to {MAX_MAP_BYTES} bytes",
+                text.len()
+            )));
+        }
         let entries: map_check::Entries =
             serde_json::from_str(text).map_err(|e| RetargetError::MapSyntax(e.to_string()))?;
+        if entries.0.len() > MAX_MAP_ENTRIES {
+            return Err(RetargetError::MapSyntax(format!(
+                "{} entries: a joint map names the 21 H3.6M body joints (at most {MAX_MAP_ENTRIES} entries are read)",
+                entries.0.len()
+            )));
+        }
         let pairs = entries
             .0
             .iter()

@@ -169,3 +169,26 @@ class Character:
     def advance(
         self, dt: float
     ) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.float32]]: ...
+
+
+class Rig:
+    """A character's own skeleton driven by a ``Character``'s poses (``motion_core::rig_target``): joint names,
+    parents (-1 for the root, parents first), rest local rotations (``n x 4``, ``x, y, z, w``) and translations
+    (``n x 3``, metres), +y up, facing +z."""
+
+    def __init__(
+        self,
+        names: Sequence[str],
+        parents: Sequence[int],
+        rest_rotations: ArrayLike,
+        rest_translations: ArrayLike,
+        character: "Character",
+        joint_map: Optional[str] = None,
+    ) -> None: ...
+    @staticmethod
+    def from_gltf(path: Union[str, "PathLike[str]"], character: "Character", joint_map: Optional[str] = None) -> "Rig": ...
+    def joint_names(self) -> list[str]: ...
+    def hips(self) -> int: ...
+    def pose(self, character: "Character") -> tuple[npt.NDArray[np.float32], npt.NDArray[np.float32]]:
+        """The local rotation to write into each joint (``n x 4``) and the hips' local translation (3 floats)."""
+        ...

@@ -104,8 +104,9 @@ pub struct Args {
     #[arg(long, required = true, num_args = 1..)]
     pub pred: Vec<PathBuf>,
     /// Comma list of npss, npss-reference, euler, ndms, apd, classifier, speed_ratio, drift,
-    /// foot_contact, posture, or all (= every metric the inputs allow; classifier and posture
-    /// when --action is given, speed_ratio, drift and foot_contact when --action and --seed are).
+    /// foot_contact, posture, or all (= every metric the inputs allow; classifier when --action is
+    /// given, posture when --action is and the H3.6M data is found, speed_ratio, drift and
+    /// foot_contact when --action and --seed are).
     #[arg(
         long,
         value_enum,
@@ -285,11 +286,20 @@ fn chosen_metrics(
     inputs: &load::Inputs,
 ) -> Result<Vec<Metric>> {
     let (pred, gt, seed) = (&inputs.pred, &inputs.gt, &inputs.seed);
+    let requested_posture = requested
+        .as_ref()
+        .is_some_and(|list| list.contains(&Metric::Posture));
     let available = |m: Metric| match m {
         Metric::Npss | Metric::NpssReference | Metric::Euler => gt.is_some(),
         Metric::Ndms => !args.db.is_empty(),
         Metric::Apd => pred.has_samples,
-        Metric::Classifier | Metric::Posture => action.is_some(),
+        Metric::Classifier => action.is_some(),
+        // Posture reads the action's real takes: with `all`, only when the data is there.
+        Metric::Posture => {
+            action.is_some()
+                && (requested_posture
+                    || motion_metrics::evaluation::resolve_dataset(args.data.as_deref()).is_ok())
+        }
         m if m.is_plausibility() => action.is_some() && seed.is_some(),
         _ => unreachable!("every metric is listed"),
     };
