@@ -48,8 +48,6 @@ against the take's real speed; the lowest is kept as ``best.pt``.
 from __future__ import annotations
 
 import argparse
-import json
-import math
 import sys
 import time
 from pathlib import Path
@@ -58,10 +56,9 @@ import numpy as np
 import torch
 
 from . import data as h36m
-from .checkpoint_io import atomic_save
+from . import takes
 from .export import save_weights
-from .metrics_np import expmap2rotmat
-from .goal_loss import seed_controls, window_loss  # noqa: F401  (window_loss: the training loss)
+from .goal_loss import new_goal_model, seed_controls, train_goal, window_loss  # noqa: F401
 from .models import GoalGRU, make_config
 
 ACTIONS = ("walking", "walkingdog", "walkingtogether", "waiting", "directions")
@@ -73,30 +70,16 @@ ROOT_STEP = 2  # 50 Hz source deltas per 25 Hz frame (motion_core::root)
 def root_trajectory(frames: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Absolute root rotations ``[n, 3, 3]`` (row vectors) and translations ``[n, 3]`` (mm) of 25 Hz H3.6M frames
     (dims 0..5: deltas), every delta applied ``ROOT_STEP`` times, from the identity."""
-    steps = expmap2rotmat(frames[:, 3:6])
-    rot = np.eye(3)
-    trans = np.zeros(3)
-    rots, transes = [], []
-    for t in range(frames.shape[0]):
-        d = frames[t, 0:3]
-        for _ in range(ROOT_STEP):
-            trans = trans + d @ rot
-            rot = steps[t] @ rot
-        rots.append(rot)
-        transes.append(trans)
-    return np.stack(rots), np.stack(transes)
+    return takes.root_trajectory(frames, ROOT_STEP)
 
 
 def headings(rots: np.ndarray) -> np.ndarray:
     """Pelvis heading (radians, 0 facing +z, pi/2 facing +x) of absolute root rotations ``[n, 3, 3]``: the rest
     forward +z as a row vector times ``R``, on the floor."""
-    forward = rots[:, 2, :]
-    return np.arctan2(forward[:, 0], forward[:, 2])
+    return takes.headings(rots, np.array([0.0, 0.0, 1.0]))
 
 
-def wrap(angle: np.ndarray) -> np.ndarray:
-    """Angles wrapped to [-pi, pi)."""
-    return (angle + math.pi) % (2.0 * math.pi) - math.pi
+wrap = takes.wrap
 
 
 def control_of(frames: np.ndarray, k: int = CONTROL_FRAMES, fps: float = FPS) -> np.ndarray:
@@ -278,56 +261,10 @@ def main(argv: list[str] | None = None) -> int:
     val = validation_set(stats, args.seed_frames + VALIDATION_HORIZON, dataset_dir, log=log)
     config = make_config("goal-gru", [int(d) for d in stats.dims_used], hidden=args.hidden, layers=args.layers,
                          seed_frames=args.seed_frames, horizon=args.horizon)
-    model = GoalGRU(config)
-    model.norm.set_stats(torch.from_numpy(stats.mean).float(), torch.from_numpy(stats.std).float())
-    with torch.no_grad():  # start as zero-velocity: the residual decoder outputs the input
-        model.decoder.weight.mul_(0.01)
-        model.decoder.bias.zero_()
-    opt = torch.optim.Adam(model.parameters(), lr=args.lr)
-    rng = np.random.default_rng(args.rng_seed)
-    start_it, best = 0, None
-    if args.resume and last.exists():
-        state = torch.load(last, map_location="cpu", weights_only=False)
-        model.load_state_dict(state["model"])
-        opt.load_state_dict(state["optimizer"])
-        start_it, best = state["iteration"], state.get("best")
-        rng = np.random.default_rng(args.rng_seed + start_it)
-        log(f"resumed at iteration {start_it}, best validation {best}")
-    log(f"{len(train_set.items)} training sequences, {len(val)} validation windows; "
-        f"{sum(p.numel() for p in model.parameters())} parameters")
-    t0 = time.time()
-    running = None
-    for it in range(start_it, args.iterations):
-        lr = args.lr * (0.5 ** (it / max(args.iterations / 3, 1)))
-        for group in opt.param_groups:
-            group["lr"] = lr
-        f, c = train_set.sample(rng, args.batch, window)
-        seed_loss, closed_loss = window_loss(model, torch.from_numpy(f), torch.from_numpy(c), args.seed_frames,
-                                             args.feed_noise)
-        loss = seed_loss + closed_loss
-        opt.zero_grad()
-        loss.backward()
-        torch.nn.utils.clip_grad_norm_(model.parameters(), 1.0)
-        opt.step()
-        value = float(loss.detach())
-        running = value if running is None else 0.98 * running + 0.02 * value
-        done = it + 1
-        if done % 100 == 0:
-            log(f"it {done} loss {running:.4f} (seed {float(seed_loss.detach()):.4f}, closed {float(closed_loss.detach()):.4f}) "
-                f"lr {lr:.2e} {(time.time() - t0) / (done - start_it):.3f} s/it")
-        if done % args.val_every == 0 or done == args.iterations:
-            report = validate(model, val, args.seed_frames, stats)
-            v = report["score"]
-            state = {"model": model.state_dict(), "optimizer": opt.state_dict(), "config": config,
-                     "iteration": done, "validation": report, "argv": argv}
-            if best is None or v < best:
-                best = v
-                atomic_save(state, args.run_dir / "best.pt")
-            state["best"] = best
-            atomic_save(state, last)
-            log(f"it {done} validation " + " ".join(f"{k} {x:.3f}" for k, x in report.items()) + f" (best {best:.3f})")
-    (args.run_dir / "done.json").write_text(json.dumps({"iterations": args.iterations, "best": best}))
-    return 0
+    model, opt = new_goal_model(config, stats.mean, stats.std, args.lr)
+    log(f"{len(train_set.items)} training sequences, {len(val)} validation windows")
+    return train_goal(args, argv, model, opt, config, lambda rng: train_set.sample(rng, args.batch, window),
+                      lambda: validate(model, val, args.seed_frames, stats), log)
 
 
 if __name__ == "__main__":

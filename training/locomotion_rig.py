@@ -3,7 +3,6 @@ module docs of ``training/locomotion.py`` state the windows, the validation rule
 
 from __future__ import annotations
 
-import json
 import time
 from pathlib import Path
 
@@ -11,9 +10,8 @@ import numpy as np
 import torch
 
 from . import data as h36m
-from .checkpoint_io import atomic_save
 from .export import save_weights
-from .goal_loss import window_loss
+from .goal_loss import new_goal_model, train_goal
 from .models import GoalGRU, make_config
 from .takes import TakeSet, controls_of, load_takes, validation_names
 
@@ -100,22 +98,7 @@ def train_rig(args, argv: list[str], log) -> int:
                          seed_frames=args.seed_frames, horizon=args.horizon, frame_dims=takes.frame_dims,
                          fps=takes.fps, skeleton="rig", control_frames=k, rig_bvh=takes.rig_bvh,
                          mm_per_unit=takes.mm_per_unit)
-    model = GoalGRU(config)
-    model.norm.set_stats(torch.from_numpy(stats.mean).float(), torch.from_numpy(stats.std).float())
-    with torch.no_grad():  # start as zero-velocity: the residual decoder outputs the input
-        model.decoder.weight.mul_(0.01)
-        model.decoder.bias.zero_()
-    opt = torch.optim.Adam(model.parameters(), lr=args.lr)
-    rng = np.random.default_rng(args.rng_seed)
-    last = args.run_dir / "last.pt"
-    start_it, best = 0, None
-    if args.resume and last.exists():
-        state = torch.load(last, map_location="cpu", weights_only=False)
-        model.load_state_dict(state["model"])
-        opt.load_state_dict(state["optimizer"])
-        start_it, best = state["iteration"], state.get("best")
-        rng = np.random.default_rng(args.rng_seed + start_it)
-        log(f"resumed at iteration {start_it}, best validation {best}")
+    model, opt = new_goal_model(config, stats.mean, stats.std, args.lr)
     horizons = [h for h in (*SHORT_HORIZONS, args.horizon) if args.seed_frames + h + 1 <= train_set.longest()]
     if not horizons:
         raise SystemExit(f"no training take has {args.seed_frames + SHORT_HORIZONS[0] + 1} frames")
@@ -124,39 +107,14 @@ def train_rig(args, argv: list[str], log) -> int:
         "excluded": args.exclude or "none",
         "rest_forward": [float(v) for v in takes.rest_forward],
     }
-    t0 = time.time()
-    running = None
-    for it in range(start_it, args.iterations):
-        lr = args.lr * (0.5 ** (it / max(args.iterations / 3, 1)))
-        for group in opt.param_groups:
-            group["lr"] = lr
+
+    def sample(rng: np.random.Generator):
         horizon = horizons[int(rng.integers(len(horizons)))]
-        f, c = train_set.sample(rng, args.batch, args.seed_frames + horizon + 1)
-        seed_loss, closed_loss = window_loss(model, torch.from_numpy(f), torch.from_numpy(c), args.seed_frames,
-                                             args.feed_noise)
-        loss = seed_loss + closed_loss
-        opt.zero_grad()
-        loss.backward()
-        torch.nn.utils.clip_grad_norm_(model.parameters(), 1.0)
-        opt.step()
-        value = float(loss.detach())
-        running = value if running is None else 0.98 * running + 0.02 * value
-        done = it + 1
-        if done % 100 == 0:
-            log(f"it {done} loss {running:.4f} lr {lr:.2e} {(time.time() - t0) / (done - start_it):.3f} s/it")
-        if done % args.val_every == 0 or done == args.iterations:
-            report = validate_rig(model, val, args.seed_frames, stats, k, takes.fps, takes.rest_forward)
-            v = report["score"]
-            state = {"model": model.state_dict(), "optimizer": opt.state_dict(), "config": config,
-                     "iteration": done, "validation": report, "argv": argv, "data": provenance_data}
-            if best is None or v < best:
-                best = v
-                atomic_save(state, args.run_dir / "best.pt")
-            state["best"] = best
-            atomic_save(state, last)
-            log(f"it {done} validation " + " ".join(f"{k_} {x:.3f}" for k_, x in report.items()) + f" (best {best:.3f})")
-    (args.run_dir / "done.json").write_text(json.dumps({"iterations": args.iterations, "best": best}))
-    return 0
+        return train_set.sample(rng, args.batch, args.seed_frames + horizon + 1)
+
+    return train_goal(args, argv, model, opt, config, sample,
+                      lambda: validate_rig(model, val, args.seed_frames, stats, k, takes.fps, takes.rest_forward),
+                      log, {"data": provenance_data})
 
 
 def export_rig(out: Path, state: dict, licence: str) -> None:
