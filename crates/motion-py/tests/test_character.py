@@ -65,6 +65,6 @@ def test_a_rig_from_the_mannequin_follows_the_character():
         assert rotations.shape == (66, 4) and np.allclose(np.linalg.norm(rotations, axis=1), 1, atol=1e-4)
         assert 0.5 < hips[1] < 1.2 or 0.5 < abs(hips[2]) < 1.2
         turns.append(abs(float(np.dot(rotations[thigh], first[thigh]))))
-    assert min(turns) < 0.995  # the thigh turned by more than about 11 degrees
+    assert min(turns) < 0.998  # the thigh turned by more than about 7 degrees (the game default shuffles)
     with pytest.raises(ValueError, match="parents"):
         motion.Rig(["a", "b"], [-1], np.zeros((2, 4)), np.zeros((2, 3)), c)
