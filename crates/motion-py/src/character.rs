@@ -110,6 +110,7 @@ impl Rig {
 
     /// `(rotations, hips_translation)` for `character`'s current pose: every joint's local
     /// rotation (`n x 4`, `x, y, z, w`) and the hips' local translation (3 floats, metres).
+    #[allow(clippy::type_complexity)]
     fn pose<'py>(
         &mut self,
         py: Python<'py>,
