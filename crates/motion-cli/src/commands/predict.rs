@@ -42,7 +42,10 @@ samples x frames x 99. Stochastic models draw each sample's noise from --rng-see
 (VGRU-d its plan noise, the intention model its z); GRU-d and DAE-LSTM give identical samples.
 
 Batch mode: --seed DIR --out DIR predicts every .bvh/.txt/.txt.gz/.npy in DIR in parallel into \
-DIR/<name>.<--format>; a bad file is reported and the others go on.
+DIR/<name>.<--format> (seeds whose names would give the same output are told apart: a.bvh and a.npy \
+give a_bvh and a_npy, a name still taken gets _2, _3, ...); a bad file is reported and the others go on. \
+Each output is written whole (a temporary file, then a rename); an interrupted batch keeps the outputs \
+already completed and leaves no partial file.
 
 Examples:
   motion-cli predict --seed examples/walk_seed.bvh --out pred.bvh
@@ -706,15 +709,24 @@ fn output_names(files: &[PathBuf], out_dir: &Path, ext: &str) -> Vec<PathBuf> {
         )
     };
     let stems: Vec<(String, String)> = files.iter().map(split).collect();
+    // Names still equal after that (`a.npy` and `a_npy.bvh` both give `a_npy`), compared without
+    // case (case-insensitive file systems), get `_2`, `_3`, ... in file order: one output per seed.
+    let mut taken: std::collections::HashSet<String> = std::collections::HashSet::new();
     stems
         .iter()
         .map(|(stem, in_ext)| {
             let shared = stems.iter().filter(|(s, _)| s == stem).count() > 1;
-            let name = if shared {
-                format!("{stem}_{in_ext}.{ext}")
+            let base = if shared {
+                format!("{stem}_{in_ext}")
             } else {
-                format!("{stem}.{ext}")
+                stem.clone()
             };
+            let mut name = format!("{base}.{ext}");
+            let mut k = 2;
+            while !taken.insert(name.to_lowercase()) {
+                name = format!("{base}_{k}.{ext}");
+                k += 1;
+            }
             out_dir.join(name)
         })
         .collect()
@@ -828,6 +840,21 @@ mod tests {
                 PathBuf::from("o/a_bvh.bvh"),
                 PathBuf::from("o/a_npy.bvh"),
                 PathBuf::from("o/b.bvh")
+            ]
+        );
+        // `a.npy` and `a_npy.bvh` would both be `a_npy`: the second is numbered.
+        let files = [
+            PathBuf::from("s/a.bvh"),
+            PathBuf::from("s/a.npy"),
+            PathBuf::from("s/a_npy.bvh"),
+        ];
+        let names = output_names(&files, Path::new("o"), "bvh");
+        assert_eq!(
+            names,
+            [
+                PathBuf::from("o/a_bvh.bvh"),
+                PathBuf::from("o/a_npy.bvh"),
+                PathBuf::from("o/a_npy_2.bvh")
             ]
         );
     }
