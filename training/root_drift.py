@@ -4,8 +4,8 @@
 motion from the first seed frame (identity before it) and measures, per window, the largest change of the hip
 height ``h_t`` (y of Hips, mm) and of the torso lean ``λ_t`` (degrees between +y and Hips -> Neck) from the last
 seed frame. The models predict the deltas only; they never see the integrated height or orientation, so a small
-bias in the predicted vertical translation or tilt accumulates over 12 s (the long-horizon fine-tunes of session
-13 leaned and sank out of the real range on 8 of 11 actions).
+bias in the predicted vertical translation or tilt accumulates over 12 s (the long-horizon VGRU-d fine-tunes,
+`docs/models.md` "Long-horizon fine-tunes of the VGRU-d", leaned and sank out of the real range on 8 of 11 actions).
 
 This module is the differentiable counterpart: ``root_poses`` integrates exactly as ``motion_core::root`` (row
 vectors, ``R(t) = Rd^s R(t-1)``, ``T(t) = T(t-1) + d (I + ... + Rd^(s-1)) R(t-1)``, the first frame applied once,
