@@ -27,7 +27,6 @@ use std::path::Path;
 
 use motion_core::formats::bvh::read_bvh;
 use motion_core::grounding::GroundingConfig;
-use motion_core::model::config::RIG_SKELETON;
 use motion_core::model::{builtin, Character, MotionSource, Noise};
 use motion_core::rig_target::{RigJoint, RigPose, RigTarget};
 use motion_core::seed::load_model_seed;
@@ -311,7 +310,7 @@ pub unsafe extern "C" fn motion_generator_start_bvh(
             unsafe { text(bvh_path, "bvh_path") }?.ok_or_else(|| invalid("bvh_path is NULL"))?;
         let action = unsafe { text(action, "action") }?;
         let config = match &g.model {
-            MotionSource::Model(m) if m.config().skeleton != RIG_SKELETON => m.config().clone(),
+            MotionSource::Model(m) if !g.model.plays_on_rig() => m.config().clone(),
             source => {
                 // A database or a model on a rig plays on its rig: the seed goes onto it (a
                 // database ignores the action).

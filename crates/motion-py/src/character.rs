@@ -6,7 +6,6 @@ use motion_core::formats::bvh::read_bvh;
 use motion_core::formats::expmap_bvh::ExpMapTarget;
 use motion_core::grounding::GroundingConfig;
 use motion_core::model::builtin::BuiltIn;
-use motion_core::model::config::RIG_SKELETON;
 use motion_core::model::{Character as CoreCharacter, MotionSource, Noise};
 use motion_core::seed::load_seed;
 use motion_core::steering::{Goal, Vec2};
@@ -218,12 +217,17 @@ impl Character {
         action: Option<&str>,
         rng_seed: u64,
     ) -> PyResult<()> {
-        let on_rig = match &self.source {
-            MotionSource::Database(_) => true,
-            MotionSource::Model(m) => m.config().skeleton == RIG_SKELETON,
-        };
         match &self.source {
-            source if on_rig => {
+            MotionSource::Model(model) if !self.source.plays_on_rig() => {
+                let fps = model.config().fps;
+                let loaded = py
+                    .detach(|| load_seed(&seed, ExpMapTarget::H36m, fps, 50.0, None))
+                    .map_err(seed_error)?;
+                self.inner
+                    .start_from_clip(loaded.frames.view(), action, Noise::Seed(rng_seed))
+                    .map_err(|e| value(format!("{}: {e}", seed.display())))?;
+            }
+            source => {
                 let source = source.clone();
                 let poses = py.detach(|| {
                     let bvh = read_bvh(&seed).map_err(format)?;
@@ -244,16 +248,6 @@ impl Character {
                 self.inner
                     .start_poses_with(&poses, action, Noise::Seed(rng_seed))
                     .map_err(value)?;
-            }
-            MotionSource::Database(_) => unreachable!("a database plays on its rig"),
-            MotionSource::Model(model) => {
-                let fps = model.config().fps;
-                let loaded = py
-                    .detach(|| load_seed(&seed, ExpMapTarget::H36m, fps, 50.0, None))
-                    .map_err(seed_error)?;
-                self.inner
-                    .start_from_clip(loaded.frames.view(), action, Noise::Seed(rng_seed))
-                    .map_err(|e| value(format!("{}: {e}", seed.display())))?;
             }
         }
         Ok(())

@@ -66,6 +66,16 @@ impl MotionSource {
         }
     }
 
+    /// Whether it plays on a rig of its own (a database, or a learned model whose file holds its
+    /// rig): seeded with poses on that rig ([`super::Character::start_poses_with`]), not with
+    /// H3.6M exp-map frames.
+    pub fn plays_on_rig(&self) -> bool {
+        match self {
+            MotionSource::Model(m) => m.config().skeleton == super::config::RIG_SKELETON,
+            MotionSource::Database(_) => true,
+        }
+    }
+
     /// Millimetres per unit of the rig's files (a database's or a rig model's; 1 for H3.6M's
     /// skeleton): BVH written on the rig use them.
     pub fn rig_mm_per_unit(&self) -> f64 {

@@ -123,6 +123,18 @@ pub fn compute(
     Ok(report)
 }
 
+/// `--seed` holds one sequence (no samples) per `--pred` sequence (`n`).
+fn check_one_seed_each(seed: &Batch, n: usize) -> Result<()> {
+    if seed.data.dim().0 != n || seed.has_samples {
+        return Err(usage(format!(
+            "--seed {} must hold one sequence per --pred sequence ({n}); found shape {:?}",
+            seed.what,
+            seed.data.shape()
+        )));
+    }
+    Ok(())
+}
+
 // ---------- NPSS and Euler error ----------
 
 /// NPSS (whole and per window) and the Euler error of every sample against its sequence's
@@ -408,13 +420,7 @@ fn score_classifier(
     }
     let (n, samples, t, d) = pred.data.dim();
     if let Some(seed) = seed {
-        if seed.data.dim().0 != n || seed.has_samples {
-            return Err(usage(format!(
-                "--seed {} must hold one sequence per --pred sequence ({n}); found shape {:?}",
-                seed.what,
-                seed.data.shape()
-            )));
-        }
+        check_one_seed_each(seed, n)?;
     }
     let flat = pred
         .data
@@ -455,13 +461,7 @@ fn score_plausibility(
         }
     }
     let (n, s, t, _) = pred.data.dim();
-    if seed.data.dim().0 != n || seed.has_samples {
-        return Err(usage(format!(
-            "--seed {} must hold one sequence per --pred sequence ({n}); found shape {:?}",
-            seed.what,
-            seed.data.shape()
-        )));
-    }
+    check_one_seed_each(seed, n)?;
     let reference = super::super::plausibility::reference(dataset, action)?;
     let pairs: Vec<_> = (0..n)
         .flat_map(|i| {
@@ -497,13 +497,7 @@ fn score_posture(
     }
     let (n, s, _, _) = pred.data.dim();
     if let Some(seed) = seed {
-        if seed.data.dim().0 != n || seed.has_samples {
-            return Err(usage(format!(
-                "--seed {} must hold one sequence per --pred sequence ({n}); found shape {:?}",
-                seed.what,
-                seed.data.shape()
-            )));
-        }
+        check_one_seed_each(seed, n)?;
     }
     let clips: Vec<(ndarray::Array2<f64>, usize)> = (0..n)
         .flat_map(|i| (0..s).map(move |k| (i, k)))
