@@ -15,6 +15,13 @@ The rule (written 2026-12-07 before any candidate's validation report was read):
 3. Among the candidates whose number of actions meeting the five targets is not below the model's without a prior,
    the most actions within the posture band wins; ties go to the largest radius (the least change to the model).
 
+**Fine-tunes** (``--fine-tunes``, written 2026-12-07 before any fine-tune's report was read): the shipped file first,
+then fine-tunes of it with the posture term (``train_intention.py --posture-weight``), and pose priors on them, in a
+order fixed before scoring. A candidate is eligible when its README example passes (``select_game.py --readme``:
+``X.readme.json`` beside each report, ``training/readme_check.py``) and its number of actions meeting the five
+targets is not below the shipped file's; among the eligible, the most actions within the posture band wins; ties go
+to the first listed (the shipped file before any fine-tune).
+
 Validation windows only; the chosen file's test windows are scored once, afterwards. Standard library only.
 """
 
@@ -25,7 +32,7 @@ import json
 import sys
 from pathlib import Path
 
-from .select_game import action_rows
+from .select_game import action_rows, readme_path, readme_verdict
 
 ARMS_SHARE = 0.05
 
@@ -103,6 +110,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--radii", help="the candidates' radii in report order (comma list; 'off' for none)")
     p.add_argument("--table", action="store_true",
                    help="print one posture table of the reports (any windows: the shipped files' test windows) and stop")
+    p.add_argument("--fine-tunes", action="store_true",
+                   help="the fine-tune rule (module doc): README example a precondition, ties to the first listed")
     args = p.parse_args(argv)
     if args.table:
         print(combined_table([json.loads(path.read_text()) for path in args.reports]))
@@ -113,13 +122,34 @@ def main(argv: list[str] | None = None) -> int:
         if report["protocol"]["windows"] != "validation":
             print(f"{path}: not a validation report (the rule reads validation windows only)", file=sys.stderr)
             return 2
-        verdicts.append(verdict(report))
+        v = verdict(report)
+        if args.fine_tunes:
+            readme = readme_path(path)
+            try:
+                v["readme"] = readme_verdict(json.loads(readme.read_text()))
+            except (OSError, ValueError, KeyError) as e:
+                print(f"error: {readme}: not a training/readme_check.py output ({e})", file=sys.stderr)
+                return 2
+        verdicts.append(v)
     radii = (args.radii or "").split(",") if args.radii else [None] * len(verdicts)
     for v, r in zip(verdicts, radii):
         v["radius"] = None if r in (None, "off") else float(r)
         print(table(v) + "\n")
     floor = verdicts[0]["targets"]
     eligible = [v for v in verdicts if v["targets"] >= floor]
+    if args.fine_tunes:
+        for v in verdicts:
+            r = v["readme"]
+            print(f"{v['source']}: README example smallest speed ratio {r['min_speed']:.3f}"
+                  f"{'' if r['passes'] else ' (fails: not eligible)'}")
+        eligible = [v for v in eligible if v["readme"]["passes"]]
+        if not eligible:
+            print("no candidate is eligible", file=sys.stderr)
+            return 1
+        best = max(eligible, key=lambda v: (v["within"], -verdicts.index(v)))
+        print(f"chosen: {best['source']}: {best['within']} / {best['actions']} actions within the posture band, "
+              f"{best['targets']} meeting the five targets (the shipped file: {floor})")
+        return 0
     best = max(eligible, key=lambda v: (v["within"], v["radius"] if v["radius"] is not None else float("inf")))
     print(f"chosen: {best['source']} (radius {best['radius']}): {best['within']} / {best['actions']} actions within "
           f"the posture band, {best['targets']} meeting the five targets (without a prior: {floor})")

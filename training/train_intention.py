@@ -87,6 +87,7 @@ from .layers import MLP
 from . import long_horizon
 from .crouch import CrouchFloor, TiptoeCeiling, crouch_loss, tiptoe_loss
 from .foot_skate import skate_of_poses
+from .posture_term import PostureGaussian, posture_loss
 from .kinematics import roughness_loss
 from .long_horizon import LONG_HORIZON, accel_loss, root_speed_loss, speed_loss, speed_ratios
 from .models import IntentionModel, joint_groups, make_config, parameter_count
@@ -169,6 +170,12 @@ def build_parser() -> argparse.ArgumentParser:
                    help="adds W x the foot-skating penalty (foot_skate.skate_penalty: low foot points of the "
                         "world-space output, root integrated, moving faster than 0.25 m/s horizontally) of the "
                         "generated frames with gradient")
+    g.add_argument("--posture-weight", type=float, default=0.0, metavar="W",
+                   help="adds W x the posture term (posture_term.posture_loss: relu(m - R)^2 of each generated frame's "
+                        "standardized deviation m from its action's real poses, the closed-loop prior's measure); "
+                        "0 = off")
+    g.add_argument("--posture-radius", type=float, default=1.0, metavar="R",
+                   help="the posture term's radius (real poses: m about 1 on average)")
     g.add_argument("--init-weights", type=Path, metavar="FILE.safetensors",
                    help="a new run whose model (and clustering) starts from an exported intention file; fresh "
                         "discriminators and optimizers; the model size flags do not apply")
@@ -424,6 +431,12 @@ def train(args, argv: list[str]) -> None:
         tiptoe_ceiling = TiptoeCeiling(labelled.seqs, model.norm.unnormalize)
         log("tiptoe limits (mm, ankle over the lowest foot point, real p95): " + ", ".join(
             f"{a} {v:.0f}" for a, v in zip(h36m.ACTIONS, tiptoe_ceiling.limits.tolist())))
+    posture = None
+    if args.posture_weight > 0:
+        if not args.posture_radius > 0:
+            raise SystemExit("error: --posture-radius must be positive")
+        posture = PostureGaussian(labelled.seqs, model.dims_used)
+        log(f"posture term: per-action Gaussians of the real poses, radius {args.posture_radius}")
     d_pose = PoseDiscriminator(args.pose_window, model.output_size, args.d_hidden, args.pose_context)
     d_label = LabelDiscriminator(args.label_window, model.intentions, max(8, args.d_hidden // 4))
     model.to(device).train()
@@ -582,6 +595,10 @@ def train(args, argv: list[str]) -> None:
             tiptoe = sum(tiptoe_loss(model, m, a, tiptoe_ceiling) for m, a in zip(moved, (acts, long_acts)))
             lg = lg + args.tiptoe_weight * tiptoe
             terms["tiptoe"] = tiptoe.item()
+        if posture is not None:
+            held = sum(posture_loss(m, a, posture, args.posture_radius) for m, a in zip(moved, (acts, long_acts)))
+            lg = lg + args.posture_weight * held
+            terms["posture"] = held.item()
         # The loop's root, integrated once for the drift and skating terms.
         poses = scored_root_poses(model, seed, drift_parts) if args.drift_weight > 0 or args.skate_weight > 0 else None
         if args.drift_weight > 0:
