@@ -12,4 +12,6 @@ fi
 rustup target add wasm32-unknown-unknown >/dev/null 2>&1 || true
 cargo build --release --target wasm32-unknown-unknown -p motion-web
 wasm-bindgen --target web --out-dir web/pkg target/wasm32-unknown-unknown/release/motion_web.wasm
+# The skinned character the page draws (CC0, assets/README.md).
+cp assets/mannequin.glb web/pkg/mannequin.glb
 echo "built web/pkg ($(du -k web/pkg/motion_web_bg.wasm | cut -f1) KiB of wasm)"

@@ -1,9 +1,12 @@
 // The built-in motion model (motion-web, Rust compiled to WebAssembly) driving one character live
-// at the display's frame rate, drawn with three.js. State for tests: window.motionStatus.
+// at the display's frame rate, drawn with three.js as a skinned glTF humanoid (the CC0 mannequin,
+// its own skeleton driven through motion-core's rig target), the joints as a stick figure on
+// demand. State for tests: window.motionStatus.
 import * as THREE from "three";
+import { GLTFLoader } from "three/addons/loaders/GLTFLoader.js";
 import init, { WebCharacter } from "./pkg/motion_web.js";
 
-const status = { ready: false, poses: 0, finite: true, action: null, source: null, error: null };
+const status = { ready: false, poses: 0, finite: true, action: null, source: null, error: null, skinned: false };
 window.motionStatus = status;
 const $ = (id) => document.getElementById(id);
 
@@ -44,6 +47,50 @@ let bones = null; // InstancedMesh: one cylinder per (joint, parent)
 let joints = null; // InstancedMesh: one sphere per joint
 const seedSource = { bvh: null, name: null };
 let lift = 0; // the model's root starts at the origin: raise the figure so its first pose stands on the floor
+
+// --- the skinned character: every node of the glTF scene in parents-first order (node 0 the scene
+// itself, the character's world), handed to the wasm character as a rig; each frame the local
+// rotations (and the hips' translation) it returns go straight into the nodes ----------------------
+let mannequin = null; // { root, nodes, hips }
+async function loadMannequin() {
+  const gltf = await new GLTFLoader().loadAsync("./pkg/mannequin.glb");
+  const nodes = [];
+  gltf.scene.traverse((o) => {
+    nodes.push(o);
+    o.frustumCulled = false; // the hips walk away from the bind-pose bounds
+  });
+  mannequin = { root: gltf.scene, nodes, hips: -1 };
+  scene.add(gltf.scene);
+}
+
+function attachRig() {
+  if (!mannequin || !character) return;
+  const { nodes } = mannequin;
+  const names = nodes.map((o, j) => (j === 0 ? "__scene" : o.name || `node${j}`));
+  const parents = nodes.map((o, j) => (j === 0 ? -1 : nodes.indexOf(o.parent)));
+  const rest = new Float32Array(7 * nodes.length);
+  nodes.forEach((o, j) => {
+    if (j === 0) return rest.set([0, 0, 0, 1, 0, 0, 0], 0);
+    if (!o.userData.rest) o.userData.rest = { q: o.quaternion.clone(), p: o.position.clone() };
+    const { q, p } = o.userData.rest;
+    rest.set([q.x, q.y, q.z, q.w, p.x, p.y, p.z], 7 * j);
+  });
+  mannequin.hips = character.attach_rig(names, Int32Array.from(parents), rest);
+  status.skinned = true;
+}
+
+function poseMannequin() {
+  if (!mannequin || mannequin.hips < 0) return;
+  const pose = character.rig_pose();
+  const { nodes, hips } = mannequin;
+  for (let j = 1; j < nodes.length; j++) nodes[j].quaternion.fromArray(pose, 4 * j);
+  nodes[hips].position.fromArray(pose, 4 * nodes.length);
+}
+
+function showSticks(on) {
+  if (bones) bones.visible = joints.visible = on;
+  if (mannequin) mannequin.root.visible = !on || !status.skinned;
+}
 
 function buildSkeleton(count) {
   if (bones) scene.remove(bones, joints);
@@ -112,6 +159,9 @@ function start() {
     parents = Array.from(character.parents());
     lift = character.floor_offset() + 0.02;
     buildSkeleton(parents.length);
+    status.skinned = false;
+    attachRig();
+    showSticks($("sticks").checked);
     status.action = source === "matching" ? "motion matching" : action;
     status.source = source;
     $("error").textContent = "";
@@ -169,6 +219,7 @@ function frame(now) {
     const xyz = character.positions();
     if (!xyz.every(Number.isFinite)) status.finite = false;
     draw(xyz);
+    poseMannequin();
     status.poses += 1;
   } catch (e) {
     fail(e);
@@ -180,7 +231,37 @@ function frame(now) {
 }
 
 // Time `n` model steps of a fresh character (µs per step), for the tests and the README numbers.
-window.motionDebug = () => ({ camera: camera.position.toArray(), lift, joints: parents.length, root: Array.from(character.positions().slice(0, 3)) });
+window.motionDebug = () => ({
+  camera: camera.position.toArray(), lift, joints: parents.length, root: Array.from(character.positions().slice(0, 3)),
+  // world positions of a few of the mannequin's bones (metres)
+  bones: mannequin ? Object.fromEntries(["pelvis", "hand_l", "foot_l", "foot_r", "head"].map((n) => {
+    const o = mannequin.root.getObjectByName(n);
+    return [n, o ? o.getWorldPosition(new THREE.Vector3()).toArray() : null];
+  })) : null,
+});
+// Pixels the skinned mesh covers in the current view: the frame drawn with and without it.
+window.motionMeshPixels = () => {
+  const gl = renderer.getContext();
+  const [w, h] = [gl.drawingBufferWidth, gl.drawingBufferHeight];
+  const read = () => {
+    renderer.render(scene, camera);
+    const px = new Uint8Array(4 * w * h);
+    gl.readPixels(0, 0, w, h, gl.RGBA, gl.UNSIGNED_BYTE, px);
+    return px;
+  };
+  const sticks = bones?.visible;
+  showSticks(false);
+  const withMesh = read();
+  mannequin.root.visible = false;
+  const without = read();
+  showSticks(sticks);
+  renderer.render(scene, camera);
+  let n = 0;
+  for (let i = 0; i < withMesh.length; i += 4) {
+    if (Math.abs(withMesh[i] - without[i]) + Math.abs(withMesh[i + 1] - without[i + 1]) + Math.abs(withMesh[i + 2] - without[i + 2]) > 30) n++;
+  }
+  return n;
+};
 window.motionBench = (n) => {
   const c = WebCharacter.walk("walking", 7n);
   c.step_model(10); // warm up
@@ -192,7 +273,7 @@ window.motionBench = (n) => {
 };
 
 try {
-  await init();
+  await Promise.all([init(), loadMannequin()]);
   for (const name of WebCharacter.actions()) {
     const option = document.createElement("option");
     option.value = option.textContent = name;
@@ -208,6 +289,7 @@ try {
     }
   });
   $("restart").addEventListener("click", start);
+  $("sticks").addEventListener("change", () => showSticks($("sticks").checked));
   $("source").addEventListener("change", start);
   $("bvh").addEventListener("change", async (event) => {
     const file = event.target.files[0];

@@ -242,6 +242,38 @@ def cases(shared: dict[str, Path]) -> list[Case]:
     add(Case("clap-unknown-flag", ["convert", "--nope"], contains=["--nope"]))
     add(Case("clap-missing-subcommand", [], contains=["no command given", "predict"]))
 
+    # -- numbers out of any range are named in short form, with the file at fault
+    def big_value_bvh(d: Path) -> None:
+        lines = files.rig_bvh(frames=80, frame_time=0.04).splitlines()
+        motion = lines.index("MOTION")
+        row = lines[motion + 10].split()
+        row[4] = "1e200"
+        lines[motion + 10] = " ".join(row)
+        (d / "big.bvh").write_text("\n".join(lines) + "\n")
+    add(Case("seed-rotation-1e200", predict + ["--seed", "big.bvh", "--out", "p.bvh"], contains=["big.bvh"], setup=big_value_bvh))
+    add(Case("weights-fps-1e-300", wp, contains=["w.safetensors"], setup=weights(edit=lambda c: c.__setitem__("fps", 1e-300))))
+    add(Case("weights-fps-1e300", wp, contains=["w.safetensors"], setup=weights(edit=lambda c: c.__setitem__("fps", 1e300))))
+    add(Case("score-pred-1e300-names-the-file", ["score", "--gt", s["e_npy"], "--pred", "p.npy"], contains=["p.npy"],
+             setup=lambda d: files.npy(d / "p.npy", (2, 30, 99), values=[1e300] * (2 * 30 * 99))))
+    add(Case("score-gt-nan-names-the-file", ["score", "--gt", "g.npy", "--pred", s["e_npy"]], contains=["g.npy"],
+             setup=lambda d: files.npy(d / "g.npy", (2, 30, 99), values=[float("nan")] * (2 * 30 * 99))))
+
+    def data_with_nan(d: Path) -> None:
+        files.data_dir(d / "d", 99)
+        s1 = d / "d/h3.6m/dataset/S1"
+        s1.mkdir(parents=True)
+        rows = files.expmap_text(400).splitlines()
+        rows[7] = ",".join(["1e300"] * 99)
+        (s1 / "walking_1.txt").write_text("\n".join(rows) + "\n")
+    add(Case("eval-data-1e300-names-the-take", ["eval", "--data", "d", "--actions", "walking", "--no-classifier", "--model", m],
+             expect="either", contains=["walking_1"], setup=data_with_nan))
+
+    # -- thin rigs with millions of frames through the retargeting and resampling paths
+    add(Case("predict-thin-rig-2m-frames", predict + ["--seed", s["thin_2m"], "--out", "p.bvh"], contains=["thin_2m.bvh"]))
+    add(Case("convert-thin-rig-2m-frames-to-30-hz", ["convert", s["thin_2m"], "o.bvh", "--fps", "30"], expect="either",
+             contains=["thin_2m.bvh"]))
+    add(Case("render-thin-rig-2m-frames", ["render", s["thin_2m"], "--out", "r.png"], expect="either", contains=["thin_2m.bvh"]))
+
     # -- .npy headers that lie
     npy_cases = {
         "npy-huge-shape": dict(shape=(2, 3), header_shape="(1000000000000, 99)"),

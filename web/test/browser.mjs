@@ -1,6 +1,7 @@
 // The page in a real headless Chromium (Debian's /usr/bin/chromium, or $CHROMIUM): it must load
-// the wasm module and three.js, generate 200 finite poses live, switch action, play the shipped
-// motion-matching database steered by the keyboard, and draw something.
+// the wasm module and three.js, generate 200 finite poses live, draw the skinned mannequin with
+// its bones moving, switch action, play the shipped motion-matching database steered by the
+// keyboard (on the same mannequin), and draw the stick figure when asked.
 // Prints the per-step cost of the model in the browser. Usage: node test/browser.mjs [screenshot.png]
 import { createServer } from "node:http";
 import { readFile, writeFile } from "node:fs/promises";
@@ -56,6 +57,19 @@ try {
   check(status.poses >= 200, `${status.poses} poses generated live`);
   check(status.finite, "every joint position finite");
 
+  // The skinned mannequin: drawn, its bones moving between frames, its feet near the floor.
+  check(status.skinned, "the mannequin's skeleton is attached to the character");
+  const b0 = (await page.evaluate(() => window.motionDebug())).bones;
+  await page.waitForTimeout(500);
+  const b1 = (await page.evaluate(() => window.motionDebug())).bones;
+  const handMoved = Math.hypot(...b1.hand_l.map((v, i) => v - b0.hand_l[i]));
+  check(handMoved > 0.05, `the mannequin's hand moved ${handMoved.toFixed(2)} m in 0.5 s`);
+  const feet = Math.min(b1.foot_l[1], b1.foot_r[1]);
+  check(feet > -0.05 && feet < 0.2 && b1.head[1] > 1.3, `feet at ${feet.toFixed(2)} m, head at ${b1.head[1].toFixed(2)} m`);
+  const meshPixels = await page.evaluate(() => window.motionMeshPixels());
+  check(meshPixels > 2000, `the skinned mesh covers ${meshPixels} pixels`);
+  await page.screenshot({ path: shot.replace(/\.png$/, "-skinned.png") });
+
   await page.selectOption("#action", "sitting");
   const before = status.poses;
   await page.waitForFunction((n) => window.motionStatus.error || window.motionStatus.poses >= n, before + 50, { timeout: 60_000 });
@@ -76,10 +90,13 @@ try {
   check(!status.error && status.source === "matching" && status.finite && from.joints > 15 && from.joints !== 32,
     `motion matching plays on its ${from.joints}-joint CMU rig (${status.error ?? "no error"})`);
   check(moved > 0.5, `steered by the keyboard, the database's character walked ${moved.toFixed(2)} m in 2 s`);
+  check(status.skinned, "the mannequin follows the database's CMU rig too");
 
   const us = await page.evaluate(() => window.motionBench(500));
   check(Number.isFinite(us) && us > 0, `one model step in the browser: ${us.toFixed(1)} µs (500 steps, wasm32, one thread)`);
 
+  await page.check("#sticks"); // the debug stick figure instead of the mesh
+  await page.waitForTimeout(200);
   const png = await page.screenshot({ path: shot });
   const img = PNG.sync.read(png);
   const [r0, g0, b0] = img.data; // the top-left corner: background

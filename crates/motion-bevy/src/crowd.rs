@@ -21,6 +21,7 @@ use motion_core::takes::seed_poses_on_rig;
 
 use crate::asset::MotionWeights;
 use crate::character::{MotionCharacter, MotionFailed, MotionModelSource, MotionPose, MotionRig};
+use crate::skin::{collect_rig, MotionSkinned, SkinDriver};
 
 /// Marks a joint entity the plugin spawned: `index` in the model skeleton's order.
 #[derive(Component, Debug, Clone, Copy)]
@@ -60,6 +61,20 @@ pub(crate) struct Crowds {
 }
 
 impl Crowds {
+    /// Drops `entity`'s row (and a group left empty).
+    fn leave(&mut self, entity: Entity) {
+        for group in &mut self.groups {
+            group.members.retain(|&(e, id, _)| {
+                let leaving = e == entity;
+                if leaving {
+                    group.crowd.remove(id);
+                }
+                !leaving
+            });
+        }
+        self.groups.retain(|g| !g.members.is_empty());
+    }
+
     /// The group of `source` at `rate`, made when there is none.
     fn group(&mut self, source: MotionSource, rate: f32) -> Result<&mut Group, String> {
         let found = self
@@ -180,9 +195,22 @@ pub(crate) fn start_characters(
     builtin: Res<BuiltinModel>,
     weights: Res<Assets<MotionWeights>>,
     asset_server: Res<AssetServer>,
-    new: Query<(Entity, &MotionCharacter, &Transform), (Without<MotionRig>, Without<MotionFailed>)>,
+    new: Query<
+        (Entity, &MotionCharacter, &Transform, Option<&MotionSkinned>),
+        (Without<MotionRig>, Without<MotionFailed>),
+    >,
+    children: Query<&Children>,
+    nodes: Query<(&Transform, Option<&Name>)>,
 ) {
-    for (entity, character, transform) in &new {
+    for (entity, character, transform, skinned) in &new {
+        // A skinned character waits for its hierarchy (a glTF scene spawns once loaded).
+        let rig = match skinned {
+            Some(_) => match collect_rig(entity, &children, &nodes) {
+                Some(rig) => Some(rig),
+                None => continue,
+            },
+            None => None,
+        };
         let model = match &character.model {
             MotionModelSource::Builtin => builtin.0.clone().map(MotionSource::Model),
             MotionModelSource::Asset(handle) => match weights.get(handle) {
@@ -200,6 +228,35 @@ pub(crate) fn start_characters(
                 continue;
             }
         };
+        let floor = pose.floor_offset(&skeleton);
+        if let (Some((rig_joints, entities, scales)), Some(skinned)) = (rig, skinned) {
+            let map = skinned.joint_map.as_deref();
+            match SkinDriver::new(rig_joints, entities, &scales, map, &skeleton) {
+                Ok(driver) => {
+                    let names = driver
+                        .target()
+                        .joints()
+                        .iter()
+                        .map(|j| j.name.clone())
+                        .collect();
+                    commands.entity(entity).insert((
+                        MotionRig {
+                            joints: driver.entities().to_vec(),
+                            names,
+                            origin: *transform,
+                            floor,
+                        },
+                        MotionPose(pose),
+                        driver,
+                    ));
+                }
+                Err(e) => {
+                    crowds.leave(entity);
+                    commands.entity(entity).insert(MotionFailed(e));
+                }
+            }
+            continue;
+        }
         let mut joints = Vec::with_capacity(skeleton.len());
         for (j, joint) in skeleton.joints().iter().enumerate() {
             let parent = joint.parent.map_or(entity, |p| joints[p]);
@@ -219,7 +276,7 @@ pub(crate) fn start_characters(
                 joints,
                 names: skeleton.joints().iter().map(|j| j.name.clone()).collect(),
                 origin: *transform,
-                floor: pose.floor_offset(&skeleton),
+                floor,
             },
             MotionPose(pose),
         ));
@@ -232,17 +289,8 @@ pub(crate) fn remove_characters(
     mut crowds: ResMut<Crowds>,
 ) {
     for entity in removed.read() {
-        for group in &mut crowds.groups {
-            group.members.retain(|&(e, id, _)| {
-                let leaving = e == entity;
-                if leaving {
-                    group.crowd.remove(id);
-                }
-                !leaving
-            });
-        }
+        crowds.leave(entity);
     }
-    crowds.groups.retain(|g| !g.members.is_empty());
 }
 
 /// One tick: action changes, the batched steps, the poses written into the rigs' transforms.
@@ -257,10 +305,11 @@ pub(crate) fn step_characters(
             &MotionRig,
             &mut Transform,
             &mut MotionPose,
+            Option<&mut SkinDriver>,
         ),
         Without<MotionJoint>,
     >,
-    mut joints: Query<&mut Transform, With<MotionJoint>>,
+    mut joints: Query<&mut Transform, Without<MotionCharacter>>,
 ) {
     let mut failed: Vec<(Entity, String)> = Vec::new();
     crowds.groups.retain_mut(|group| {
@@ -285,7 +334,7 @@ pub(crate) fn step_characters(
             return false;
         }
         for &(entity, id, _) in &group.members {
-            let Ok((_, rig, mut root, mut pose)) = characters.get_mut(entity) else {
+            let Ok((_, rig, mut root, mut pose, skin)) = characters.get_mut(entity) else {
                 continue;
             };
             let Some(now) = group.crowd.pose(id) else {
@@ -301,15 +350,25 @@ pub(crate) fn step_characters(
                 Transform::from_translation(vec3(motion.ground_translation.to_array()))
                     .with_rotation(quat(motion.ground_yaw.to_array())),
             );
-            for (j, &joint) in rig.joints.iter().enumerate() {
-                let Ok(mut t) = joints.get_mut(joint) else {
-                    continue;
-                };
-                if j == 0 {
-                    t.translation = vec3(motion.pelvis_offset.to_array()) + Vec3::Y * rig.floor;
-                    t.rotation = quat(motion.pelvis_rotation.to_array());
-                } else {
-                    t.rotation = quat(now.local_rotations[j].to_array());
+            if let Some(mut skin) = skin {
+                skin.pose(
+                    now,
+                    motion.pelvis_offset,
+                    motion.pelvis_rotation,
+                    rig.floor,
+                    &mut joints,
+                );
+            } else {
+                for (j, &joint) in rig.joints.iter().enumerate() {
+                    let Ok(mut t) = joints.get_mut(joint) else {
+                        continue;
+                    };
+                    if j == 0 {
+                        t.translation = vec3(motion.pelvis_offset.to_array()) + Vec3::Y * rig.floor;
+                        t.rotation = quat(motion.pelvis_rotation.to_array());
+                    } else {
+                        t.rotation = quat(now.local_rotations[j].to_array());
+                    }
                 }
             }
             pose.0.clone_from(now);

@@ -30,6 +30,9 @@
 //! - every batch is stepped as often as the game's frame time needs (**one batched step per
 //!   model frame for all its characters**: a `BatchGenerator` underneath), each character
 //!   resampled to the game's clock;
+//! - a character with [`MotionSkinned`] on a spawned glTF scene (a skinned humanoid) drives that
+//!   scene's own joints instead, found by `Name` and mapped onto the model's skeleton (rest poses,
+//!   proportions and the hips' height handled by `motion_core::rig_target`);
 //! - the pose is written: the character entity's `Transform` is its start transform times the
 //!   root motion (ground translation and heading), the hips' local transform the pelvis offset
 //!   (raised once so the first pose stands on the entity's origin: spawn on the floor) and tilt, every other joint its local rotation; [`MotionPose`] holds the engine pose.
@@ -40,6 +43,7 @@
 mod asset;
 mod character;
 mod crowd;
+mod skin;
 
 use bevy::prelude::*;
 use bevy::transform::TransformSystems;
@@ -49,6 +53,7 @@ pub use character::{
     MotionCharacter, MotionFailed, MotionGoal, MotionModelSource, MotionPose, MotionRig, MotionSeed,
 };
 pub use crowd::MotionJoint;
+pub use skin::MotionSkinned;
 
 /// Where the plugin's systems run, in `PostUpdate` before transform propagation: order game
 /// systems that read [`MotionPose`] after it.

@@ -763,3 +763,151 @@ fn grounded_predictions_stand_on_the_seed_floor() {
         "the raw fixture stays on the floor ({raw_off} mm): the test shows nothing"
     );
 }
+
+/// `bvh` with its whole motion tilted `degrees` about the world x and z axes and lifted `lift`
+/// units along world +y and +z: a take whose floor is sloped and off the origin.
+fn tilted(bvh: &Bvh, degrees: f64, lift: f64) -> Bvh {
+    use motion_core::formats::expmap_bvh::continuous_euler_degrees;
+    use motion_core::kinematics::local_transform;
+    use motion_core::rotation::EulerOrder;
+    use motion_core::skeleton::Channel;
+    let tilt = glam::DQuat::from_rotation_x(degrees.to_radians())
+        * glam::DQuat::from_rotation_z(0.7 * degrees.to_radians());
+    let root = bvh.skeleton.joint(0);
+    let axis = |c: &Channel| match c {
+        Channel::Xrotation | Channel::Xposition => 0,
+        Channel::Yrotation | Channel::Yposition => 1,
+        _ => 2,
+    };
+    let rot: Vec<usize> = (0..root.channels.len())
+        .filter(|&k| root.channels[k].is_rotation())
+        .collect();
+    let pos: Vec<usize> = (0..root.channels.len())
+        .filter(|&k| !root.channels[k].is_rotation())
+        .collect();
+    let order = EulerOrder::from_axes([0, 1, 2].map(|i| axis(&root.channels[rot[i]]))).unwrap();
+    let offset = glam::DVec3::from_array(root.offset);
+    let mut out = bvh.clone();
+    let mut before = None;
+    for t in 0..bvh.frames.nrows() {
+        let row = bvh.frames.row(t).to_vec();
+        let (r, p) = local_transform(&bvh.skeleton, 0, &row);
+        let q = tilt * glam::DQuat::from_mat3(&r);
+        let world = tilt * p + glam::DVec3::new(0.0, lift, lift);
+        let angles = continuous_euler_degrees(order, q, before);
+        before = Some(angles);
+        for i in 0..3 {
+            out.frames[[t, rot[i]]] = angles[i];
+            out.frames[[t, pos[i]]] = (world - offset)[axis(&root.channels[pos[i]])];
+        }
+    }
+    out
+}
+
+/// The seed part of a grounded prediction is the input's last frames, and the prediction goes on
+/// from where the input ends, in the input's coordinates, on a tilted and lifted floor: for a
+/// CMU-style rig, the same rig z-up, and a rig mapped by a joint map.
+#[test]
+fn a_grounded_prediction_keeps_the_seed_in_the_users_coordinates() {
+    use motion_core::kinematics::local_transform;
+    use motion_core::resample::resample_bvh;
+    use motion_core::retarget::{demo_rig, JointMap, Retargeter, CMU_NAMES, MAPPED_JOINTS};
+    let dir = scratch("user_frame");
+    let walk = read_bvh(walk_seed()).unwrap();
+    let map = dir.join("map.json");
+    let pairs: Vec<String> = MAPPED_JOINTS
+        .iter()
+        .zip(CMU_NAMES.map(|n| if n == "LeftForeArm" { "LeftElbow" } else { n }))
+        .map(|(m, u)| format!("\"{m}\": \"{u}\""))
+        .collect();
+    std::fs::write(&map, format!("{{{}}}", pairs.join(", "))).unwrap();
+    for (name, z_up, renamed) in [
+        ("cmu", false, false),
+        ("zup", true, false),
+        ("mapped", false, true),
+    ] {
+        let rig = demo_rig("", z_up, 1.0 / 10.0);
+        let retargeter = Retargeter::new(&rig, JointMap::detect(&rig).unwrap()).unwrap();
+        let rest = ndarray::Array2::zeros((1, rig.channel_count()));
+        let mut bvh = tilted(&retargeter.to_rig(&walk, rest.view()), 3.0, 40.0);
+        if renamed {
+            let joints = bvh
+                .skeleton
+                .joints()
+                .iter()
+                .map(|j| {
+                    let mut j = j.clone();
+                    if j.name == "LeftForeArm" {
+                        j.name = "LeftElbow".into();
+                    }
+                    j
+                })
+                .collect();
+            bvh.skeleton = Skeleton::new(joints).unwrap();
+        }
+        let bvh = resample_bvh(&bvh, 25.0).unwrap();
+        let (seed, out) = (
+            dir.join(format!("{name}.bvh")),
+            dir.join(format!("{name}_pred.bvh")),
+        );
+        write_bvh(&seed, &bvh).unwrap();
+        let mut args: Vec<&dyn AsRef<std::ffi::OsStr>> = vec![
+            &"--seed",
+            &seed,
+            &"--action",
+            &"walking",
+            &"--frames",
+            &"20",
+            &"--out",
+            &out,
+            &"--json",
+        ];
+        if renamed {
+            args.extend([&"--joint-map" as &dyn AsRef<std::ffi::OsStr>, &map]);
+        }
+        let (code, stdout, stderr) = predict_with(&[], &args);
+        assert_eq!(code, 0, "{name}: {stderr}");
+        assert!(
+            stderr.contains("tilted"),
+            "{name}: the tilt is reported: {stderr}"
+        );
+        let report: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+        let tilt = report["seed_floor"]["tilt_deg"].as_f64().unwrap();
+        assert!((tilt - 3.6).abs() < 0.5, "{name}: floor tilt {tilt}");
+        let (input, pred) = (read_bvh(&seed).unwrap(), read_bvh(&out).unwrap());
+        let (n, k) = (input.frames.nrows(), 10);
+        assert_eq!(pred.frames.nrows(), k + 20);
+        let (mut worst_deg, mut worst_rel): (f64, f64) = (0.0, 0.0);
+        for t in 0..k {
+            let (a, b) = (input.frames.row(n - k + t), pred.frames.row(t));
+            for j in 0..input.skeleton.len() {
+                let q = |row: ndarray::ArrayView1<'_, f64>| {
+                    glam::DQuat::from_mat3(
+                        &local_transform(&input.skeleton, j, row.as_slice().unwrap()).0,
+                    )
+                };
+                let d = q(a).inverse() * q(b);
+                worst_deg = worst_deg.max(2.0 * d.xyz().length().to_degrees());
+            }
+            for c in 0..3 {
+                worst_rel = worst_rel.max((a[c] - b[c]).abs() / a[c].abs().max(1.0));
+            }
+        }
+        assert!(
+            worst_deg < 1e-4,
+            "{name}: seed rotations differ by {worst_deg} deg"
+        );
+        assert!(
+            worst_rel < 1e-6,
+            "{name}: seed root differs by {worst_rel} (relative)"
+        );
+        // The prediction continues from the seed's last frame: one step, not a jump.
+        let step = |row: ndarray::ArrayView1<'_, f64>| glam::DVec3::new(row[0], row[1], row[2]);
+        let last_step = (step(input.frames.row(n - 1)) - step(input.frames.row(n - 2))).length();
+        let first = (step(pred.frames.row(k)) - step(pred.frames.row(k - 1))).length();
+        assert!(
+            first < 3.0 * last_step + 2.0,
+            "{name}: jump of {first} units (a step is {last_step})"
+        );
+    }
+}

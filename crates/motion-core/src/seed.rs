@@ -409,7 +409,9 @@ pub struct WrittenClip<'a> {
 impl WrittenClip<'_> {
     /// The rows from `first_written` of `history` (the seed file's frames up to the seed's end)
     /// followed by `continuation`: grounded on the seed window's floor ([`crate::grounding`];
-    /// with `predicted` false a real continuation is only moved onto that floor), or raw.
+    /// with `predicted` false a real continuation is only moved onto that floor), or raw. Either
+    /// way in the seed file's own coordinates: the written seed rows are the file's, and the
+    /// continuation follows on from them ([`crate::grounding::ClipSpec::in_input_frame`]).
     ///
     /// # Errors
     /// A skeleton without two legs (grounding on).
@@ -419,6 +421,20 @@ impl WrittenClip<'_> {
         continuation: ArrayView2<'_, f64>,
         predicted: bool,
     ) -> Result<Array2<f64>, GroundingError> {
+        Ok(self.frames_and_floor(history, continuation, predicted)?.0)
+    }
+
+    /// [`frames`](Self::frames), and the seed's floor the grounding worked on (world metres, its
+    /// slope and levelling; `None` with grounding off): what a front end reports.
+    ///
+    /// # Errors
+    /// A skeleton without two legs (grounding on).
+    pub fn frames_and_floor(
+        &self,
+        history: ArrayView2<'_, f64>,
+        continuation: ArrayView2<'_, f64>,
+        predicted: bool,
+    ) -> Result<(Array2<f64>, Option<crate::grounding::Floor>), GroundingError> {
         let whole = ndarray::concatenate(ndarray::Axis(0), &[history, continuation])
             .expect("frames of one layout");
         let stop = whole.nrows();
@@ -431,15 +447,20 @@ impl WrittenClip<'_> {
                 self.grounding,
             );
             spec.ground_after_seed = predicted;
-            return Ok(ground_expmap_clip(whole.view(), &spec)?.window(self.first_written..stop));
+            spec.in_input_frame = true;
+            let clip = ground_expmap_clip(whole.view(), &spec)?;
+            return Ok((clip.window(self.first_written..stop), clip.floor));
         }
-        Ok(clip_window(
-            &whole,
-            self.first_written,
-            stop,
-            self.target,
-            self.fps,
-            self.anchor,
+        Ok((
+            clip_window(
+                &whole,
+                self.first_written,
+                stop,
+                self.target,
+                self.fps,
+                self.anchor,
+            ),
+            None,
         ))
     }
 }

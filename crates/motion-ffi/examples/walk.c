@@ -61,6 +61,13 @@ int main(void) {
     printf("250 poses, all unit quaternions; root at (%.2f, %.2f, %.2f) m; %.1f us per pose\n",
            root[0], root[1], root[2], us);
 
+    /* The seed's floor the poses stand on (the world the seed was given in, for engines that
+     * place the character there). */
+    float level[4], pivot[3], tilt;
+    if (motion_generator_floor(gen, level, pivot, &tilt) != MotionStatus_Ok)
+        return fail("motion_generator_floor");
+    printf("seed floor: tilt %.2f degrees, pivot (%.2f, %.2f, %.2f) m\n", tilt, pivot[0], pivot[1], pivot[2]);
+
     /* The character's own rig: an Unreal-named skeleton given as arrays (metres, +y up, facing +z,
      * identity rest rotations but the pelvis turned 90 degrees about x, as exporters do), and
      * the local rotations to copy into its bones for the current pose. */

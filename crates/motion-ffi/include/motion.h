@@ -123,6 +123,20 @@ int motion_generator_start_frames(struct motion_generator *generator,
 // `generator` is NULL or live.
 int motion_generator_set_grounding(struct motion_generator *generator, int enabled);
 
+// The seed's floor the grounding put the poses on, once fitted (after the start and the first
+// pose): `level` gets the rotation (`x, y, z, w`) that levels it, `pivot` the point (metres) it
+// turns about, `tilt_degrees` its slope. Poses come out in the floor frame (the floor level at
+// y = 0); a position `p` of a pose is `inverse(level) * (p - (pivot.x, 0, pivot.z)) + pivot` in
+// the world the seed was given in. Returns 0, or `MOTION_STATUS_STATE` before a floor is fitted
+// (or with grounding off).
+//
+// # Safety
+// `generator` NULL or live; `level` 4 floats, `pivot` 3, `tilt_degrees` 1 (or NULL).
+int motion_generator_floor(const struct motion_generator *generator,
+                           float *level,
+                           float *pivot,
+                           float *tilt_degrees);
+
 // Steers the character from the next model frame on toward a velocity on the floor (`vx`,
 // `vz` in metres per second, world axes) and a facing (`facing`: yaw in radians about +y, 0
 // facing +z, pi/2 facing +x), by root-motion warping (motion_core::steering: the stride scaled

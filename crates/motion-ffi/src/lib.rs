@@ -406,6 +406,42 @@ pub unsafe extern "C" fn motion_generator_set_grounding(
     })
 }
 
+/// The seed's floor the grounding put the poses on, once fitted (after the start and the first
+/// pose): `level` gets the rotation (`x, y, z, w`) that levels it, `pivot` the point (metres) it
+/// turns about, `tilt_degrees` its slope. Poses come out in the floor frame (the floor level at
+/// y = 0); a position `p` of a pose is `inverse(level) * (p - (pivot.x, 0, pivot.z)) + pivot` in
+/// the world the seed was given in. Returns 0, or `MOTION_STATUS_STATE` before a floor is fitted
+/// (or with grounding off).
+///
+/// # Safety
+/// `generator` NULL or live; `level` 4 floats, `pivot` 3, `tilt_degrees` 1 (or NULL).
+#[no_mangle]
+pub unsafe extern "C" fn motion_generator_floor(
+    generator: *const motion_generator,
+    level: *mut f32,
+    pivot: *mut f32,
+    tilt_degrees: *mut f32,
+) -> c_int {
+    guard(|| {
+        let g = unsafe { generator.as_ref() }.ok_or_else(|| invalid("generator is NULL"))?;
+        if level.is_null() || pivot.is_null() {
+            return Err(invalid("level or pivot is NULL"));
+        }
+        let floor = g.character.grounder().fitted_floor().ok_or((
+            MotionStatus::State,
+            "no floor fitted yet: start the generator and take a pose first (grounding on)".into(),
+        ))?;
+        unsafe {
+            std::slice::from_raw_parts_mut(level, 4).copy_from_slice(&floor.level.to_array());
+            std::slice::from_raw_parts_mut(pivot, 3).copy_from_slice(&floor.pivot.to_array());
+            if !tilt_degrees.is_null() {
+                *tilt_degrees = floor.tilt_degrees() as f32;
+            }
+        }
+        Ok(0)
+    })
+}
+
 /// Steers the character from the next model frame on toward a velocity on the floor (`vx`,
 /// `vz` in metres per second, world axes) and a facing (`facing`: yaw in radians about +y, 0
 /// facing +z, pi/2 facing +x), by root-motion warping (motion_core::steering: the stride scaled
@@ -605,25 +641,16 @@ pub unsafe extern "C" fn motion_rig_new(
         let rotations = unsafe { std::slice::from_raw_parts(rest_rotations, 4 * joint_count) };
         let translations =
             unsafe { std::slice::from_raw_parts(rest_translations, 3 * joint_count) };
-        let mut joints = Vec::with_capacity(joint_count);
-        for j in 0..joint_count {
-            let name = unsafe { text(names[j], "a joint name") }
-                .map_err(|e| e.1)?
-                .ok_or_else(|| format!("joint {j}: its name is NULL"))?;
-            let parent = match parents[j] {
-                -1 => None,
-                p if p >= 0 => Some(p as usize),
-                p => return Err(format!("joint {j}: parent {p} (-1 for the root)")),
-            };
-            let r = &rotations[4 * j..4 * j + 4];
-            let t = &translations[3 * j..3 * j + 3];
-            joints.push(RigJoint {
-                name: name.to_string(),
-                parent,
-                rest_rotation: glam::Quat::from_xyzw(r[0], r[1], r[2], r[3]),
-                rest_translation: glam::Vec3::new(t[0], t[1], t[2]),
-            });
-        }
+        let names = (0..joint_count)
+            .map(|j| {
+                unsafe { text(names[j], "a joint name") }
+                    .map_err(|e| e.1)?
+                    .ok_or_else(|| format!("joint {j}: its name is NULL"))
+            })
+            .collect::<Result<Vec<_>, String>>()?;
+        let parents: Vec<i64> = parents.iter().map(|&p| i64::from(p)).collect();
+        let joints = RigJoint::from_arrays(names, &parents, rotations, translations)
+            .map_err(|e| e.to_string())?;
         let target =
             RigTarget::from_joints(joints, map, &g.model.skeleton()).map_err(|e| e.to_string())?;
         let out = RigPose::for_target(&target);

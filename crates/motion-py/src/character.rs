@@ -45,34 +45,21 @@ impl Rig {
         joint_map: Option<&str>,
     ) -> PyResult<Rig> {
         use motion_core::rig_target::{RigJoint, RigTarget};
-        let n = names.len();
         let rot = crate::arrays::f64_array(rest_rotations, "rest_rotations")?;
         let tr = crate::arrays::f64_array(rest_translations, "rest_translations")?;
         let (rot, tr) = (rot.as_array(), tr.as_array());
-        if parents.len() != n || rot.shape() != [n, 4] || tr.shape() != [n, 3] {
+        let n = names.len();
+        if rot.shape() != [n, 4] || tr.shape() != [n, 3] {
             return Err(value(format!(
-                "{n} names need {n} parents, rest_rotations {n} x 4 and rest_translations {n} x 3; got {}, {:?} and {:?}",
-                parents.len(),
+                "{n} names need rest_rotations {n} x 4 and rest_translations {n} x 3; got {:?} and {:?}",
                 rot.shape(),
                 tr.shape()
             )));
         }
-        let mut joints = Vec::with_capacity(n);
-        for (j, name) in names.into_iter().enumerate() {
-            let parent = match parents[j] {
-                -1 => None,
-                p if p >= 0 => Some(p as usize),
-                p => return Err(value(format!("joint {j}: parent {p} (-1 for the root)"))),
-            };
-            let q = |k: usize| rot[[j, k]] as f32;
-            let t = |k: usize| tr[[j, k]] as f32;
-            joints.push(RigJoint {
-                name,
-                parent,
-                rest_rotation: glam::Quat::from_xyzw(q(0), q(1), q(2), q(3)),
-                rest_translation: glam::Vec3::new(t(0), t(1), t(2)),
-            });
-        }
+        let flat =
+            |a: ndarray::ArrayViewD<'_, f64>| a.iter().map(|&v| v as f32).collect::<Vec<f32>>();
+        let joints =
+            RigJoint::from_arrays(names, &parents, &flat(rot), &flat(tr)).map_err(value)?;
         let target =
             RigTarget::from_joints(joints, joint_map, character.inner.skeleton()).map_err(value)?;
         let out = motion_core::rig_target::RigPose::for_target(&target);
@@ -204,6 +191,22 @@ impl Character {
     #[getter]
     fn fps(&self) -> f64 {
         self.source.fps()
+    }
+
+    /// The seed's floor the poses stand on, once fitted (after `start` and the first `advance`):
+    /// `{"level": (x, y, z, w), "pivot": (x, y, z), "tilt_degrees": t}`, or `None`. Poses come
+    /// out in the floor frame; a position `p` of a pose is `inverse(level) * (p - (pivot.x, 0,
+    /// pivot.z)) + pivot` in the world the seed was given in.
+    #[getter]
+    fn floor<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, pyo3::types::PyDict>>> {
+        let Some(f) = self.inner.grounder().fitted_floor() else {
+            return Ok(None);
+        };
+        let d = pyo3::types::PyDict::new(py);
+        d.set_item("level", f.level.to_array())?;
+        d.set_item("pivot", f.pivot.to_array())?;
+        d.set_item("tilt_degrees", f.tilt_degrees())?;
+        Ok(Some(d))
     }
 
     /// Seeds it from a file: a BVH on any rig the built-in maps fit (or exp-map text / `.npy`

@@ -35,8 +35,13 @@ def test_a_model_character_and_bad_input():
     c = motion.Character()  # the built-in game default
     assert not c.is_database and len(c.joint_names) == 32
     c.start(WALK_SEED, action="walking", rng_seed=3)
+    assert c.floor is None or "level" in c.floor
     root, rotations = c.advance(1 / 30)
     assert np.isfinite(root).all() and rotations.shape == (32, 4)
+    # The seed's floor the poses stand on: the example seed walks on a level floor.
+    floor = c.floor
+    assert floor is not None and len(floor["level"]) == 4 and len(floor["pivot"]) == 3
+    assert 0.0 <= floor["tilt_degrees"] < 1.0
     with pytest.raises(ValueError, match="finite"):
         c.set_goal((float("nan"), 0.0))
     with pytest.raises(ValueError, match="dt"):

@@ -28,6 +28,8 @@ use motion_core::matching::MatchingDatabase;
 use motion_core::model::batch::Noise;
 use motion_core::model::builtin::game_model;
 use motion_core::model::{Character, MotionModel};
+use motion_core::pose::Pose;
+use motion_core::rig_target::{RigJoint, RigPose, RigTarget};
 use motion_core::seed::seed_from_bvh;
 use motion_core::takes::seed_poses_on_rig;
 use motion_core::weights::WeightStore;
@@ -82,6 +84,18 @@ pub struct Animator {
     flat: Vec<f32>,
     poses: u64,
     floor: f32,
+    rig: Option<Box<SkinnedRig>>,
+}
+
+/// A skinned character's rig (a three.js skeleton, or any joint arrays) and its buffers.
+#[derive(Debug)]
+struct SkinnedRig {
+    target: RigTarget,
+    out: RigPose,
+    /// The character's pose raised onto the floor (what the target reads).
+    scratch: Pose,
+    /// Per joint `x, y, z, w`, then the hips' translation.
+    flat: Vec<f32>,
 }
 
 impl Animator {
@@ -130,6 +144,7 @@ impl Animator {
             flat: vec![0.0; 3 * joints],
             poses: 0,
             floor: 0.0,
+            rig: None,
         };
         let first = animator.character.advance(0.0).map_err(|e| e.to_string())?;
         animator.floor = first.floor_offset(&animator.skeleton);
@@ -155,8 +170,73 @@ impl Animator {
         for (dst, p) in self.flat.chunks_exact_mut(3).zip(&self.positions) {
             dst.copy_from_slice(&p.to_array());
         }
+        if let Some(rig) = self.rig.as_deref_mut() {
+            rig.scratch.clone_from(pose);
+            rig.scratch.root_translation.y += self.floor;
+            rig.target.write(&rig.scratch, &mut rig.out);
+            let n = rig.out.local_rotations.len();
+            for (dst, q) in rig.flat.chunks_exact_mut(4).zip(&rig.out.local_rotations) {
+                dst.copy_from_slice(&q.to_array());
+            }
+            rig.flat[4 * n..].copy_from_slice(&rig.out.hips_translation.to_array());
+        }
         self.poses += 1;
         Ok(())
+    }
+
+    /// Drives a skinned character's own skeleton from now on: its joints in parents-first order
+    /// (joint 0 the rig's root, whose space is the character's world: +y up, metres, the floor at
+    /// `y = 0`), each with a name, a parent (-1 for the root), a rest rotation `x, y, z, w` and a
+    /// rest translation (metres) in `rest` (7 values per joint), mapped by the built-in joint maps
+    /// (`motion_core::rig_target`). Returns the hips joint (the one whose translation moves).
+    pub fn attach_rig(
+        &mut self,
+        names: Vec<String>,
+        parents: &[i32],
+        rest: &[f32],
+    ) -> Result<usize, String> {
+        let n = names.len();
+        if rest.len() != 7 * n {
+            return Err(format!(
+                "{n} joints need 7 rest values each ({}), got {}",
+                7 * n,
+                rest.len()
+            ));
+        }
+        let rotations: Vec<f32> = rest.chunks_exact(7).flat_map(|c| c[..4].to_vec()).collect();
+        let translations: Vec<f32> = rest.chunks_exact(7).flat_map(|c| c[4..].to_vec()).collect();
+        let parents: Vec<i64> = parents.iter().map(|&p| i64::from(p)).collect();
+        let joints = RigJoint::from_arrays(names, &parents, &rotations, &translations)
+            .map_err(|e| e.to_string())?;
+        let target =
+            RigTarget::from_joints(joints, None, &self.skeleton).map_err(|e| e.to_string())?;
+        let hips = target.hips();
+        let out = RigPose::for_target(&target);
+        self.rig = Some(Box::new(SkinnedRig {
+            scratch: Pose::rest(self.skeleton.len()),
+            flat: vec![0.0; 4 * n + 3],
+            target,
+            out,
+        }));
+        self.advance(0.0)?;
+        self.poses -= 1;
+        Ok(hips)
+    }
+
+    /// The attached rig's pose at the last [`advance`](Self::advance): each joint's local rotation
+    /// `x, y, z, w` (unmapped joints: their rest rotation), then the hips' local translation
+    /// (metres, in the parent space of the hips); empty without a rig.
+    pub fn rig_pose(&self) -> &[f32] {
+        self.rig.as_deref().map_or(&[], |r| &r.flat)
+    }
+
+    /// The attached rig's mapped joints (`true` where the motion drives the joint).
+    pub fn rig_mapped(&self) -> Vec<bool> {
+        self.rig.as_deref().map_or_else(Vec::new, |r| {
+            (0..r.target.joints().len())
+                .map(|j| r.target.is_mapped(j))
+                .collect()
+        })
     }
 
     /// Joint world positions of the last pose, `x, y, z` per joint, metres.
@@ -351,6 +431,33 @@ impl WebCharacter {
     pub fn step_model(&mut self, n: u32) -> Result<(), JsError> {
         self.inner.step_model(n).map_err(js)
     }
+
+    /// Drives a skinned character's skeleton (a three.js `Skeleton`'s bones, any rig the
+    /// built-in maps fit) from now on: names, parents (-1 for the root) and 7 rest values per
+    /// joint (rotation `x, y, z, w`, translation in metres), parents first, joint 0 the root in
+    /// the character's world. Returns the hips joint.
+    pub fn attach_rig(
+        &mut self,
+        names: Vec<String>,
+        parents: Vec<i32>,
+        rest: Vec<f32>,
+    ) -> Result<u32, JsError> {
+        self.inner
+            .attach_rig(names, &parents, &rest)
+            .map(|h| h as u32)
+            .map_err(js)
+    }
+
+    /// The rig's pose (a copy): 4 values per joint (its local rotation `x, y, z, w`), then the
+    /// hips' local translation (3, metres); empty without a rig.
+    pub fn rig_pose(&self) -> Vec<f32> {
+        self.inner.rig_pose().to_vec()
+    }
+
+    /// Which of the rig's joints the motion drives.
+    pub fn rig_mapped(&self) -> Vec<u8> {
+        self.inner.rig_mapped().into_iter().map(u8::from).collect()
+    }
 }
 
 #[cfg(test)]
@@ -419,5 +526,75 @@ mod tests {
         assert!(Animator::actions()
             .unwrap()
             .contains(&"walking".to_string()));
+    }
+
+    /// The mannequin's skin as the page hands it over (names, parents, 7 rest values each).
+    fn mannequin() -> (Vec<String>, Vec<i32>, Vec<f32>) {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/mannequin.glb");
+        let joints = motion_core::rig_target::read_gltf_joints(&path).unwrap();
+        let names = joints.iter().map(|j| j.name.clone()).collect();
+        let parents = joints
+            .iter()
+            .map(|j| j.parent.map_or(-1, |p| p as i32))
+            .collect();
+        let rest = joints
+            .iter()
+            .flat_map(|j| {
+                let (q, t) = (j.rest_rotation.to_array(), j.rest_translation.to_array());
+                [q[0], q[1], q[2], q[3], t[0], t[1], t[2]]
+            })
+            .collect();
+        (names, parents, rest)
+    }
+
+    #[test]
+    fn a_skinned_rig_follows_the_character_and_matches_the_rig_target() {
+        let mut a = Animator::from_bvh(WALK_SEED_BVH, "walk_seed.bvh", "walking", 1).unwrap();
+        assert!(a.rig_pose().is_empty());
+        let (names, parents, rest) = mannequin();
+        let n = names.len();
+        let hips = a.attach_rig(names.clone(), &parents, &rest).unwrap();
+        assert_eq!(names[hips], "pelvis");
+        assert_eq!(a.rig_pose().len(), 4 * n + 3);
+        let mapped = a.rig_mapped();
+        assert!(mapped.iter().filter(|&&m| m).count() >= 15);
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/mannequin.glb");
+        let mut target = RigTarget::from_gltf(&path, None, &a.skeleton).unwrap();
+        let mut out = RigPose::for_target(&target);
+        let first_hips = Vec3::from_slice(&a.rig_pose()[4 * n..]);
+        for _ in 0..120 {
+            a.advance(1.0 / 60.0).unwrap();
+        }
+        // The same pose through motion-core's target read from the file directly.
+        let mut pose = a.character.current().clone();
+        pose.root_translation.y += a.floor_offset();
+        target.write(&pose, &mut out);
+        for j in 0..n {
+            let got = Quat::from_slice(&a.rig_pose()[4 * j..4 * j + 4]);
+            assert!(
+                got.dot(out.local_rotations[j]).abs() > 1.0 - 1e-6,
+                "joint {j}"
+            );
+        }
+        let hips_now = Vec3::from_slice(&a.rig_pose()[4 * n..]);
+        assert!((hips_now - out.hips_translation).length() < 1e-5);
+        assert!(
+            (hips_now - first_hips).with_y(0.0).length() > 0.3,
+            "walked {first_hips} -> {hips_now}"
+        );
+        assert!(
+            hips_now.y > 0.7 && hips_now.y < 1.1,
+            "hips at {} m",
+            hips_now.y
+        );
+        // Bad arrays are errors.
+        let e = a
+            .attach_rig(names.clone(), &parents, &rest[1..])
+            .unwrap_err();
+        assert!(e.contains("7 rest values"), "{e}");
+        let mut bad = parents.clone();
+        bad[3] = -2;
+        let e = a.attach_rig(names, &bad, &rest).unwrap_err();
+        assert!(e.contains("parent -2"), "{e}");
     }
 }

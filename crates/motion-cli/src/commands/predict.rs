@@ -205,6 +205,23 @@ struct Done {
     inferred: bool,
     seed_frames: usize,
     notices: Vec<String>,
+    /// The seed's floor the grounding fitted (grounding on).
+    floor: Option<motion_core::grounding::Floor>,
+}
+
+/// The seed's floor for `--json`: where grounding put the floor frame (the output itself stays
+/// in the seed's coordinates).
+fn floor_json(floor: Option<&motion_core::grounding::Floor>) -> Value {
+    floor.map_or(Value::Null, |f| {
+        json!({
+            "height_m": f.height,
+            "slope_x": f.slope_x,
+            "slope_z": f.slope_z,
+            "tilt_deg": f.tilt_degrees(),
+            "levelling_xyzw": f.level.to_array(),
+            "pivot_m": f.pivot.to_array(),
+        })
+    })
 }
 
 /// Runs the command.
@@ -383,6 +400,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 "rng_seed": job.rng_seed,
                 "outputs": done.outputs,
                 "notices": done.notices,
+                "seed_floor": floor_json(done.floor.as_ref()),
             });
             args.reporting.print_json(&report)?;
         } else {
@@ -555,13 +573,16 @@ fn predict_one(
         anchor: (format == FileFormat::Bvh).then_some(known),
     };
     let history = seed.frames.slice(s![..end, ..]);
-    let written = |continuation: ndarray::ArrayView2<'_, f64>,
-                   format: FileFormat,
-                   predicted: bool|
+    let mut floor = None;
+    let mut written = |continuation: ndarray::ArrayView2<'_, f64>,
+                       format: FileFormat,
+                       predicted: bool|
      -> anyhow::Result<Array2<f64>> {
-        rule(format)
-            .frames(history, continuation, predicted)
-            .with_context(|| format!("{}", seed_path.display()))
+        let (frames, fitted) = rule(format)
+            .frames_and_floor(history, continuation, predicted)
+            .with_context(|| format!("{}", seed_path.display()))?;
+        floor = floor.or(fitted);
+        Ok(frames)
     };
     let samples: Vec<Array2<f64>> = predictions
         .outer_iter()
@@ -597,12 +618,20 @@ fn predict_one(
     }
     let mut notices = seed.notices;
     notices.extend(action_notice);
+    if let Some(tilt) = floor.map(|f| f.tilt_degrees()).filter(|t| *t >= 0.01) {
+        notices.push(format!(
+            "{}: the seed's floor is tilted {tilt:.2} degrees (fitted to its feet); the motion was \
+             grounded on it levelled and is written in the seed's own coordinates (--json: seed_floor)",
+            seed_path.display()
+        ));
+    }
     Ok(Done {
         outputs,
         action,
         inferred,
         seed_frames: needed,
         notices,
+        floor,
     })
 }
 
@@ -778,6 +807,7 @@ fn run_batch(args: &Args, job: &Job) -> anyhow::Result<()> {
                     "outputs": done.outputs,
                     "action": done.action,
                     "action_inferred": done.inferred,
+                    "seed_floor": floor_json(done.floor.as_ref()),
                 }));
             }
             Err(err) => {

@@ -31,10 +31,23 @@ pub const MAX_LINE_BYTES: u64 = 1 << 20;
 /// The most values one file may give (512 MiB of f64).
 pub const MAX_VALUES: usize = 1 << 26;
 
+/// A field as an error shows it: at most 24 characters (a long run of digits cut short).
+fn shown(field: &str) -> String {
+    match field.char_indices().nth(24) {
+        Some((cut, _)) => format!("{}...", &field[..cut]),
+        None => field.to_string(),
+    }
+}
+
+/// The largest magnitude a value may have (radians or millimetres): beyond it the forward
+/// kinematics of the frame overflows or means nothing.
+pub const MAX_MAGNITUDE: f64 = 1e9;
+
 /// Reads an exp-map text file (`.txt` or `.txt.gz`) into `frames x columns`.
 ///
 /// Errors: missing/unreadable file ([`FormatError::Io`]); a non-number, NaN/infinite value or a
-/// row whose column count differs from the first row ([`FormatError::Parse`] with the 1-based
+/// value beyond [`MAX_MAGNITUDE`], a row whose column count differs from the first row
+/// ([`FormatError::Parse`] with the 1-based
 /// line); no frames at all ([`FormatError::Invalid`]). Blank lines (e.g. a trailing newline) and
 /// surrounding whitespace are ignored.
 pub fn read_expmap_text(path: impl AsRef<Path>) -> Result<Array2<f64>, FormatError> {
@@ -115,15 +128,31 @@ pub fn parse_expmap_text(reader: impl BufRead, path: &Path) -> Result<Array2<f64
             let v: f64 = field.parse().map_err(|_| {
                 parse_err(
                     line_no,
-                    format!("column {}: expected a number, found {:?}", col + 1, field),
+                    format!(
+                        "column {}: expected a number, found {:?}",
+                        col + 1,
+                        shown(field)
+                    ),
                 )
             })?;
             if !v.is_finite() {
                 return Err(parse_err(
                     line_no,
                     format!(
-                        "column {}: expected a finite number, found {field}",
-                        col + 1
+                        "column {}: expected a finite number, found {}",
+                        col + 1,
+                        crate::motion::compact_number(v)
+                    ),
+                ));
+            }
+            if v.abs() > MAX_MAGNITUDE {
+                return Err(parse_err(
+                    line_no,
+                    format!(
+                        "column {}: {} is out of range (an exp-map angle in radians or a position in millimetres is at most {} in magnitude)",
+                        col + 1,
+                        crate::motion::compact_number(v),
+                        crate::motion::compact_number(MAX_MAGNITUDE)
                     ),
                 ));
             }

@@ -6,6 +6,13 @@
 //! data's, untouched); every frame after it is grounded. The root is re-encoded as the clip had
 //! it (H3.6M deltas, exact inverse of the integration, or absolute), the legs' joints whose
 //! rotations the foot locking changed are written back as exp maps.
+//!
+//! **Which frame the clip is written in.** Grounding works in the floor frame of the seed (its
+//! floor fitted, levelled, at `y = 0`). Evaluation reads that frame ([`ClipSpec::in_input_frame`]
+//! `false`); a file written for the user keeps the user's coordinates (`true`): the seed's frames
+//! are the input's own root poses, exactly, and every grounded frame after them is moved back
+//! from the floor frame by the inverse of the seed floor's levelling, so the prediction continues
+//! the user's clip where it ends. [`GroundedClip::floor`] says what the floor frame was.
 use std::ops::Range;
 
 use glam::{DVec3, Quat, Vec3};
@@ -47,6 +54,8 @@ pub struct ClipSpec<'a> {
     pub ground_after_seed: bool,
     /// The grounding.
     pub config: GroundingConfig,
+    /// `true`: the clip is written in the input's coordinates, not the floor frame (module docs).
+    pub in_input_frame: bool,
 }
 
 /// A grounded clip: frames and their absolute root poses.
@@ -58,6 +67,8 @@ pub struct GroundedClip {
     pub root_poses: Vec<RootPose>,
     /// Whether the root is stored as deltas.
     deltas: bool,
+    /// The seed's floor the clip was grounded on (world metres; `None` with grounding off).
+    pub floor: Option<super::Floor>,
 }
 
 impl GroundedClip {
@@ -119,6 +130,7 @@ pub fn ground_expmap_clip(
     }
     let mut out = frames.to_owned();
     let mut new_poses = poses.clone();
+    let mut floor = None;
     let leg_joints: Vec<usize> = grounder
         .body_parts()
         .legs
@@ -147,6 +159,25 @@ pub fn ground_expmap_clip(
             }
             new_poses[t] = to_pose(root, rotations[0]);
         }
+        let fitted = grounder.floor();
+        floor = Some(fitted);
+        if spec.in_input_frame {
+            // The seed's own poses, and the grounded frames moved back from the floor frame.
+            let (level_inv, pivot) = (fitted.level.as_dquat().inverse(), fitted.pivot.as_dvec3());
+            for (t, pose) in new_poses.iter_mut().enumerate() {
+                if t < seed_end || !spec.ground_after_seed {
+                    *pose = poses[t];
+                    continue;
+                }
+                let root = (DVec3::from_array(pose.translation) + offset) * METRES_PER_MM;
+                let user = level_inv * (root - DVec3::new(pivot.x, 0.0, pivot.z)) + pivot;
+                let rotation = level_inv * row_mat3_to_quat(&pose.rotation);
+                *pose = RootPose {
+                    rotation: quat_to_row_mat3(rotation.normalize()),
+                    translation: (user / METRES_PER_MM - offset).to_array(),
+                };
+            }
+        }
         match spec.root {
             RootEncoding::Deltas => {
                 let deltas = root_deltas(&new_poses, spec.step);
@@ -159,6 +190,7 @@ pub fn ground_expmap_clip(
         frames: out,
         root_poses: new_poses,
         deltas: spec.root == RootEncoding::Deltas,
+        floor,
     })
 }
 
@@ -182,6 +214,7 @@ impl<'a> ClipSpec<'a> {
             action,
             ground_after_seed: true,
             config,
+            in_input_frame: false,
         }
     }
 }
@@ -214,6 +247,7 @@ mod tests {
             action: Some("walking"),
             ground_after_seed: true,
             config,
+            in_input_frame: false,
         }
     }
 

@@ -156,6 +156,17 @@ impl Floor {
         self.level.as_dquat() * (p - pivot) + DVec3::new(pivot.x, 0.0, pivot.z)
     }
 
+    /// A position in the floor frame back in the world the floor was fitted in (the inverse of
+    /// [`to_floor_frame`](Self::to_floor_frame)).
+    pub fn from_floor_frame(&self, p: Vec3) -> Vec3 {
+        self.level.inverse() * (p - Vec3::new(self.pivot.x, 0.0, self.pivot.z)) + self.pivot
+    }
+
+    /// The floor's tilt from level (degrees).
+    pub fn tilt_degrees(&self) -> f64 {
+        (self.slope_x.hypot(self.slope_z)).atan().to_degrees()
+    }
+
     /// A root pose (translation metres, world rotation) in the floor frame.
     pub fn root_to_floor_frame(&self, translation: Vec3, rotation: Quat) -> (Vec3, Quat) {
         (

@@ -441,6 +441,14 @@ impl Grounder {
         floor
     }
 
+    /// The floor the grounding works on, once it has been fitted (after the seed and the first
+    /// grounded frame): the seed's floor in the world the seed was given in (its height, slope,
+    /// the rotation `level` that levels it and the `pivot` it turns about). Poses come out in
+    /// the floor frame; `Floor::from_floor_frame` takes a position back into the seed's world.
+    pub fn fitted_floor(&self) -> Option<Floor> {
+        self.floor
+    }
+
     /// Grounds on `floor` instead of the one fitted on the seed (a source that knows its floor:
     /// a motion-matching database continues a seed it has put on a level floor). Call it after
     /// the last [`Self::observe_seed`], which forgets it.

@@ -584,10 +584,23 @@ fn rest_positions(skeleton: &Skeleton) -> Vec<DVec3> {
     out
 }
 
-/// The rotation whose columns are the orthonormal frame of `up` and `side` (side made
-/// perpendicular).
-/// The world axis (±x, ±y or ±z) nearest to `v`: a skeleton's up axis from its rest spine, which
-/// leans a few degrees in many rigs (Mixamo's head sits forward of its hips).
+/// A rest spine within this angle (degrees) of a world axis stands along that axis (it leans, as
+/// many rigs' do: Mixamo's head sits forward of its hips); one farther from every axis belongs to
+/// a rig turned obliquely, whose up is the spine itself.
+pub const UPRIGHT_SPINE_DEG: f64 = 20.0;
+
+/// A skeleton's up direction from its rest spine `v` (hips to head): the nearest world axis when
+/// the spine is within [`UPRIGHT_SPINE_DEG`] of it, the spine's own direction otherwise (a rig
+/// turned obliquely: the same take on a rig turned any way gives the same model motion).
+fn up_of_spine(v: DVec3) -> DVec3 {
+    let axis = nearest_axis(v);
+    match v.try_normalize() {
+        Some(n) if n.dot(axis).clamp(-1.0, 1.0).acos().to_degrees() > UPRIGHT_SPINE_DEG => n,
+        _ => axis,
+    }
+}
+
+/// The world axis (±x, ±y or ±z) nearest to `v`.
 fn nearest_axis(v: DVec3) -> DVec3 {
     let length = v.length_squared();
     if length.is_nan() || length <= 0.0 {
@@ -603,6 +616,8 @@ fn nearest_axis(v: DVec3) -> DVec3 {
     }
 }
 
+/// The rotation whose columns are the orthonormal frame of `up` and `side` (side made
+/// perpendicular).
 fn frame(up: DVec3, side: DVec3) -> Option<DMat3> {
     let e1 = up.try_normalize()?;
     let e2 = (side - e1 * side.dot(e1)).try_normalize()?;
@@ -663,10 +678,11 @@ impl Retargeter {
         };
         // World axes: up is the world axis nearest each rest spine (hips to head), so that the
         // world's vertical maps onto the model's and a rest spine that leans does not tilt the
-        // floor (a tilted map sinks or lifts the body as it travels); the side axis is the hips'.
+        // floor (a tilted map sinks or lifts the body as it travels); a rig turned obliquely has
+        // its spine as up ([`up_of_spine`]); the side axis is the hips'.
         let (mu, ms) = span(&pm, &model_at);
         let (uu, us) = span(&pu, &map.user);
-        let (mu, uu) = (nearest_axis(mu), nearest_axis(uu));
+        let (mu, uu) = (up_of_spine(mu), up_of_spine(uu));
         let fm = frame(mu, ms).expect("the H3.6M rest pose has a frame");
         let fu = frame(uu, us).ok_or_else(|| RetargetError::Degenerate("Hips".into()))?;
         let g = DQuat::from_mat3(&(fm * fu.transpose())).normalize();
@@ -1182,6 +1198,77 @@ mod tests {
     }
 
     /// A rig from `(name, parent, offset, rotation order)` rows (the root also gets positions).
+    /// `rig` and its `frames` turned rigidly by `o`: every offset and every world rotation turned
+    /// (the local rotations conjugated), the same motion on a rig standing another way.
+    fn turned(rig: &Skeleton, frames: &Array2<f64>, o: DQuat) -> (Skeleton, Array2<f64>) {
+        use crate::formats::expmap_bvh::continuous_euler_degrees;
+        let joints = rig
+            .joints()
+            .iter()
+            .map(|j| {
+                let mut j = j.clone();
+                j.offset = (o * DVec3::from_array(j.offset)).to_array();
+                j
+            })
+            .collect();
+        let out_rig = Skeleton::new(joints).unwrap();
+        let layouts = layouts(rig).unwrap();
+        let mut out = frames.clone();
+        for t in 0..frames.nrows() {
+            let row = frames.row(t).to_vec();
+            for (j, layout) in layouts.iter().enumerate() {
+                let (r, p) = local_transform(rig, j, &row);
+                if let Some((order, cols)) = layout.rotation {
+                    let q = o * DQuat::from_mat3(&r) * o.inverse();
+                    let before = (t > 0).then(|| cols.map(|c| out[[t - 1, layout.start + c]]));
+                    let a = continuous_euler_degrees(order, q, before);
+                    for k in 0..3 {
+                        out[[t, layout.start + cols[k]]] = a[k];
+                    }
+                }
+                if !layout.position.is_empty() {
+                    let world = o * p - DVec3::from_array(out_rig.joint(j).offset);
+                    for &(axis, k) in &layout.position {
+                        out[[t, layout.start + k]] = world[axis];
+                    }
+                }
+            }
+        }
+        (out_rig, out)
+    }
+
+    #[test]
+    fn a_rig_turned_obliquely_gives_the_model_the_same_motion() {
+        let rig = cmu_rig("", false);
+        let rig_frames = frames(&rig, 30);
+        let model = |rig: &Skeleton, f: &Array2<f64>| {
+            Retargeter::new(rig, JointMap::detect(rig).unwrap())
+                .unwrap()
+                .to_model(f.view(), 1.0 / 120.0)
+                .frames
+        };
+        let upright = model(&rig, &rig_frames);
+        let turns = [
+            DQuat::from_rotation_x(30f64.to_radians())
+                * DQuat::from_rotation_y(40f64.to_radians())
+                * DQuat::from_rotation_z(50f64.to_radians()),
+            DQuat::from_rotation_z(35f64.to_radians()),
+            DQuat::from_rotation_x(90f64.to_radians()), // z-up
+            DQuat::from_rotation_x(180f64.to_radians()), // upside down
+        ];
+        for o in turns {
+            let (r, f) = turned(&rig, &rig_frames, o);
+            let again = model(&r, &f);
+            let worst = (&again - &upright)
+                .iter()
+                .fold(0.0f64, |m, v| m.max(v.abs()));
+            assert!(
+                worst < 1e-6,
+                "turned by {o}: the model frames differ by {worst}"
+            );
+        }
+    }
+
     fn rig(rows: &[(&str, &str, [f64; 3], &str)]) -> Skeleton {
         rig_from_rows(rows)
     }

@@ -89,6 +89,61 @@ pub enum RigTargetError {
     Legs(String),
 }
 
+impl RigJoint {
+    /// Joints from the flat arrays an engine hands over (the C ABI, Python, JavaScript): per
+    /// joint its name, its parent (`-1` for the root), its rest rotation `x, y, z, w` (4 values
+    /// per joint) and rest translation in metres (3 per joint). The rig itself is checked by
+    /// [`RigTarget::from_joints`].
+    ///
+    /// # Errors
+    /// Lengths that disagree, or a parent below `-1`.
+    pub fn from_arrays<S: Into<String>>(
+        names: impl IntoIterator<Item = S>,
+        parents: &[i64],
+        rest_rotations: &[f32],
+        rest_translations: &[f32],
+    ) -> Result<Vec<RigJoint>, RigTargetError> {
+        let names: Vec<String> = names.into_iter().map(Into::into).collect();
+        let n = names.len();
+        if parents.len() != n || rest_rotations.len() != 4 * n || rest_translations.len() != 3 * n {
+            return Err(RigTargetError::Joints(format!(
+                "{n} names need {n} parents, {} rest rotation values (4 per joint) and {} rest \
+                 translation values (3 per joint); got {}, {} and {}",
+                4 * n,
+                3 * n,
+                parents.len(),
+                rest_rotations.len(),
+                rest_translations.len()
+            )));
+        }
+        names
+            .into_iter()
+            .enumerate()
+            .map(|(j, name)| {
+                let parent = match parents[j] {
+                    -1 => None,
+                    p if p >= 0 => Some(usize::try_from(p).unwrap_or(usize::MAX)),
+                    p => {
+                        return Err(RigTargetError::Joints(format!(
+                            "joint {j} ({name:?}): parent {p} (-1 for the root)"
+                        )))
+                    }
+                };
+                let (r, t) = (
+                    &rest_rotations[4 * j..4 * j + 4],
+                    &rest_translations[3 * j..3 * j + 3],
+                );
+                Ok(RigJoint {
+                    name,
+                    parent,
+                    rest_rotation: Quat::from_xyzw(r[0], r[1], r[2], r[3]),
+                    rest_translation: Vec3::new(t[0], t[1], t[2]),
+                })
+            })
+            .collect()
+    }
+}
+
 impl From<SkeletonError> for RigTargetError {
     fn from(e: SkeletonError) -> Self {
         RigTargetError::Joints(e.to_string())

@@ -178,6 +178,9 @@ fn score_against_ground_truth(
     } else {
         (gt_flat, pred_flat)
     };
+    // Errors name both files: a value the conversion cannot take (an exp map of 1e300) is in
+    // one of them.
+    let what = |metric: &str| format!("{metric} of --pred {} against --gt {}", pred.what, gt.what);
     let mut npss = Npss::new();
     let mut windows = NpssWindows::default();
     for (metric, power) in [
@@ -189,10 +192,10 @@ fn score_against_ground_truth(
         }
         let value = npss
             .score(gt_e.view(), pred_e.view(), power)
-            .map_err(|e| metric_error("NPSS", e))?;
+            .map_err(|e| metric_error(&what("NPSS"), e))?;
         let per_window = npss
             .score_windows(gt_e.view(), pred_e.view(), power, &NPSS_WINDOWS_25HZ)
-            .map_err(|e| metric_error("NPSS", e))?
+            .map_err(|e| metric_error(&what("NPSS"), e))?
             .iter()
             .map(|w| (w.window.label.to_string(), w.value))
             .collect();
@@ -208,8 +211,8 @@ fn score_against_ground_truth(
         report.npss_windows = Some(windows);
     }
     if metrics.contains(&Metric::Euler) {
-        let per_frame =
-            euler_error(gt_e.view(), pred_e.view()).map_err(|e| metric_error("Euler error", e))?;
+        let per_frame = euler_error(gt_e.view(), pred_e.view())
+            .map_err(|e| metric_error(&what("Euler error"), e))?;
         report.euler_error_ms = Some(
             euler_error_at_horizons(&per_frame)
                 .iter()
