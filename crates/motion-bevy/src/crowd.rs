@@ -21,7 +21,7 @@ use motion_core::takes::seed_poses_on_rig;
 
 use crate::asset::MotionWeights;
 use crate::character::{MotionCharacter, MotionFailed, MotionModelSource, MotionPose, MotionRig};
-use crate::skin::{collect_rig, MotionSkinned, SkinDriver};
+use crate::skin::{collect_rig, Hierarchy, MotionSkinned, SkinDriver};
 
 /// Marks a joint entity the plugin spawned: `index` in the model skeleton's order.
 #[derive(Component, Debug, Clone, Copy)]
@@ -199,13 +199,12 @@ pub(crate) fn start_characters(
         (Entity, &MotionCharacter, &Transform, Option<&MotionSkinned>),
         (Without<MotionRig>, Without<MotionFailed>),
     >,
-    children: Query<&Children>,
-    nodes: Query<(&Transform, Option<&Name>)>,
+    hierarchy: Hierarchy,
 ) {
     for (entity, character, transform, skinned) in &new {
         // A skinned character waits for its hierarchy (a glTF scene spawns once loaded).
         let rig = match skinned {
-            Some(_) => match collect_rig(entity, &children, &nodes) {
+            Some(_) => match collect_rig(entity, &hierarchy) {
                 Some(rig) => Some(rig),
                 None => continue,
             },

@@ -54,37 +54,85 @@ pub(crate) struct SkinDriver {
     hips_parent_scale: f32,
 }
 
-/// The hierarchy below `root` as rig joints (module docs), with its entities; `None` while it
-/// has no descendants yet.
+/// What [`collect_rig`] reads of the world: the hierarchy, and (feature `gltf`) the skins.
+#[derive(bevy::ecs::system::SystemParam)]
+pub(crate) struct Hierarchy<'w, 's> {
+    children: Query<'w, 's, &'static Children>,
+    parents: Query<'w, 's, &'static ChildOf>,
+    nodes: Query<'w, 's, (&'static Transform, Option<&'static Name>)>,
+    #[cfg(feature = "gltf")]
+    skins: Query<'w, 's, &'static bevy::mesh::skinning::SkinnedMesh>,
+}
+
+impl Hierarchy<'_, '_> {
+    /// The joints of the largest skin below `root` (feature `gltf`; `None` without one).
+    fn skin_joints(&self, root: Entity) -> Option<Vec<Entity>> {
+        #[cfg(feature = "gltf")]
+        {
+            self.children
+                .iter_descendants(root)
+                .filter_map(|e| self.skins.get(e).ok())
+                .max_by_key(|s| s.joints.len())
+                .map(|s| s.joints.clone())
+        }
+        #[cfg(not(feature = "gltf"))]
+        {
+            let _ = root;
+            None
+        }
+    }
+}
+
+/// The hierarchy below `root` as rig joints (module docs), with its entities and each one's
+/// uniform scale; `None` while it has no descendants yet. With a skin below it (a glTF
+/// character), only the skin's joints and the nodes above them are joints: meshes are not.
 pub(crate) fn collect_rig(
     root: Entity,
-    children: &Query<&Children>,
-    nodes: &Query<(&Transform, Option<&Name>)>,
+    world: &Hierarchy<'_, '_>,
 ) -> Option<(Vec<RigJoint>, Vec<Entity>, Vec<f32>)> {
-    let first = children.get(root).ok()?;
+    let first = world.children.get(root).ok()?;
     if first.is_empty() {
         return None;
     }
+    // With a skin: its joints and every node above one.
+    let keep: Option<std::collections::HashSet<Entity>> = world.skin_joints(root).map(|joints| {
+        let mut keep = std::collections::HashSet::new();
+        for joint in joints {
+            let mut at = Some(joint);
+            while let Some(e) = at {
+                if e == root || !keep.insert(e) {
+                    break;
+                }
+                at = world.parents.get(e).ok().map(|c| c.parent());
+            }
+        }
+        keep
+    });
     // Breadth-first: parents before children. Each entry: entity, parent joint, world
     // transform relative to the character (scale kept, for the uniform scale).
     let mut entities = vec![root];
     let mut parents: Vec<Option<usize>> = vec![None];
-    let mut world = vec![Transform::IDENTITY];
+    let mut transforms = vec![Transform::IDENTITY];
     let mut i = 0;
     while i < entities.len() {
-        if let Ok(kids) = children.get(entities[i]) {
+        if let Ok(kids) = world.children.get(entities[i]) {
             for &kid in kids {
-                let Ok((t, _)) = nodes.get(kid) else { continue };
+                let Ok((t, _)) = world.nodes.get(kid) else {
+                    continue;
+                };
+                if keep.as_ref().is_some_and(|k| !k.contains(&kid)) {
+                    continue;
+                }
                 entities.push(kid);
                 parents.push(Some(i));
-                world.push(world[i].mul_transform(*t));
+                transforms.push(transforms[i].mul_transform(*t));
             }
         }
         i += 1;
     }
     let joints = (0..entities.len())
         .map(|j| {
-            let name = match (j, nodes.get(entities[j])) {
+            let name = match (j, world.nodes.get(entities[j])) {
                 (0, _) => "__character".to_string(),
                 (_, Ok((_, Some(n)))) => n.as_str().to_string(),
                 _ => format!("entity{}", entities[j].index()),
@@ -92,10 +140,10 @@ pub(crate) fn collect_rig(
             let (rest_rotation, rest_translation) = match parents[j] {
                 None => (Quat::IDENTITY, Vec3::ZERO),
                 Some(p) => {
-                    let inv = world[p].rotation.inverse();
+                    let inv = transforms[p].rotation.inverse();
                     (
-                        (inv * world[j].rotation).normalize(),
-                        inv * (world[j].translation - world[p].translation),
+                        (inv * transforms[j].rotation).normalize(),
+                        inv * (transforms[j].translation - transforms[p].translation),
                     )
                 }
             };
@@ -107,7 +155,10 @@ pub(crate) fn collect_rig(
             }
         })
         .collect();
-    let scales = world.iter().map(|w| w.scale.dot(Vec3::ONE) / 3.0).collect();
+    let scales = transforms
+        .iter()
+        .map(|w| w.scale.dot(Vec3::ONE) / 3.0)
+        .collect();
     Some((joints, entities, scales))
 }
 
