@@ -54,11 +54,18 @@ let lift = 0; // the model's root starts at the origin: raise the figure so its 
 let mannequin = null; // { root, nodes, hips }
 async function loadMannequin() {
   const gltf = await new GLTFLoader().loadAsync("./pkg/mannequin.glb");
-  const nodes = [];
+  // The rig: the bones of the largest skin and every node above them (meshes are not joints).
+  let bones = [];
   gltf.scene.traverse((o) => {
-    nodes.push(o);
+    if (o.isSkinnedMesh && o.skeleton.bones.length > bones.length) bones = o.skeleton.bones;
     o.frustumCulled = false; // the hips walk away from the bind-pose bounds
   });
+  const keep = new Set([gltf.scene]);
+  for (let b of bones) {
+    for (; b && !keep.has(b); b = b.parent) keep.add(b);
+  }
+  const nodes = [];
+  gltf.scene.traverse((o) => keep.has(o) && nodes.push(o));
   mannequin = { root: gltf.scene, nodes, hips: -1 };
   scene.add(gltf.scene);
 }
@@ -234,7 +241,7 @@ function frame(now) {
 window.motionDebug = () => ({
   camera: camera.position.toArray(), lift, joints: parents.length, root: Array.from(character.positions().slice(0, 3)),
   // world positions of a few of the mannequin's bones (metres)
-  bones: mannequin ? Object.fromEntries(["pelvis", "hand_l", "foot_l", "foot_r", "head"].map((n) => {
+  bones: mannequin ? Object.fromEntries(["pelvis", "hand_l", "foot_l", "foot_r", "ball_l", "ball_r", "head"].map((n) => {
     const o = mannequin.root.getObjectByName(n);
     return [n, o ? o.getWorldPosition(new THREE.Vector3()).toArray() : null];
   })) : null,

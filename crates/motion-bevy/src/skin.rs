@@ -22,8 +22,10 @@ use motion_core::skeleton::Skeleton;
 /// (a `WorldAssetRoot`) or of any joint hierarchy: the character drives those joints (module
 /// docs). The character starts once the hierarchy is there.
 ///
-/// ```no_run
+/// With the `gltf` feature (Bevy's glTF loader; the `skinned` example runs this):
+/// ```ignore
 /// # use bevy::prelude::*;
+/// # use bevy::world_serialization::WorldAssetRoot;
 /// # use motion_bevy::{MotionCharacter, MotionSkinned};
 /// fn spawn(mut commands: Commands, assets: Res<AssetServer>) {
 ///     commands.spawn((

@@ -541,6 +541,18 @@ fn parse_motion(
                     ),
                 )
             })?;
+            if value.abs() > MAX_CHANNEL_MAGNITUDE {
+                return Err(cursor.error(
+                    line_no,
+                    format!(
+                        "channel {} of frame {}: {} is out of range (a channel value is a finite number of at most {} in magnitude: degrees or the file's length unit)",
+                        column + 1,
+                        found + 1,
+                        crate::motion::compact_number(value),
+                        crate::motion::compact_number(MAX_CHANNEL_MAGNITUDE)
+                    ),
+                ));
+            }
             values.push(value);
         }
         let n = values.len() - start;
@@ -594,6 +606,10 @@ fn labelled_value<'a>(line: &'a str, label: &str) -> Option<&'a str> {
     let value = value.trim();
     (!value.is_empty() && !value.contains(char::is_whitespace)).then_some(value)
 }
+
+/// The largest magnitude of a channel value (degrees, or the file's length unit): beyond it a
+/// rotation means nothing and forward kinematics overflows.
+pub const MAX_CHANNEL_MAGNITUDE: f64 = 1e9;
 
 /// A finite f64, or `None` (NaN and infinities are not valid BVH numbers).
 fn parse_number(text: &str) -> Option<f64> {

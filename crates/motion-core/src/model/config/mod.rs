@@ -178,7 +178,7 @@ impl ModelConfig {
         if !(self.fps.is_finite() && (1.0..=limits::FPS).contains(&self.fps)) {
             return Err(format!(
                 "fps {} is outside 1 ..= {} frames per second",
-                self.fps,
+                crate::motion::compact_number(self.fps),
                 limits::FPS
             ));
         }
