@@ -120,10 +120,10 @@ fn writer_keeps_every_bit_of_awkward_numbers() {
         123456789.12345679,
         -0.0,
         5e-324,
-        f64::MAX,
+        motion_core::formats::bvh::MAX_CHANNEL_MAGNITUDE,
         2.0f64.sqrt(),
         -179.99999999999997,
-        1e22,
+        -999_999_999.999_999_9,
     ];
     for (k, v) in awkward.iter().enumerate() {
         bvh.frames[[0, k]] = *v;
@@ -132,6 +132,17 @@ fn writer_keeps_every_bit_of_awkward_numbers() {
     for (a, b) in bvh.frames.iter().zip(back.frames.iter()) {
         assert_eq!(a.to_bits(), b.to_bits(), "{a} != {b}");
     }
+    // Beyond the reader's bound a value is refused, in short form, with its place.
+    bvh.frames[[0, 3]] = 1e22;
+    let err = parse_bvh(&to_bvh_string(&bvh).unwrap(), "awkward.bvh")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("awkward.bvh")
+            && err.contains("channel 4 of frame 1")
+            && err.contains("1.000e22"),
+        "{err}"
+    );
 }
 
 #[test]

@@ -38,10 +38,11 @@ def test_a_model_character_and_bad_input():
     assert c.floor is None or "level" in c.floor
     root, rotations = c.advance(1 / 30)
     assert np.isfinite(root).all() and rotations.shape == (32, 4)
-    # The seed's floor the poses stand on: the example seed walks on a level floor.
+    # The seed's floor the poses stand on (in the world the seed was integrated in), levelled.
     floor = c.floor
     assert floor is not None and len(floor["level"]) == 4 and len(floor["pivot"]) == 3
-    assert 0.0 <= floor["tilt_degrees"] < 1.0
+    assert abs(np.linalg.norm(floor["level"]) - 1.0) < 1e-5
+    assert 0.0 <= floor["tilt_degrees"] < 30.0  # grounding.floor.MAX_TILT_DEG
     with pytest.raises(ValueError, match="finite"):
         c.set_goal((float("nan"), 0.0))
     with pytest.raises(ValueError, match="dt"):

@@ -584,7 +584,10 @@ mod tests {
         let (q, t) = (Quat::from_slice(&root[..4]), Vec3::from_slice(&root[4..7]));
         assert_eq!(parents[hips], 0);
         let (from, to) = (q * first_hips + t, q * hips_now + t);
-        assert!((to - from).with_y(0.0).length() > 0.2, "walked {from} -> {to}");
+        assert!(
+            (to - from).with_y(0.0).length() > 0.2,
+            "walked {from} -> {to}"
+        );
         assert!(to.y > 0.7 && to.y < 1.1, "hips at {} m", to.y);
         // Bad arrays are errors.
         let e = a

@@ -28,6 +28,7 @@ use crate::skeleton::Skeleton;
 mod parse;
 mod write;
 
+pub use parse::MAX_CHANNEL_MAGNITUDE;
 pub use write::write_to;
 
 /// A BVH file in memory: the hierarchy, the frames and the frame time.
