@@ -4,9 +4,11 @@
 //! the square drawn in blue); the others switch actions every few seconds.
 //!
 //! `cargo run --release -p motion-bevy --example crowd --features render -- 32`
+mod common;
+
 use bevy::prelude::*;
 use bevy::transform::TransformSystems;
-use motion_bevy::{MotionCharacter, MotionFailed, MotionGoal, MotionPlugin, MotionRig};
+use motion_bevy::{MotionCharacter, MotionGoal, MotionPlugin, MotionRig};
 use motion_core::steering::{Vec2 as FloorVec, Waypoints};
 
 /// Side of each walker's square (metres) and its walking speed (m/s).
@@ -51,7 +53,12 @@ fn main() {
         )
         .add_systems(
             Update,
-            (follow_routes, switch_actions, orbit_camera, report_failures),
+            (
+                follow_routes,
+                switch_actions,
+                orbit_camera,
+                common::report_failures,
+            ),
         )
         .add_systems(
             PostUpdate,
@@ -171,31 +178,11 @@ fn draw_routes(mut gizmos: Gizmos, routes: Query<&Route>) {
     }
 }
 
-fn report_failures(failed: Query<(Entity, &MotionFailed), Added<MotionFailed>>) {
-    for (entity, failure) in &failed {
-        eprintln!("character {entity}: {}", failure.0);
-    }
-}
-
 /// Bones as gizmo lines between each joint's and its parent's global position.
 fn draw_skeletons(
     mut gizmos: Gizmos,
     rigs: Query<&MotionRig>,
     joints: Query<(&GlobalTransform, &ChildOf)>,
 ) {
-    for rig in &rigs {
-        for &joint in &rig.joints()[1..] {
-            let Ok((at, parent)) = joints.get(joint) else {
-                continue;
-            };
-            let Ok((from, _)) = joints.get(parent.parent()) else {
-                continue;
-            };
-            gizmos.line(
-                from.translation(),
-                at.translation(),
-                Color::srgb(1.0, 0.7, 0.3),
-            );
-        }
-    }
+    common::draw_rigs(&mut gizmos, &rigs, &joints);
 }

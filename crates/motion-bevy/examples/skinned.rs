@@ -5,12 +5,12 @@
 //! toggles a gizmo skeleton of the driven joints. The camera follows.
 //!
 //! `cargo run --release -p motion-bevy --example skinned --features render`
+mod common;
+
 use bevy::prelude::*;
 use bevy::transform::TransformSystems;
 use bevy::world_serialization::WorldAssetRoot;
-use motion_bevy::{
-    MotionCharacter, MotionFailed, MotionGoal, MotionPlugin, MotionRig, MotionSkinned,
-};
+use motion_bevy::{MotionCharacter, MotionGoal, MotionPlugin, MotionRig, MotionSkinned};
 
 /// Walking speed when steered (m/s): about the built-in model's own pace.
 const SPEED: f32 = 0.6;
@@ -30,7 +30,7 @@ fn main() {
         ))
         .init_resource::<ShowSkeleton>()
         .add_systems(Startup, setup)
-        .add_systems(Update, (steer, switch_action, report_failures))
+        .add_systems(Update, (steer, switch_action, common::report_failures))
         .add_systems(
             PostUpdate,
             (follow_camera, draw_skeleton).after(TransformSystems::Propagate),
@@ -133,28 +133,7 @@ fn draw_skeleton(
     rigs: Query<&MotionRig>,
     joints: Query<(&GlobalTransform, &ChildOf)>,
 ) {
-    if !show.0 {
-        return;
-    }
-    for rig in &rigs {
-        for &joint in &rig.joints()[1..] {
-            let Ok((at, parent)) = joints.get(joint) else {
-                continue;
-            };
-            let Ok((from, _)) = joints.get(parent.parent()) else {
-                continue;
-            };
-            gizmos.line(
-                from.translation(),
-                at.translation(),
-                Color::srgb(1.0, 0.7, 0.3),
-            );
-        }
-    }
-}
-
-fn report_failures(failed: Query<(Entity, &MotionFailed), Added<MotionFailed>>) {
-    for (entity, failure) in &failed {
-        eprintln!("character {entity}: {}", failure.0);
+    if show.0 {
+        common::draw_rigs(&mut gizmos, &rigs, &joints);
     }
 }

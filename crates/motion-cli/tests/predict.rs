@@ -585,21 +585,26 @@ fn write_rig_walk(path: &Path, rename: Option<(&str, &str)>) {
     )
     .unwrap();
     if let Some((from, to)) = rename {
-        let joints = bvh
-            .skeleton
-            .joints()
-            .iter()
-            .map(|j| {
-                let mut j = j.clone();
-                if j.name == from {
-                    j.name = to.into();
-                }
-                j
-            })
-            .collect();
-        bvh.skeleton = motion_core::skeleton::Skeleton::new(joints).unwrap();
+        rename_joint(&mut bvh, from, to);
     }
     write_bvh(path, &bvh).unwrap();
+}
+
+/// `bvh` with its joint `from` called `to`: a rig no built-in map fits.
+fn rename_joint(bvh: &mut Bvh, from: &str, to: &str) {
+    let joints = bvh
+        .skeleton
+        .joints()
+        .iter()
+        .map(|j| {
+            let mut j = j.clone();
+            if j.name == from {
+                j.name = to.into();
+            }
+            j
+        })
+        .collect();
+    bvh.skeleton = motion_core::skeleton::Skeleton::new(joints).unwrap();
 }
 
 #[test]
@@ -852,19 +857,7 @@ fn a_grounded_prediction_keeps_the_seed_in_the_users_coordinates() {
         let rest = ndarray::Array2::zeros((1, rig.channel_count()));
         let mut bvh = tilted(&retargeter.to_rig(&walk, rest.view()), 3.0, 40.0);
         if renamed {
-            let joints = bvh
-                .skeleton
-                .joints()
-                .iter()
-                .map(|j| {
-                    let mut j = j.clone();
-                    if j.name == "LeftForeArm" {
-                        j.name = "LeftElbow".into();
-                    }
-                    j
-                })
-                .collect();
-            bvh.skeleton = Skeleton::new(joints).unwrap();
+            rename_joint(&mut bvh, "LeftForeArm", "LeftElbow");
         }
         let bvh = resample_bvh(&bvh, 25.0).unwrap();
         let (seed, out) = (
