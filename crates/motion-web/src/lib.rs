@@ -203,8 +203,12 @@ impl Animator {
                 rest.len()
             ));
         }
-        let rotations: Vec<f32> = rest.chunks_exact(7).flat_map(|c| c[..4].to_vec()).collect();
-        let translations: Vec<f32> = rest.chunks_exact(7).flat_map(|c| c[4..].to_vec()).collect();
+        let (mut rotations, mut translations) =
+            (Vec::with_capacity(4 * n), Vec::with_capacity(3 * n));
+        for joint in rest.chunks_exact(7) {
+            rotations.extend_from_slice(&joint[..4]);
+            translations.extend_from_slice(&joint[4..]);
+        }
         let parents: Vec<i64> = parents.iter().map(|&p| i64::from(p)).collect();
         let joints = RigJoint::from_arrays(names, &parents, &rotations, &translations)
             .map_err(|e| e.to_string())?;

@@ -618,7 +618,10 @@ fn predict_one(
     }
     let mut notices = seed.notices;
     notices.extend(action_notice);
-    if let Some(tilt) = floor.map(|f| f.tilt_degrees()).filter(|t| *t >= 0.01) {
+    if let Some(tilt) = floor
+        .map(|f| f.tilt_degrees())
+        .filter(|t| *t >= motion_core::grounding::floor::NOTABLE_TILT_DEG)
+    {
         notices.push(format!(
             "{}: the seed's floor is tilted {tilt:.2} degrees (fitted to its feet); the motion was \
              grounded on it levelled and is written in the seed's own coordinates (--json: seed_floor)",

@@ -163,14 +163,14 @@ pub fn ground_expmap_clip(
         floor = Some(fitted);
         if spec.in_input_frame {
             // The seed's own poses, and the grounded frames moved back from the floor frame.
-            let (level_inv, pivot) = (fitted.level.as_dquat().inverse(), fitted.pivot.as_dvec3());
+            let level_inv = fitted.level.as_dquat().inverse();
             for (t, pose) in new_poses.iter_mut().enumerate() {
                 if t < seed_end || !spec.ground_after_seed {
                     *pose = poses[t];
                     continue;
                 }
                 let root = (DVec3::from_array(pose.translation) + offset) * METRES_PER_MM;
-                let user = level_inv * (root - DVec3::new(pivot.x, 0.0, pivot.z)) + pivot;
+                let user = fitted.from_floor_frame_f64(root);
                 let rotation = level_inv * row_mat3_to_quat(&pose.rotation);
                 *pose = RootPose {
                     rotation: quat_to_row_mat3(rotation.normalize()),

@@ -27,6 +27,8 @@ pub const MIN_SPREAD_M: f64 = 0.05;
 pub const AIRBORNE_M: f64 = 0.03;
 /// Rounds of the fit (see [`Floor::fit`]).
 const FIT_ROUNDS: usize = 16;
+/// The smallest tilt (degrees) front ends tell the user about: below it a floor is level.
+pub const NOTABLE_TILT_DEG: f64 = 0.01;
 /// The steepest floor the fit reports (degrees); a steeper fit gives a level floor.
 pub const MAX_TILT_DEG: f64 = 30.0;
 
@@ -159,7 +161,13 @@ impl Floor {
     /// A position in the floor frame back in the world the floor was fitted in (the inverse of
     /// [`to_floor_frame`](Self::to_floor_frame)).
     pub fn from_floor_frame(&self, p: Vec3) -> Vec3 {
-        self.level.inverse() * (p - Vec3::new(self.pivot.x, 0.0, self.pivot.z)) + self.pivot
+        self.from_floor_frame_f64(p.as_dvec3()).as_vec3()
+    }
+
+    /// [`from_floor_frame`](Self::from_floor_frame) in f64.
+    pub fn from_floor_frame_f64(&self, p: DVec3) -> DVec3 {
+        let pivot = self.pivot.as_dvec3();
+        self.level.as_dquat().inverse() * (p - DVec3::new(pivot.x, 0.0, pivot.z)) + pivot
     }
 
     /// The floor's tilt from level (degrees).
