@@ -1,7 +1,8 @@
 //! # motion-metrics
 //!
 //! NPSS (Gopalakrishnan et al. 2019), the Euler-angle error of the standard H3.6M protocol, NDMS (Tanke et al. 2021),
-//! APD, the action-classifier protocol of Ghosh et al. 2017, plausibility measures without ground
+//! APD, the 3-D joint-position error of LTD, HRI and siMLPe ([`mpjpe`]), the multi-sample metrics of
+//! DLow and BeLFusion ([`multimodal`]), the action-classifier protocol of Ghosh et al. 2017, plausibility measures without ground
 //! truth and the whole H3.6M test protocol of one action ([`protocol::ActionTruth`]), in `f64`, exact to their definitions (`metrics.md`, `h36m.md`).
 //!
 //! Every metric takes ndarray views of the caller's data, checks shapes and finiteness (typed
@@ -27,6 +28,8 @@ pub mod classifier;
 pub mod error;
 pub mod euler_error;
 pub mod evaluation;
+pub mod mpjpe;
+pub mod multimodal;
 pub mod ndms;
 pub mod npss;
 pub mod plausibility;
@@ -43,6 +46,8 @@ pub use error::MetricError;
 pub use euler_error::{
     euler_error, euler_error_at_horizons, EULER_HORIZONS_MS, EULER_HORIZON_FRAMES_25HZ,
 };
+pub use mpjpe::{mpjpe, mpjpe_batch, JointMean};
+pub use multimodal::{score_sample_sets, SampleSetReport, SampleSetScores, SampleSets};
 pub use ndms::{NdmsConfig, NdmsDatabase, NdmsReport, NnMethod};
 pub use npss::{npss, npss_reference, npss_windows, Npss, SpectrumPower, NPSS_WINDOWS_25HZ};
 pub use plausibility::{ActionReference, PlausibilityReport};

@@ -17,6 +17,7 @@ use crate::rotation::expmap_frame_to_euler_protocol;
 
 pub use crate::skeleton::H36M_ACTIONS as ACTIONS;
 
+pub mod sampler;
 pub mod validation;
 pub use validation::WindowSet;
 
