@@ -23,7 +23,7 @@
 //! assert_eq!(per_frame.to_vec(), vec![0.0, 1.0]);
 //! # Ok::<(), motion_metrics::MetricError>(())
 //! ```
-use ndarray::{s, Array1, Array2, Array3, ArrayView2, ArrayView3, ArrayView4, Axis};
+use ndarray::{s, Array1, Array2, Array3, Array4, ArrayView2, ArrayView3, ArrayView4, Axis};
 use rayon::prelude::*;
 
 use motion_core::kinematics::ExpMapFk;
@@ -195,6 +195,111 @@ pub fn fill_h36m_prediction(
     Ok(out)
 }
 
+/// How the arrays given to [`score_mpjpe`] are read.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MpjpeInput {
+    /// H3.6M exp-map frames (`N x T x 99`): positions by [`h36m_pelvis_positions`].
+    Expmap,
+    /// Positions, `N x T x J x 3` or `N x T x 3J` (flattened joints, LTD's layout).
+    Positions,
+}
+
+/// [`score_mpjpe`]'s result.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct MpjpeScores {
+    /// Sequences scored.
+    pub sequences: usize,
+    /// The error of every predicted frame, the mean over sequences.
+    pub per_frame: Vec<f64>,
+    /// The values at 80 ... 1000 ms ([`MPJPE_HORIZON_FRAMES`], 25 Hz frames) when the prediction
+    /// has 25 frames or more.
+    pub horizons: Option<[f64; 8]>,
+    /// `true` when the prediction held the 22 predicted H3.6M joints and was completed from the
+    /// ground truth ([`fill_h36m_prediction`]).
+    pub filled_from_truth: bool,
+}
+
+/// MPJPE of predictions against ground truth given as arrays (`score --metric mpjpe`, Python's
+/// `motion.mpjpe`): both read as `input`, the error of every frame averaged over sequences. A
+/// prediction of the 22 predicted joints against 32-joint truth is completed the reference's way.
+pub fn score_mpjpe(
+    pred: ndarray::ArrayViewD<'_, f64>,
+    truth: ndarray::ArrayViewD<'_, f64>,
+    input: MpjpeInput,
+    joints: JointMean,
+) -> Result<MpjpeScores, MetricError> {
+    let truth = positions_of(truth, input, "ground truth")?;
+    let mut pred = positions_of(pred, input, "prediction")?;
+    let (n, t, j, _) = truth.dim();
+    let filled = pred.dim() == (n, t, H36M_PREDICTED_JOINTS.len(), 3) && j == H36M_JOINT_COUNT;
+    if filled {
+        let mut full = Array4::zeros(truth.raw_dim());
+        for i in 0..n {
+            full.index_axis_mut(Axis(0), i).assign(&fill_h36m_prediction(
+                pred.index_axis(Axis(0), i),
+                truth.index_axis(Axis(0), i),
+            )?);
+        }
+        pred = full;
+    }
+    let errors = mpjpe_batch(pred.view(), truth.view(), joints)?;
+    let per_frame = errors.mean_axis(Axis(0)).expect("not empty").to_vec();
+    Ok(MpjpeScores {
+        sequences: n,
+        horizons: at_horizons(&per_frame),
+        per_frame,
+        filled_from_truth: filled,
+    })
+}
+
+/// `N x T x J x 3` positions of an input read as `input`.
+fn positions_of(
+    values: ndarray::ArrayViewD<'_, f64>,
+    input: MpjpeInput,
+    what: &str,
+) -> Result<Array4<f64>, MetricError> {
+    let shape = values.shape().to_vec();
+    let wrong = |expected: &str| {
+        MetricError::InvalidConfig(format!(
+            "MPJPE reads the {what} as {expected}; its shape is {shape:?}"
+        ))
+    };
+    check_not_empty(what, &values)?;
+    match input {
+        MpjpeInput::Expmap => {
+            if shape.len() != 3 || shape[2] != H36M_FRAME_DIMS {
+                return Err(wrong("H3.6M exp-map frames N x T x 99"));
+            }
+            let mut out = Array4::zeros((shape[0], shape[1], H36M_JOINT_COUNT, 3));
+            for (i, seq) in values.outer_iter().enumerate() {
+                let seq = seq.into_dimensionality::<ndarray::Ix2>().expect("3-D input");
+                let positions = h36m_pelvis_positions(seq).map_err(|e| match e {
+                    MetricError::NonFinite { index, .. } => MetricError::NonFinite {
+                        what: what.to_string(),
+                        index: [vec![i], index].concat(),
+                    },
+                    other => other,
+                })?;
+                out.index_axis_mut(Axis(0), i).assign(&positions);
+            }
+            Ok(out)
+        }
+        MpjpeInput::Positions => match shape.len() {
+            4 => Ok(values
+                .into_dimensionality::<ndarray::Ix4>()
+                .expect("4-D input")
+                .to_owned()),
+            3 if shape[2] % 3 == 0 => Ok(values
+                .to_owned()
+                .into_shape_with_order((shape[0], shape[1], shape[2] / 3, 3))
+                .expect("same element count")
+                .into_dimensionality::<ndarray::Ix4>()
+                .expect("4-D")),
+            _ => Err(wrong("positions N x T x J x 3 or N x T x 3J")),
+        },
+    }
+}
+
 fn check_pair<D: ndarray::Dimension>(
     a_name: &str,
     a: &ndarray::ArrayView<'_, f64, D>,
@@ -257,7 +362,36 @@ fn per_frame(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use ndarray::Array4;
+
+    #[test]
+    fn twenty_two_joints_are_completed_from_the_truth_and_layouts_agree() {
+        let frames = ndarray::Array3::from_shape_fn((2, 25, 99), |(n, t, d)| {
+            0.05 * ((d * 3 + t + n) % 13) as f64 - 0.3
+        });
+        let truth = {
+            let mut out = Array4::zeros((2, 25, 32, 3));
+            for n in 0..2 {
+                out.index_axis_mut(Axis(0), n)
+                    .assign(&h36m_pelvis_positions(frames.index_axis(Axis(0), n)).unwrap());
+            }
+            out
+        };
+        let moved = truth.mapv(|v| v + 2.0);
+        let pred22 = Array4::from_shape_fn((2, 25, 22, 3), |(n, t, k, c)| {
+            moved[[n, t, H36M_PREDICTED_JOINTS[k], c]]
+        });
+        let flat = pred22.clone().into_shape_with_order((2, 25, 66)).unwrap();
+        let a = score_mpjpe(flat.view().into_dyn(), truth.view().into_dyn(), MpjpeInput::Positions, JointMean::All32).unwrap();
+        let b = score_mpjpe(pred22.view().into_dyn(), truth.view().into_dyn(), MpjpeInput::Positions, JointMean::All32).unwrap();
+        assert!(a.filled_from_truth);
+        assert_eq!(a, b);
+        // Moved by (2, 2, 2): 22 + 6 copies of sqrt(12) over 32 joints.
+        let expected = 28.0 * 12f64.sqrt() / 32.0;
+        assert!((a.per_frame[0] - expected).abs() < 1e-9);
+        let from_expmap = score_mpjpe(frames.view().into_dyn(), frames.view().into_dyn(), MpjpeInput::Expmap, JointMean::All32).unwrap();
+        assert_eq!(from_expmap.horizons, Some([0.0; 8]));
+        assert!(score_mpjpe(flat.view().into_dyn(), flat.view().into_dyn(), MpjpeInput::Expmap, JointMean::All32).is_err());
+    }
 
     fn wave(t: usize, j: usize, phase: f64) -> Array3<f64> {
         Array3::from_shape_fn((t, j, 3), |(a, b, c)| {

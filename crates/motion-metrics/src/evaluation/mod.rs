@@ -23,6 +23,7 @@
 //!
 //! The predictions can be kept ([`EvalOptions::save_predictions`]), written piece by piece
 //! ([`motion_core::formats::npy_stream`]).
+pub mod mpjpe;
 pub mod posture;
 pub mod published;
 pub mod report;
@@ -787,6 +788,24 @@ fn action_result(
     }
 }
 
+/// The report's description of `model` (named `source`), run with `samples` samples per window.
+fn model_info(model: &MotionModel, source: String, samples: usize) -> ModelInfo {
+    let config = model.config();
+    let stochastic = config.architecture().is_stochastic();
+    ModelInfo {
+        source,
+        architecture: config.architecture().name(),
+        hidden: config.hidden,
+        actions: config.actions.clone(),
+        actions_trained: selection::trained_actions(model),
+        stochastic,
+        plan_horizon: (config.architecture() == Architecture::VgruD).then_some(config.horizon),
+        stored_dtype: model.stored_dtype().to_string(),
+        note: (!stochastic && samples > 1)
+            .then_some("deterministic model: the K samples are identical (APD is 0)"),
+    }
+}
+
 fn full_report(
     options: &EvalOptions,
     model: &MotionModel,
@@ -795,8 +814,6 @@ fn full_report(
     results: Vec<ActionResult>,
     saved: Option<SavedPredictions>,
 ) -> EvalReport {
-    let config = model.config();
-    let stochastic = config.architecture().is_stochastic();
     let mean_over_actions = MeansOverActions {
         actions: results.len(),
         model: Means::of(&results.iter().map(|r| &r.model).collect::<Vec<_>>()),
@@ -809,18 +826,7 @@ fn full_report(
         ),
     };
     EvalReport {
-        model: ModelInfo {
-            source: options.model_name.clone(),
-            architecture: config.architecture().name(),
-            hidden: config.hidden,
-            actions: config.actions.clone(),
-            actions_trained: selection::trained_actions(model),
-            stochastic,
-            plan_horizon: (config.architecture() == Architecture::VgruD).then_some(config.horizon),
-            stored_dtype: model.stored_dtype().to_string(),
-            note: (!stochastic && options.samples > 1)
-                .then_some("deterministic model: the K samples are identical (APD is 0)"),
-        },
+        model: model_info(model, options.model_name.clone(), options.samples),
         data: dataset.display().to_string(),
         protocol: Protocol {
             subject: TEST_SUBJECT,

@@ -451,3 +451,61 @@ mod tests {
         );
     }
 }
+
+/// One published MPJPE row (mm) of the 3-D protocols (`protocols_modern.md` §1.6).
+#[derive(Debug, Clone, Copy)]
+pub struct MpjpeRow {
+    /// The method and how it was measured.
+    pub method: &'static str,
+    /// The window set: `8` or `256`.
+    pub set: &'static str,
+    /// At 80, 160, 320, 400, 560, 720, 880, 1000 ms (`None` where none is published).
+    pub values: [Option<f64>; 8],
+    /// Where the number was read.
+    pub source: &'static str,
+}
+
+/// The published 15-action averages of the MPJPE protocols. Citations: Mao, Liu, Salzmann, Li,
+/// "Learning Trajectory Dependencies for Human Motion Prediction", ICCV 2019 (LTD); Mao, Liu,
+/// Salzmann, "History Repeats Itself", ECCV 2020 (HRI); Guo, Du, Moreno-Noguer, Alameda-Pineda,
+/// "Back to MLP: A Simple Baseline for Human Motion Prediction", WACV 2023 (siMLPe).
+#[rustfmt::skip]
+pub const MPJPE_ROWS: [MpjpeRow; 5] = [
+    MpjpeRow { method: "zero-velocity", set: "256",
+        values: [Some(23.8), Some(44.4), Some(76.1), Some(88.2), Some(107.4), Some(121.6), Some(131.6), Some(136.6)],
+        source: "posepred COMMANDS.md @c0c04345 (the pUAL paper's table as the authors' toolbox tabulates it)" },
+    MpjpeRow { method: "HRI (released model)", set: "256",
+        values: [Some(10.4), Some(22.6), Some(47.1), Some(58.3), Some(77.3), Some(91.8), Some(104.1), Some(112.1)],
+        source: "HRI checkpoint/pretrained/h36m_3d_in50_out10_dctn20/test_pre_action.csv @0451c844, average row" },
+    MpjpeRow { method: "siMLPe (paper)", set: "256",
+        values: [Some(9.6), Some(21.7), Some(46.3), Some(57.3), Some(75.7), Some(90.1), Some(101.8), Some(109.4)],
+        source: "siMLPe Table 1 as quoted in dulucas/siMLPe issue #12" },
+    MpjpeRow { method: "siMLPe (released checkpoint, re-measured)", set: "256",
+        values: [Some(13.4), Some(24.0), Some(47.7), Some(58.4), Some(78.6), Some(92.1), Some(105.2), Some(112.0)],
+        source: "dulucas/siMLPe issue #12 (a user's re-run)" },
+    MpjpeRow { method: "LTD (pre-trained, 3-D, 10 observed frames)", set: "8",
+        values: [Some(12.1), Some(25.0), Some(51.0), Some(61.3), None, None, None, None],
+        source: "LTD README.md @b81bef95, results table" },
+];
+
+/// HRI's released model on the 256-set, per action (the actions whose row is copied in
+/// `protocols_modern.md` §1.6; HRI's CSV, same source as [`MPJPE_ROWS`]).
+#[rustfmt::skip]
+pub const HRI_256_PER_ACTION: [(&str, [f64; 8]); 8] = [
+    ("walking", [10.0, 19.5, 34.2, 39.8, 47.4, 52.1, 55.5, 58.1]),
+    ("eating", [6.4, 14.0, 28.7, 36.2, 50.0, 61.4, 70.6, 75.7]),
+    ("smoking", [7.0, 14.9, 29.9, 36.4, 47.6, 56.6, 64.4, 69.5]),
+    ("discussion", [10.2, 23.4, 52.1, 65.4, 86.6, 102.2, 113.2, 119.8]),
+    ("greeting", [13.7, 30.1, 63.8, 78.1, 101.9, 118.4, 132.7, 138.8]),
+    ("phoning", [8.6, 18.3, 39.0, 49.2, 67.4, 82.9, 96.5, 105.0]),
+    ("posing", [10.2, 24.2, 58.5, 75.8, 107.6, 136.8, 161.4, 178.2]),
+    ("walkingdog", [20.1, 40.3, 73.3, 86.3, 108.2, 120.6, 135.9, 146.9]),
+];
+
+/// HRI's published 256-set row of `action`, if copied.
+pub fn hri_256_action(action: &str) -> Option<[f64; 8]> {
+    HRI_256_PER_ACTION
+        .iter()
+        .find(|(a, _)| *a == action)
+        .map(|(_, v)| *v)
+}

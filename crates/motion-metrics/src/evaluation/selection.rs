@@ -78,6 +78,17 @@ pub struct Selection {
     pub skipped: Vec<(&'static str, String)>,
 }
 
+/// Where a protocol's windows of an action come from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum WindowSource {
+    /// The fixed table of [`protocol::TEST_WINDOWS`] (none for the actions whose S5 files were
+    /// absent when it was made).
+    Table,
+    /// Sampled from both S5 takes of the action ([`protocol::sampler`]): any action whose two
+    /// files are present.
+    BothTakes,
+}
+
 /// Resolves `--actions` (a comma list or `all`) against the model and the dataset.
 ///
 /// Errors: an unknown action name (the message lists the valid ones), an action the model cannot
@@ -87,6 +98,17 @@ pub fn select_actions(
     model: &MotionModel,
     dataset: &Path,
     any_action: bool,
+) -> Result<Selection, EvalError> {
+    select_actions_from(requested, model, dataset, any_action, WindowSource::Table)
+}
+
+/// [`select_actions`] for a protocol whose windows come from `source`.
+pub fn select_actions_from(
+    requested: &[String],
+    model: &MotionModel,
+    dataset: &Path,
+    any_action: bool,
+    source: WindowSource,
 ) -> Result<Selection, EvalError> {
     let all = requested.iter().any(|a| a.trim() == "all");
     let names: Vec<&'static str> = if all {
@@ -136,16 +158,19 @@ pub fn select_actions(
             }
             return Err(EvalError::Invalid(reason));
         }
-        if ACTIONS_WITHOUT_WINDOWS.contains(&action) {
+        if source == WindowSource::Table && ACTIONS_WITHOUT_WINDOWS.contains(&action) {
             selection.skipped.push((
                 action,
                 "no test windows: its S5 files are absent from the data release".into(),
             ));
             continue;
         }
-        let mut subactions: Vec<u8> = protocol::test_windows(action)
-            .map(|w| w.subaction)
-            .collect();
+        let mut subactions: Vec<u8> = match source {
+            WindowSource::Table => protocol::test_windows(action)
+                .map(|w| w.subaction)
+                .collect(),
+            WindowSource::BothTakes => vec![1, 2],
+        };
         subactions.sort_unstable();
         subactions.dedup();
         let missing: Vec<String> = subactions

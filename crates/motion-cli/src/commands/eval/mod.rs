@@ -2,6 +2,7 @@
 //! 5's test windows, scored beside the zero-velocity baseline and the papers' published numbers),
 //! printed as a table (`table`), as JSON (`--json`) or drawn (`plots`, `--plot`). Nothing is
 //! measured here.
+mod mpjpe_table;
 mod plots;
 mod table;
 
@@ -10,9 +11,13 @@ use std::path::PathBuf;
 use anyhow::Result;
 
 use motion_core::protocol::{WindowSet, LONG_TERM_HORIZON};
+use motion_metrics::evaluation::mpjpe::{
+    check_mpjpe_request, evaluate_mpjpe, MpjpeOptions, MpjpeWindows,
+};
 use motion_metrics::evaluation::{
     check_request, evaluate, resolve_dataset, EvalError, EvalOptions, Progress,
 };
+use motion_metrics::JointMean;
 
 use super::UsageError;
 use crate::model_source::{self, BuiltIn};
@@ -53,11 +58,15 @@ With K samples: the Euler error is the mean over all 8 x K sequences; NPSS score
 index as a set of 8 windows and averages over the K sets; NDMS is f_sim over all words of all \
 8 x K forecasts; APD is per window over its K samples, then the mean over windows.
 
+--protocol mpjpe: the 3-D joint-position error (mm) of LTD, HRI and siMLPe, as their code computes it (motion_metrics::mpjpe, protocols_modern.md): positions by forward kinematics of the exp-map frames with dims 0..5 zeroed (the pelvis frame, one skeleton), the mean over all 32 joints, the error at single frames 80-1000 ms after the last observed one. Windows on S5 from numpy's RandomState(1234567890) drawn as the reference draws them: --windows 256 (HRI and siMLPe, the default), 8 (the Martinez set of LTD's table, the angle protocol's test windows) or all (every window of both takes, --stride frames apart). --input-frames (default 50) frames are observed, 25 predicted. --ltd-sampler places the windows as LTD's loader does (for 10 observed frames whatever --input-frames is). Beside the model: zero-velocity (the last observed pose repeated), HRI's published row per action, and the published 15-action averages of the same set. Four S5 takes are missing from the release here: the average then covers fewer actions and says which.
+
 Examples:
   motion-cli eval --data ../shared/data --actions walking,eating,smoking --samples 5
   motion-cli eval --model weights/vgru_d_multi.safetensors --actions all --json > eval.json
   motion-cli eval --actions walking --save-predictions walking.npy
   motion-cli eval --actions walking,greeting --horizon 300 --samples 5   # 12 s
+  motion-cli eval --protocol mpjpe --windows 256 --json > mpjpe.json
+  motion-cli eval --protocol mpjpe --windows all --stride 5 --actions walking
 
 Exit status 2 for bad input (unknown action, missing data directory, unreadable model).";
 
@@ -101,17 +110,44 @@ pub struct Args {
     /// Evaluate a single-action model on other actions too.
     #[arg(long)]
     pub any_action: bool,
-    /// Which S5 windows: the protocol's 8 test windows per action (report these), or 8
-    /// validation windows per action that overlap no test window (choose checkpoints and settings
-    /// on these, the same windows as training/data.py's validation set).
-    #[arg(long, value_enum, default_value = "test")]
-    pub windows: Windows,
+    /// Which protocol: h36m (Euler error, NPSS, NDMS, APD, plausibility, posture, the
+    /// classifier) or mpjpe (3-D joint-position error of LTD, HRI and siMLPe).
+    #[arg(long, value_enum, default_value = "h36m")]
+    pub protocol: ProtocolChoice,
+    /// Which S5 windows. h36m: test (the protocol's 8 per action, = 8; the default) or
+    /// validation (8 per action overlapping no test window: choose checkpoints and settings on
+    /// these). mpjpe: 256 (the default), 8 or all.
+    #[arg(long, value_enum)]
+    pub windows: Option<Windows>,
+    /// With --windows all: frames (25 Hz) between window starts.
+    #[arg(long, value_name = "N")]
+    pub stride: Option<usize>,
+    /// mpjpe: observed frames per window (25 Hz).
+    #[arg(long, value_name = "N")]
+    pub input_frames: Option<usize>,
+    /// mpjpe: place the windows as LTD's loader does (its sampler always gets 10 observed
+    /// frames); without it, as HRI and siMLPe do.
+    #[arg(long)]
+    pub ltd_sampler: bool,
+    /// mpjpe: the joints each frame's error averages: 32 (the reference's) or 22 (the predicted
+    /// joints only, a variant).
+    #[arg(long, value_name = "32|22")]
+    pub joints: Option<String>,
     #[command(flatten)]
     pub reporting: crate::commands::output::Output,
     /// Also draw metric vs horizon per action (Euler error, NPSS windows, NDMS bins; the
     /// zero-velocity baseline dashed) to FILE.svg or FILE.png.
     #[arg(long, value_name = "FILE.svg|FILE.png")]
     pub plot: Option<PathBuf>,
+}
+
+/// `--protocol`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum ProtocolChoice {
+    /// The H3.6M protocol of the seed papers (angles, NDMS, plausibility, posture, classifier).
+    H36m,
+    /// The 3-D joint-position error of LTD, HRI and siMLPe.
+    Mpjpe,
 }
 
 /// `--windows`.
@@ -121,10 +157,42 @@ pub enum Windows {
     Test,
     /// Windows disjoint from the test windows.
     Validation,
+    /// The 8-window Martinez set.
+    #[value(name = "8")]
+    Eight,
+    /// HRI's and siMLPe's 256 windows.
+    #[value(name = "256")]
+    TwoFiftySix,
+    /// Every window at --stride.
+    All,
 }
 
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
+    if args.protocol == ProtocolChoice::Mpjpe {
+        return run_mpjpe(args);
+    }
+    for (given, name) in [
+        (args.stride.is_some(), "--stride"),
+        (args.input_frames.is_some(), "--input-frames"),
+        (args.ltd_sampler, "--ltd-sampler"),
+        (args.joints.is_some(), "--joints"),
+    ] {
+        if given {
+            return Err(UsageError(format!("{name} belongs to --protocol mpjpe")).into());
+        }
+    }
+    let windows = match args.windows {
+        None | Some(Windows::Test) | Some(Windows::Eight) => WindowSet::Test,
+        Some(Windows::Validation) => WindowSet::Validation,
+        Some(other) => {
+            return Err(UsageError(format!(
+                "--windows {}: the h36m protocol has the 8 test windows per action (test, 8) or the validation windows; 256 and all belong to --protocol mpjpe",
+                if other == Windows::All { "all" } else { "256" }
+            ))
+            .into())
+        }
+    };
     check_request(args.horizon, args.samples, args.save_predictions.as_deref()).map_err(usage)?;
     if let Some(plot) = &args.plot {
         crate::plot::check_extension(plot)?;
@@ -155,10 +223,7 @@ pub fn run(args: Args) -> Result<()> {
         classifier,
         any_action: args.any_action,
         save_predictions: args.save_predictions.clone(),
-        windows: match args.windows {
-            Windows::Test => WindowSet::Test,
-            Windows::Validation => WindowSet::Validation,
-        },
+        windows,
     };
     let mut bar = None;
     let report = evaluate(&model, &options, &mut |p| match p {
@@ -190,6 +255,85 @@ pub fn run(args: Args) -> Result<()> {
         args.reporting.print_json(&report)?;
     } else {
         print!("{}", table::table(&report));
+    }
+    Ok(())
+}
+
+/// `eval --protocol mpjpe`.
+fn run_mpjpe(args: Args) -> Result<()> {
+    let refuse = |what: &str| -> Result<()> {
+        Err(UsageError(format!("{what} belongs to --protocol h36m; mpjpe predicts 25 frames per window, one sample")).into())
+    };
+    if args.samples != 1 {
+        return refuse("--samples");
+    }
+    if args.horizon != LONG_TERM_HORIZON {
+        return refuse("--horizon");
+    }
+    if args.save_predictions.is_some() {
+        return refuse("--save-predictions");
+    }
+    if args.plot.is_some() {
+        return refuse("--plot");
+    }
+    let name = args.windows.map(|w| match w {
+        Windows::Test => "test",
+        Windows::Validation => "validation",
+        Windows::Eight => "8",
+        Windows::TwoFiftySix => "256",
+        Windows::All => "all",
+    });
+    let windows = MpjpeWindows::parse(name, args.stride).map_err(usage)?;
+    let joints = match args.joints.as_deref() {
+        None => JointMean::All32,
+        Some(name) => JointMean::from_name(name).ok_or_else(|| {
+            UsageError(format!("--joints {name}: use 32 (all joints, the reference's) or 22 (the predicted joints)"))
+        })?,
+    };
+    let dataset = resolve_dataset(args.data.as_deref()).map_err(usage)?;
+    let mut options = MpjpeOptions::new(
+        dataset,
+        model_source::describe(args.model.as_deref(), BuiltIn::Forecast),
+    );
+    options.actions = args.actions.clone();
+    options.windows = windows;
+    options.input_frames = args.input_frames.unwrap_or(options.input_frames);
+    options.sampler_input = args
+        .ltd_sampler
+        .then_some(motion_core::protocol::sampler::LTD_SAMPLER_INPUT);
+    options.joints = joints;
+    options.rng_seed = args.rng_seed;
+    options.any_action = args.any_action;
+    check_mpjpe_request(&options).map_err(usage)?;
+    let model = model_source::load_model(args.model.as_deref(), BuiltIn::Forecast)?;
+    let mut bar = None;
+    let mut started = 0u64;
+    let report = evaluate_mpjpe(&model, &options, &mut |p| match p {
+        Progress::Start { actions } => {
+            bar = Some(args.reporting.progress_bar(
+                actions as u64,
+                "{bar:30} {pos}/{len} actions {elapsed} {msg}",
+            ));
+        }
+        Progress::Stage { action, stage } => {
+            if let Some(b) = &bar {
+                if stage == "loading" {
+                    started += 1;
+                    b.set_position(started - 1);
+                }
+                b.set_message(format!("{action}: {stage}"));
+            }
+        }
+        Progress::Window => {}
+    })
+    .map_err(usage)?;
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    if args.reporting.json {
+        args.reporting.print_json(&report)?;
+    } else {
+        print!("{}", mpjpe_table::table(&report));
     }
     Ok(())
 }

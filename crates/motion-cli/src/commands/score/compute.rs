@@ -43,6 +43,7 @@ pub fn compute(
         frames,
         posture: None,
         input_space: *space,
+        mpjpe: None,
         ndms: None,
         npss: None,
         npss_reference: None,
@@ -53,7 +54,15 @@ pub fn compute(
         plausibility: None,
     };
     if let Some(gt) = gt {
-        score_against_ground_truth(metrics, gt, pred, *space, &mut report)?;
+        if metrics.contains(&Metric::Mpjpe) {
+            report.mpjpe = Some(mpjpe_of(gt, pred, *space)?);
+        }
+        if metrics
+            .iter()
+            .any(|m| matches!(m, Metric::Npss | Metric::NpssReference | Metric::Euler))
+        {
+            score_against_ground_truth(metrics, gt, pred, *space, &mut report)?;
+        }
     }
     if metrics.contains(&Metric::Ndms) {
         let method = match args.nn {
@@ -136,6 +145,47 @@ fn check_one_seed_each(seed: &Batch, n: usize) -> Result<()> {
 }
 
 // ---------- NPSS and Euler error ----------
+
+/// MPJPE of every sample against its sequence's ground truth (a prediction of the 22 predicted
+/// H3.6M joints is completed from 32-joint truth).
+fn mpjpe_of(
+    gt: &Batch,
+    pred: &Batch,
+    space: InputSpace,
+) -> Result<motion_metrics::mpjpe::MpjpeScores> {
+    use motion_metrics::mpjpe::{score_mpjpe, MpjpeInput};
+    let (n, s, t, w) = pred.data.dim();
+    let (gn, _, gt_frames, gw) = gt.data.dim();
+    if (n, t) != (gn, gt_frames) {
+        return Err(usage(format!(
+            "shape mismatch: --pred {} has {n} sequences x {t} frames but --gt {} has {gn} x {gt_frames}",
+            pred.what, gt.what
+        )));
+    }
+    let pred_flat = pred
+        .data
+        .to_shape((n * s, t, w))
+        .expect("contiguous")
+        .into_owned();
+    let gt_seq = gt.data.index_axis(Axis(1), 0);
+    let gt_flat = Array3::from_shape_fn((n * s, t, gw), |(i, f, d)| gt_seq[[i / s, f, d]]);
+    let input = match space {
+        InputSpace::Expmap => MpjpeInput::Expmap,
+        InputSpace::Raw => MpjpeInput::Positions,
+    };
+    score_mpjpe(
+        pred_flat.view().into_dyn(),
+        gt_flat.view().into_dyn(),
+        input,
+        motion_metrics::JointMean::All32,
+    )
+    .map_err(|e| {
+        metric_error(
+            &format!("MPJPE of --pred {} against --gt {}", pred.what, gt.what),
+            e,
+        )
+    })
+}
 
 /// NPSS (whole and per window) and the Euler error of every sample against its sequence's
 /// ground truth, into `report`.

@@ -83,8 +83,11 @@ The reference statistics are read from the H3.6M data (--data, $MOTION_DATA_DIR,
 The seed gives the drift's starting frame and the floor of foot_contact: --seed holds one \
 sequence (N x T_s x 99) per --pred sequence, e.g. the 50 frames `predict` was seeded with.
 
+MPJPE (--metric mpjpe; motion_metrics::mpjpe): the mean over joints of the 3-D distance (mm), per predicted frame, averaged over sequences, and at 80-1000 ms when there are 25 frames at 25 Hz. Exp-map frames (N x T x 99) are put in the pelvis frame first (forward kinematics with dims 0..5 zeroed, as LTD, HRI and siMLPe do); raw positions (N x T x J x 3, or N x T x 3J) are used as given. A prediction of the 22 joints the reference models predict (N x T x 66) against 32-joint ground truth (N x T x 96) is completed from the truth the reference's way.
+
 Examples:
   motion-cli score --gt gt.npy --pred pred.npy --metric npss,euler --json
+  motion-cli score --gt gt.npy --pred pred.npy --metric mpjpe
   motion-cli score --pred pred.npy --seed seed.npy --action walking --metric classifier --plot walking.svg
   motion-cli score --pred pred.npy --seed seed.npy --action walking --metric speed_ratio,drift,foot_contact
   motion-cli score --pred pred.bvh --seed-frames 50 --action walking --metric posture
@@ -103,8 +106,8 @@ pub struct Args {
     /// NDMS words are κ = 8 frames at 25 Hz, so give 25 Hz frames.
     #[arg(long, required = true, num_args = 1..)]
     pub pred: Vec<PathBuf>,
-    /// Comma list of npss, npss-reference, euler, ndms, apd, classifier, speed_ratio, drift,
-    /// foot_contact, posture, or all (= every metric the inputs allow; classifier when --action is
+    /// Comma list of npss, npss-reference, euler, mpjpe, ndms, apd, classifier, speed_ratio,
+    /// drift, foot_contact, posture, or all (= every metric the inputs allow; classifier when --action is
     /// given, posture when --action is and the H3.6M data is found, speed_ratio, drift and
     /// foot_contact when --action and --seed are).
     #[arg(
@@ -191,11 +194,13 @@ pub enum Metric {
     FootContact,
     /// Posture realism against the action's real takes (motion_metrics::posture).
     Posture,
+    /// 3-D joint-position error (mm) of LTD, HRI and siMLPe (motion_metrics::mpjpe).
+    Mpjpe,
     /// Every metric the inputs allow.
     All,
 }
 
-const ALL_METRICS: [Metric; 10] = [
+const ALL_METRICS: [Metric; 11] = [
     Metric::Npss,
     Metric::NpssReference,
     Metric::Euler,
@@ -206,6 +211,7 @@ const ALL_METRICS: [Metric; 10] = [
     Metric::Drift,
     Metric::FootContact,
     Metric::Posture,
+    Metric::Mpjpe,
 ];
 
 impl Metric {
@@ -221,6 +227,7 @@ impl Metric {
             Metric::Drift => "drift",
             Metric::FootContact => "foot_contact",
             Metric::Posture => "posture",
+            Metric::Mpjpe => "mpjpe",
             Metric::All => "all",
         }
     }
@@ -289,8 +296,17 @@ fn chosen_metrics(
     let requested_posture = requested
         .as_ref()
         .is_some_and(|list| list.contains(&Metric::Posture));
+    let asked_for_some = requested.is_some();
     let available = |m: Metric| match m {
         Metric::Npss | Metric::NpssReference | Metric::Euler => gt.is_some(),
+        // With `all`: H3.6M exp-map frames or positions given as N x T x J x 3.
+        Metric::Mpjpe if asked_for_some => gt.is_some(),
+        Metric::Mpjpe => {
+            gt.is_some()
+                && (pred.joints.is_some()
+                    || (inputs.space == InputSpace::Expmap
+                        && pred.data.dim().3 == motion_core::skeleton::H36M_FRAME_DIMS))
+        }
         Metric::Ndms => !args.db.is_empty(),
         Metric::Apd => pred.has_samples,
         Metric::Classifier => action.is_some(),
@@ -329,7 +345,7 @@ fn chosen_metrics(
     };
     if metrics.is_empty() {
         return Err(usage(
-            "nothing to score: give --gt (NPSS, Euler error), --db (NDMS), samples in --pred (APD) or --action with --seed (speed_ratio, drift, foot_contact)",
+            "nothing to score: give --gt (NPSS, Euler error, MPJPE), --db (NDMS), samples in --pred (APD) or --action with --seed (speed_ratio, drift, foot_contact)",
         ));
     }
     Ok(metrics)

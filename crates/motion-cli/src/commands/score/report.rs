@@ -42,6 +42,9 @@ pub struct ScoreReport {
     pub foot_contact: Option<FootContactReport>,
     /// Frames per prediction.
     pub frames: usize,
+    /// MPJPE per predicted frame and at 80-1000 ms (mm).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mpjpe: Option<motion_metrics::mpjpe::MpjpeScores>,
     /// Posture realism per window after the seed (when asked for).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub posture: Option<motion_metrics::evaluation::posture::PostureScore>,
@@ -189,6 +192,32 @@ pub fn human_table(report: &ScoreReport) -> String {
             for (window, value) in per_window.into_iter().flatten() {
                 out.push_str(&format!("  {window:<34} {}\n", num(*value)));
             }
+        }
+    }
+    if let Some(m) = &report.mpjpe {
+        match &m.horizons {
+            Some(h) => {
+                out.push_str("MPJPE (mm)       ");
+                for ms in motion_metrics::mpjpe::MPJPE_HORIZONS_MS {
+                    out.push_str(&format!("{:>8}", format!("{ms} ms")));
+                }
+                out.push_str("\n                 ");
+                for v in h {
+                    out.push_str(&format!("{v:>8.2}"));
+                }
+                out.push('\n');
+            }
+            None => {
+                let mean = m.per_frame.iter().sum::<f64>() / m.per_frame.len() as f64;
+                out.push_str(&format!(
+                    "{:<36} {} (fewer than 25 frames: no horizons)\n",
+                    "MPJPE (mm), mean over frames",
+                    num(mean)
+                ));
+            }
+        }
+        if m.filled_from_truth {
+            out.push_str("  (22 predicted joints, the rest from the ground truth)\n");
         }
     }
     if let Some(h) = &report.euler_error_ms {
