@@ -8,9 +8,12 @@ use pyo3::prelude::*;
 use motion_core::model::builtin::default_action_classifier;
 use motion_core::model::ActionClassifier;
 use motion_core::protocol::WindowSet;
+use motion_core::protocol::sampler::LTD_SAMPLER_INPUT;
+use motion_metrics::evaluation::mpjpe::{evaluate_mpjpe as run_mpjpe, MpjpeOptions, MpjpeWindows};
 use motion_metrics::evaluation::{
     check_request, evaluate as run, resolve_dataset, EvalError, EvalOptions,
 };
+use motion_metrics::JointMean;
 
 use crate::errors::{format, value, weights};
 use crate::model::{BuiltIn, Model};
@@ -36,8 +39,13 @@ fn eval_error(e: EvalError) -> PyErr {
 /// gives another), `False` skips it. `windows="validation"` runs the S5 windows disjoint from the
 /// test windows (choose checkpoints and settings on those; report test windows); `any_action=True`
 /// evaluates a single-action model on other actions too.
+///
+/// `protocol="mpjpe"` runs the 3-D joint-position protocol of LTD, HRI and siMLPe instead
+/// (`motion-cli eval --protocol mpjpe --json`): `windows` 256 (default), 8 or `"all"` (with
+/// `stride`, default 5), `input_frames` observed frames (50), `ltd_sampler=True` for LTD's window
+/// placement, `joints` `"all-32"` (the reference's) or `"predicted-22"`.
 #[pyfunction]
-#[pyo3(signature = (model = None, data = None, actions = None, horizon = 100, samples = 1, rng_seed = 0, classifier = None, windows = "test", any_action = false))]
+#[pyo3(signature = (model = None, data = None, actions = None, horizon = 100, samples = 1, rng_seed = 0, classifier = None, windows = None, any_action = false, protocol = "h36m", stride = None, input_frames = None, ltd_sampler = false, joints = "all-32"))]
 #[allow(clippy::too_many_arguments)]
 fn evaluate<'py>(
     py: Python<'py>,
@@ -48,9 +56,62 @@ fn evaluate<'py>(
     samples: usize,
     rng_seed: u64,
     classifier: Option<&Bound<'py, PyAny>>,
-    windows: &str,
+    windows: Option<&Bound<'py, PyAny>>,
     any_action: bool,
+    protocol: &str,
+    stride: Option<usize>,
+    input_frames: Option<usize>,
+    ltd_sampler: bool,
+    joints: &str,
 ) -> PyResult<Bound<'py, PyAny>> {
+    // `windows` may be a name or a number (8, 256).
+    let windows: Option<String> = match windows {
+        None => None,
+        Some(w) => Some(match w.extract::<usize>() {
+            Ok(n) => n.to_string(),
+            Err(_) => w.extract::<String>()?,
+        }),
+    };
+    let actions: Vec<String> = match actions {
+        None => vec!["all".into()],
+        Some(a) => match a.extract::<String>() {
+            Ok(one) => vec![one],
+            Err(_) => a.extract::<Vec<String>>()?,
+        },
+    };
+    match protocol {
+        "h36m" => {}
+        "mpjpe" => {
+            if samples != 1 || horizon != 100 {
+                return Err(value(
+                    "protocol=\"mpjpe\" predicts 25 frames per window, one sample: leave horizon and samples at their defaults",
+                ));
+            }
+            return evaluate_mpjpe(
+                py,
+                model,
+                data,
+                actions,
+                MpjpeWindows::parse(windows.as_deref(), stride).map_err(eval_error)?,
+                input_frames,
+                ltd_sampler,
+                joints,
+                rng_seed,
+                any_action,
+            );
+        }
+        other => {
+            return Err(value(format!(
+                "protocol {other:?}: expected \"h36m\" (angles, NDMS, plausibility, posture, classifier) or \"mpjpe\" (3-D joint-position error of LTD, HRI, siMLPe)"
+            )))
+        }
+    }
+    if stride.is_some() || input_frames.is_some() || ltd_sampler || joints != "all-32" {
+        return Err(value(
+            "stride, input_frames, ltd_sampler and joints belong to protocol=\"mpjpe\"",
+        ));
+    }
+    let windows = windows.as_deref().unwrap_or("test");
     let windows = WindowSet::from_name(windows).ok_or_else(|| {
         pyo3::exceptions::PyValueError::new_err(format!(
             "windows={windows:?}: expected \"test\" (the protocol's test windows) or \"validation\" (S5 windows disjoint from them)"
@@ -62,13 +123,6 @@ fn evaluate<'py>(
             Model::builtin(BuiltIn::Forecast)?.model,
             format!("built-in {}", BuiltIn::Forecast.file_name()),
         ),
-    };
-    let actions: Vec<String> = match actions {
-        None => vec!["all".into()],
-        Some(a) => match a.extract::<String>() {
-            Ok(one) => vec![one],
-            Err(_) => a.extract::<Vec<String>>()?,
-        },
     };
     let classifier: Option<Arc<ActionClassifier>> = match classifier {
         None => builtin_classifier()?,
@@ -96,6 +150,48 @@ fn evaluate<'py>(
     options.any_action = any_action;
     let report = py
         .detach(|| run(&model, &options, &mut |_| {}))
+        .map_err(eval_error)?;
+    let json = serde_json::to_string(&report).map_err(value)?;
+    py.import("json")?.call_method1("loads", (json,))
+}
+
+/// The MPJPE protocol's report as a dict (`motion-cli eval --protocol mpjpe --json`).
+#[allow(clippy::too_many_arguments)]
+fn evaluate_mpjpe<'py>(
+    py: Python<'py>,
+    model: Option<&Model>,
+    data: Option<PathBuf>,
+    actions: Vec<String>,
+    windows: MpjpeWindows,
+    input_frames: Option<usize>,
+    ltd_sampler: bool,
+    joints: &str,
+    rng_seed: u64,
+    any_action: bool,
+) -> PyResult<Bound<'py, PyAny>> {
+    let joints = JointMean::from_name(joints).ok_or_else(|| {
+        value(format!(
+            "joints {joints:?}: expected \"all-32\" (the reference's mean over 32 joints) or \"predicted-22\""
+        ))
+    })?;
+    let (model, name) = match model {
+        Some(m) => (Arc::clone(&m.model), m.model.path().display().to_string()),
+        None => (
+            Model::builtin(BuiltIn::Forecast)?.model,
+            format!("built-in {}", BuiltIn::Forecast.file_name()),
+        ),
+    };
+    let dataset = resolve_dataset(data.as_deref()).map_err(eval_error)?;
+    let mut options = MpjpeOptions::new(dataset, name);
+    options.actions = actions;
+    options.windows = windows;
+    options.input_frames = input_frames.unwrap_or(options.input_frames);
+    options.sampler_input = ltd_sampler.then_some(LTD_SAMPLER_INPUT);
+    options.joints = joints;
+    options.rng_seed = rng_seed;
+    options.any_action = any_action;
+    let report = py
+        .detach(|| run_mpjpe(&model, &options, &mut |_| {}))
         .map_err(eval_error)?;
     let json = serde_json::to_string(&report).map_err(value)?;
     py.import("json")?.call_method1("loads", (json,))

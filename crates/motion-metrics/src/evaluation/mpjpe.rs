@@ -216,6 +216,9 @@ pub struct MpjpeAction {
     pub label: Option<String>,
     /// Windows evaluated (duplicates kept).
     pub windows: usize,
+    /// Where each window starts: `[subaction, first observed frame at 25 Hz]` of the S5 take, in
+    /// the reference's draw order.
+    pub window_starts: Vec<(u8, usize)>,
     /// The model's MPJPE at each horizon (mm).
     pub model: [f64; 8],
     /// The zero-velocity baseline's (mm).
@@ -383,6 +386,7 @@ pub fn evaluate_mpjpe(
             action,
             label: planned.label.clone(),
             windows: windows.len(),
+            window_starts: windows.iter().map(|w| (w.subaction, w.seed_start)).collect(),
             model: MPJPE_HORIZON_FRAMES.map(|f| model_per_frame[f]),
             zero_velocity: MPJPE_HORIZON_FRAMES.map(|f| zero_velocity_per_frame[f]),
             model_per_frame,

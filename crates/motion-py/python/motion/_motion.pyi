@@ -79,13 +79,28 @@ def evaluate(
     samples: int = 1,
     rng_seed: int = 0,
     classifier: Union[bool, Path, None] = None,
-    windows: str = "test",
+    windows: Union[str, int, None] = None,
     any_action: bool = False,
+    protocol: str = "h36m",
+    stride: Optional[int] = None,
+    input_frames: Optional[int] = None,
+    ltd_sampler: bool = False,
+    joints: str = "all-32",
 ) -> dict[str, Any]:
     """The H3.6M protocol: the report of ``motion-cli eval --json`` as a dict.
 
     ``windows="validation"`` runs the S5 windows disjoint from the test windows
-    (``motion-cli eval --windows validation``)."""
+    (``motion-cli eval --windows validation``). ``protocol="mpjpe"`` runs the 3-D
+    joint-position protocol (``motion-cli eval --protocol mpjpe``): ``windows`` 256
+    (default), 8 or ``"all"`` with ``stride``."""
+
+def mpjpe(gt: ArrayLike, pred: ArrayLike, input_space: str = "expmap", joints: str = "all-32") -> F64:
+    """MPJPE (mm) per predicted frame, the mean over sequences (LTD, HRI, siMLPe)."""
+
+def sample_set_metrics(
+    samples: ArrayLike, gt: ArrayLike, last_observed: ArrayLike, threshold: float = 0.5
+) -> dict[str, Any]:
+    """APD, ADE, FDE, MMADE, MMFDE of ``N x K x T x D`` samples (DLow, BeLFusion)."""
 
 def read_bvh(path: Path) -> dict[str, Any]:
     """``{"channels", "fps", "joints", "parents", "offsets", "expmap"}`` of a BVH file."""
