@@ -44,6 +44,7 @@ pub fn compute(
         posture: None,
         input_space: *space,
         mpjpe: None,
+        multimodal: None,
         ndms: None,
         npss: None,
         npss_reference: None,
@@ -56,6 +57,10 @@ pub fn compute(
     if let Some(gt) = gt {
         if metrics.contains(&Metric::Mpjpe) {
             report.mpjpe = Some(mpjpe_of(gt, pred, *space)?);
+        }
+        if metrics.contains(&Metric::Multimodal) {
+            let seed = seed.as_ref().expect("checked by the caller");
+            report.multimodal = Some(multimodal_of(gt, pred, seed, *space, args.multimodal_threshold)?);
         }
         if metrics
             .iter()
@@ -145,6 +150,47 @@ fn check_one_seed_each(seed: &Batch, n: usize) -> Result<()> {
 }
 
 // ---------- NPSS and Euler error ----------
+
+/// The multi-sample metrics of `N x K x T x D` samples against `N x T x D` futures, each window's
+/// last observed pose the last frame of its seed.
+fn multimodal_of(
+    gt: &Batch,
+    pred: &Batch,
+    seed: &Batch,
+    space: InputSpace,
+    threshold: f64,
+) -> Result<motion_metrics::multimodal::SampleSetScores> {
+    use motion_metrics::multimodal::{score_sample_sets, SampleSets};
+    if space != InputSpace::Raw {
+        return Err(usage(format!(
+            "multimodal: {} holds exp-map frames; the multi-sample metrics are distances between pose vectors: give positions with --input-space raw",
+            pred.what
+        )));
+    }
+    let (n, _, t, d) = pred.data.dim();
+    let (gn, _, gt_frames, gd) = gt.data.dim();
+    let (sn, _, seed_frames, sd) = seed.data.dim();
+    if (gn, gt_frames, gd) != (n, t, d) || (sn, sd) != (n, d) {
+        return Err(usage(format!(
+            "shape mismatch: --pred {} is {n} windows x {t} frames x {d}, --gt {} {gn} x {gt_frames} x {gd}, --seed {} {sn} x {seed_frames} x {sd}",
+            pred.what, gt.what, seed.what
+        )));
+    }
+    let last = seed.data.slice(s![.., 0, seed_frames - 1, ..]);
+    let report = score_sample_sets(SampleSets {
+        samples: pred.data.view(),
+        truth: gt.data.index_axis(Axis(1), 0),
+        last_observed: last,
+        threshold,
+    })
+    .map_err(|e| {
+        metric_error(
+            &format!("multimodal metrics of --pred {} against --gt {}", pred.what, gt.what),
+            e,
+        )
+    })?;
+    Ok(report.mean)
+}
 
 /// MPJPE of every sample against its sequence's ground truth (a prediction of the 22 predicted
 /// H3.6M joints is completed from 32-joint truth).

@@ -85,6 +85,8 @@ sequence (N x T_s x 99) per --pred sequence, e.g. the 50 frames `predict` was se
 
 MPJPE (--metric mpjpe; motion_metrics::mpjpe): the mean over joints of the 3-D distance (mm), per predicted frame, averaged over sequences, and at 80-1000 ms when there are 25 frames at 25 Hz. Exp-map frames (N x T x 99) are put in the pelvis frame first (forward kinematics with dims 0..5 zeroed, as LTD, HRI and siMLPe do); raw positions (N x T x J x 3, or N x T x 3J) are used as given. A prediction of the 22 joints the reference models predict (N x T x 66) against 32-joint ground truth (N x T x 96) is completed from the truth the reference's way.
 
+The multi-sample metrics of DLow and BeLFusion (--metric multimodal; motion_metrics::multimodal): --pred holds K samples per window (N x K x T x D), --gt the real futures (N x T x D), --seed the observed frames (N x T_s x D; its last frame is the last observed pose). On the numbers as given (--input-space raw; e.g. 16 root-relative joints x 3 in metres as DLow uses): APD (mean distance over pairs of samples), ADE and FDE (the best sample's mean and last-frame distance), MMADE and MMFDE (the same against the futures of every window whose last observed pose lies within --multimodal-threshold, default 0.5), each distance the norm of the whole pose vector, then the mean over windows.
+
 Examples:
   motion-cli score --gt gt.npy --pred pred.npy --metric npss,euler --json
   motion-cli score --gt gt.npy --pred pred.npy --metric mpjpe
@@ -106,8 +108,8 @@ pub struct Args {
     /// NDMS words are κ = 8 frames at 25 Hz, so give 25 Hz frames.
     #[arg(long, required = true, num_args = 1..)]
     pub pred: Vec<PathBuf>,
-    /// Comma list of npss, npss-reference, euler, mpjpe, ndms, apd, classifier, speed_ratio,
-    /// drift, foot_contact, posture, or all (= every metric the inputs allow; classifier when --action is
+    /// Comma list of npss, npss-reference, euler, mpjpe, multimodal, ndms, apd, classifier,
+    /// speed_ratio, drift, foot_contact, posture, or all (= every metric the inputs allow; classifier when --action is
     /// given, posture when --action is and the H3.6M data is found, speed_ratio, drift and
     /// foot_contact when --action and --seed are).
     #[arg(
@@ -152,6 +154,10 @@ pub struct Args {
     /// raw positions (4-D, N x T x J x 3) are taken as gravity-aligned, y up (metrics.md's recipe).
     #[arg(long, value_enum)]
     pub input_space: Option<InputSpace>,
+    /// --metric multimodal: the distance between last observed poses under which windows share
+    /// their futures as multimodal ground truth (DLow's and BeLFusion's 0.5 on H3.6M, metres).
+    #[arg(long, value_name = "D", default_value_t = motion_metrics::multimodal::H36M_MULTIMODAL_THRESHOLD)]
+    pub multimodal_threshold: f64,
     /// NDMS nearest-neighbour search (all exact; the pose-bound scan is fastest on motion words).
     #[arg(long, value_enum, default_value = "pose-bound")]
     pub nn: NnChoice,
@@ -196,11 +202,13 @@ pub enum Metric {
     Posture,
     /// 3-D joint-position error (mm) of LTD, HRI and siMLPe (motion_metrics::mpjpe).
     Mpjpe,
+    /// APD, ADE, FDE, MMADE and MMFDE of sample sets (DLow, BeLFusion; motion_metrics::multimodal).
+    Multimodal,
     /// Every metric the inputs allow.
     All,
 }
 
-const ALL_METRICS: [Metric; 11] = [
+const ALL_METRICS: [Metric; 12] = [
     Metric::Npss,
     Metric::NpssReference,
     Metric::Euler,
@@ -212,6 +220,7 @@ const ALL_METRICS: [Metric; 11] = [
     Metric::FootContact,
     Metric::Posture,
     Metric::Mpjpe,
+    Metric::Multimodal,
 ];
 
 impl Metric {
@@ -228,6 +237,7 @@ impl Metric {
             Metric::FootContact => "foot_contact",
             Metric::Posture => "posture",
             Metric::Mpjpe => "mpjpe",
+            Metric::Multimodal => "multimodal",
             Metric::All => "all",
         }
     }
@@ -301,6 +311,12 @@ fn chosen_metrics(
         Metric::Npss | Metric::NpssReference | Metric::Euler => gt.is_some(),
         // With `all`: H3.6M exp-map frames or positions given as N x T x J x 3.
         Metric::Mpjpe if asked_for_some => gt.is_some(),
+        Metric::Multimodal => {
+            gt.is_some()
+                && seed.is_some()
+                && pred.has_samples
+                && (asked_for_some || inputs.space == InputSpace::Raw)
+        }
         Metric::Mpjpe => {
             gt.is_some()
                 && (pred.joints.is_some()
@@ -329,6 +345,7 @@ fn chosen_metrics(
                         Metric::Apd => "samples in --pred (N x S x T x D)",
                         Metric::Classifier => "--action NAME (the action whose probability is reported)",
                         Metric::Posture => "--action NAME (the action whose real takes are the reference)",
+                        Metric::Multimodal => "--gt, --seed (its last frame is each window's last observed pose) and samples in --pred (N x S x T x D)",
                         m if m.is_plausibility() && action.is_none() => {
                             "--action NAME (the action whose real data is the reference)"
                         }

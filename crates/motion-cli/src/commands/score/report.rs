@@ -42,6 +42,9 @@ pub struct ScoreReport {
     pub foot_contact: Option<FootContactReport>,
     /// Frames per prediction.
     pub frames: usize,
+    /// APD, ADE, FDE, MMADE, MMFDE of the sample sets, means over windows.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub multimodal: Option<motion_metrics::multimodal::SampleSetScores>,
     /// MPJPE per predicted frame and at 80-1000 ms (mm).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub mpjpe: Option<motion_metrics::mpjpe::MpjpeScores>,
@@ -193,6 +196,16 @@ pub fn human_table(report: &ScoreReport) -> String {
                 out.push_str(&format!("  {window:<34} {}\n", num(*value)));
             }
         }
+    }
+    if let Some(m) = &report.multimodal {
+        out.push_str(&format!(
+            "multi-sample (mean over windows)  APD {}  ADE {}  FDE {}  MMADE {}  MMFDE {}\n",
+            num(m.apd),
+            num(m.ade),
+            num(m.fde),
+            num(m.mmade),
+            num(m.mmfde)
+        ));
     }
     if let Some(m) = &report.mpjpe {
         match &m.horizons {
