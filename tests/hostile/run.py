@@ -268,6 +268,32 @@ def cases(shared: dict[str, Path]) -> list[Case]:
     add(Case("eval-data-1e300-names-the-take", ["eval", "--data", "d", "--actions", "walking", "--no-classifier", "--model", m],
              expect="either", contains=["walking_1"], setup=data_with_nan))
 
+    # -- the MPJPE protocol and the multi-sample metrics
+    mp = ["eval", "--protocol", "mpjpe", "--model", m]
+    add(Case("eval-mpjpe-s5-98-columns", mp + ["--data", "d", "--actions", "walking"], contains=["walking_1"],
+             setup=lambda d: files.data_dir(d / "d", 98)))
+    add(Case("eval-mpjpe-takes-too-short", mp + ["--data", "d", "--actions", "walking"], contains=["walking_1", "166"],
+             setup=lambda d: files.data_dir(d / "d", 99, rows=300)))
+    add(Case("eval-mpjpe-stride-0", mp + ["--windows", "all", "--stride", "0"], contains=["stride"]))
+    add(Case("eval-mpjpe-stride-without-all", mp + ["--stride", "5"], contains=["stride"]))
+    add(Case("eval-mpjpe-input-frames-1e6", mp + ["--input-frames", "1000000"], contains=["--input-frames"]))
+    add(Case("eval-mpjpe-test-windows", mp + ["--windows", "test"], contains=["8", "256"]))
+    add(Case("eval-mpjpe-samples-5", mp + ["--samples", "5"], contains=["--samples"]))
+    add(Case("eval-h36m-windows-256", ["eval", "--model", m, "--windows", "256", "--no-classifier"], contains=["mpjpe"]))
+    add(Case("score-mpjpe-pred-1e300-names-the-file", ["score", "--gt", s["e_npy"], "--pred", "p.npy", "--metric", "mpjpe"],
+             contains=["p.npy"], setup=lambda d: files.npy(d / "p.npy", (2, 30, 99), values=[1e300] * (2 * 30 * 99))))
+    add(Case("score-mpjpe-positions-shape", ["score", "--gt", "g.npy", "--pred", "p.npy", "--metric", "mpjpe"],
+             contains=["p.npy"], setup=lambda d: (files.npy(d / "g.npy", (2, 30, 32, 3)), files.npy(d / "p.npy", (2, 30, 7, 3)))))
+    add(Case("score-multimodal-nan-names-the-file",
+             ["score", "--gt", "g.npy", "--pred", "p.npy", "--seed", "s.npy", "--input-space", "raw", "--metric", "multimodal"],
+             contains=["p.npy"], setup=lambda d: (files.npy(d / "g.npy", (2, 10, 6)), files.npy(d / "s.npy", (2, 4, 6)),
+                                                  files.npy(d / "p.npy", (2, 3, 10, 6), values=[float("nan")] * 360))))
+    add(Case("score-multimodal-threshold-nan",
+             ["score", "--gt", "g.npy", "--pred", "p.npy", "--seed", "s.npy", "--input-space", "raw", "--metric", "multimodal",
+              "--multimodal-threshold", "nan"],
+             contains=["threshold"], setup=lambda d: (files.npy(d / "g.npy", (2, 10, 6)), files.npy(d / "s.npy", (2, 4, 6)),
+                                                      files.npy(d / "p.npy", (2, 3, 10, 6)))))
+
     # -- thin rigs with millions of frames through the retargeting and resampling paths
     add(Case("predict-thin-rig-2m-frames", predict + ["--seed", s["thin_2m"], "--out", "p.bvh"], contains=["thin_2m.bvh"]))
     add(Case("convert-thin-rig-2m-frames-to-30-hz", ["convert", s["thin_2m"], "o.bvh", "--fps", "30"], expect="either",

@@ -235,10 +235,11 @@ pub fn score_mpjpe(
     if filled {
         let mut full = Array4::zeros(truth.raw_dim());
         for i in 0..n {
-            full.index_axis_mut(Axis(0), i).assign(&fill_h36m_prediction(
-                pred.index_axis(Axis(0), i),
-                truth.index_axis(Axis(0), i),
-            )?);
+            full.index_axis_mut(Axis(0), i)
+                .assign(&fill_h36m_prediction(
+                    pred.index_axis(Axis(0), i),
+                    truth.index_axis(Axis(0), i),
+                )?);
         }
         pred = full;
     }
@@ -272,7 +273,9 @@ fn positions_of(
             }
             let mut out = Array4::zeros((shape[0], shape[1], H36M_JOINT_COUNT, 3));
             for (i, seq) in values.outer_iter().enumerate() {
-                let seq = seq.into_dimensionality::<ndarray::Ix2>().expect("3-D input");
+                let seq = seq
+                    .into_dimensionality::<ndarray::Ix2>()
+                    .expect("3-D input");
                 let positions = h36m_pelvis_positions(seq).map_err(|e| match e {
                     MetricError::NonFinite { index, .. } => MetricError::NonFinite {
                         what: what.to_string(),
@@ -289,7 +292,7 @@ fn positions_of(
                 .into_dimensionality::<ndarray::Ix4>()
                 .expect("4-D input")
                 .to_owned()),
-            3 if shape[2] % 3 == 0 => Ok(values
+            3 if shape[2].is_multiple_of(3) => Ok(values
                 .to_owned()
                 .into_shape_with_order((shape[0], shape[1], shape[2] / 3, 3))
                 .expect("same element count")
@@ -381,16 +384,40 @@ mod tests {
             moved[[n, t, H36M_PREDICTED_JOINTS[k], c]]
         });
         let flat = pred22.clone().into_shape_with_order((2, 25, 66)).unwrap();
-        let a = score_mpjpe(flat.view().into_dyn(), truth.view().into_dyn(), MpjpeInput::Positions, JointMean::All32).unwrap();
-        let b = score_mpjpe(pred22.view().into_dyn(), truth.view().into_dyn(), MpjpeInput::Positions, JointMean::All32).unwrap();
+        let a = score_mpjpe(
+            flat.view().into_dyn(),
+            truth.view().into_dyn(),
+            MpjpeInput::Positions,
+            JointMean::All32,
+        )
+        .unwrap();
+        let b = score_mpjpe(
+            pred22.view().into_dyn(),
+            truth.view().into_dyn(),
+            MpjpeInput::Positions,
+            JointMean::All32,
+        )
+        .unwrap();
         assert!(a.filled_from_truth);
         assert_eq!(a, b);
         // Moved by (2, 2, 2): 22 + 6 copies of sqrt(12) over 32 joints.
         let expected = 28.0 * 12f64.sqrt() / 32.0;
         assert!((a.per_frame[0] - expected).abs() < 1e-9);
-        let from_expmap = score_mpjpe(frames.view().into_dyn(), frames.view().into_dyn(), MpjpeInput::Expmap, JointMean::All32).unwrap();
+        let from_expmap = score_mpjpe(
+            frames.view().into_dyn(),
+            frames.view().into_dyn(),
+            MpjpeInput::Expmap,
+            JointMean::All32,
+        )
+        .unwrap();
         assert_eq!(from_expmap.horizons, Some([0.0; 8]));
-        assert!(score_mpjpe(flat.view().into_dyn(), flat.view().into_dyn(), MpjpeInput::Expmap, JointMean::All32).is_err());
+        assert!(score_mpjpe(
+            flat.view().into_dyn(),
+            flat.view().into_dyn(),
+            MpjpeInput::Expmap,
+            JointMean::All32
+        )
+        .is_err());
     }
 
     fn wave(t: usize, j: usize, phase: f64) -> Array3<f64> {
@@ -407,9 +434,7 @@ mod tests {
         for t in 0..4 {
             let mut sum = 0.0;
             for j in 0..5 {
-                let d: Vec<f64> = (0..3)
-                    .map(|c| pred[[t, j, c]] - truth[[t, j, c]])
-                    .collect();
+                let d: Vec<f64> = (0..3).map(|c| pred[[t, j, c]] - truth[[t, j, c]]).collect();
                 sum += (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
             }
             assert!((got[t] - sum / 5.0).abs() < 1e-12);

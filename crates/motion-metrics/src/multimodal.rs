@@ -236,7 +236,7 @@ pub fn cmd(
             expected: vec![n],
         });
     }
-    if d % 3 != 0 || t < 2 {
+    if !d.is_multiple_of(3) || t < 2 {
         return Err(MetricError::InvalidConfig(format!(
             "CMD needs poses of joints x 3 numbers and at least 2 frames; got {t} frames of {d}"
         )));
@@ -279,8 +279,8 @@ pub fn cmd(
         }
         let mut area = 0.0;
         for f in 1..t {
-            let v = members.iter().map(|&i| per_window[i][f - 1]).sum::<f64>()
-                / members.len() as f64;
+            let v =
+                members.iter().map(|&i| per_window[i][f - 1]).sum::<f64>() / members.len() as f64;
             area += (t - f) as f64 * (v - mu).abs();
         }
         total += members.len() as f64 / n as f64 * area;

@@ -7,8 +7,8 @@ use pyo3::prelude::*;
 
 use motion_core::model::builtin::default_action_classifier;
 use motion_core::model::ActionClassifier;
-use motion_core::protocol::WindowSet;
 use motion_core::protocol::sampler::LTD_SAMPLER_INPUT;
+use motion_core::protocol::WindowSet;
 use motion_metrics::evaluation::mpjpe::{evaluate_mpjpe as run_mpjpe, MpjpeOptions, MpjpeWindows};
 use motion_metrics::evaluation::{
     check_request, evaluate as run, resolve_dataset, EvalError, EvalOptions,

@@ -1,8 +1,8 @@
 //! The metrics (motion-metrics), on numpy arrays.
 use motion_core::protocol::expmap_batch_to_euler_protocol;
-use motion_metrics::npss::{Npss, SpectrumPower, NPSS_WINDOWS_25HZ};
 use motion_metrics::mpjpe::{score_mpjpe, MpjpeInput};
 use motion_metrics::multimodal::{score_sample_sets, SampleSets};
+use motion_metrics::npss::{Npss, SpectrumPower, NPSS_WINDOWS_25HZ};
 use motion_metrics::{
     apd, apd_batch, euler_error, JointMean, NdmsConfig, NdmsDatabase as Database, NnMethod,
 };
@@ -179,7 +179,7 @@ fn sample_set_metrics<'py>(
     let report = py
         .detach(|| score_sample_sets(sets))
         .map_err(|e| metric("multi-sample metrics", e))?;
-    let mut json = serde_json::to_value(&report.mean).map_err(value)?;
+    let mut json = serde_json::to_value(report.mean).map_err(value)?;
     json["per_window"] = serde_json::to_value(&report.windows).map_err(value)?;
     json["multimodal_set_sizes"] =
         serde_json::to_value(&report.multimodal_set_sizes).map_err(value)?;

@@ -89,7 +89,9 @@ impl MpjpeWindows {
             }
         };
         if stride.is_some() && !matches!(windows, MpjpeWindows::All { .. }) {
-            return Err(EvalError::Invalid("a stride goes with the `all` windows".into()));
+            return Err(EvalError::Invalid(
+                "a stride goes with the `all` windows".into(),
+            ));
         }
         Ok(windows)
     }
@@ -314,16 +316,20 @@ pub fn evaluate_mpjpe(
         for sub in [1u8, 2] {
             let path = sequence_file(&options.dataset, TEST_SUBJECT, action, sub);
             let take = read_take(&path)?;
-            let positions = h36m_pelvis_positions(take.frames.view()).map_err(|source| {
-                EvalError::Metric {
+            let positions =
+                h36m_pelvis_positions(take.frames.view()).map_err(|source| EvalError::Metric {
                     what: path.display().to_string(),
                     source,
-                }
-            })?;
+                })?;
             takes.push((path, take.frames, positions));
         }
-        let windows = windows_of(options, takes[0].1.nrows(), takes[1].1.nrows())
-            .map_err(|e| EvalError::Invalid(format!("{action}: {e}")))?;
+        let windows = windows_of(options, takes[0].1.nrows(), takes[1].1.nrows()).map_err(|e| {
+            EvalError::Invalid(format!(
+                "{action} ({}, {}): {e}",
+                takes[0].0.display(),
+                takes[1].0.display()
+            ))
+        })?;
         progress(Progress::Stage {
             action,
             stage: "predicting",
@@ -386,7 +392,10 @@ pub fn evaluate_mpjpe(
             action,
             label: planned.label.clone(),
             windows: windows.len(),
-            window_starts: windows.iter().map(|w| (w.subaction, w.seed_start)).collect(),
+            window_starts: windows
+                .iter()
+                .map(|w| (w.subaction, w.seed_start))
+                .collect(),
             model: MPJPE_HORIZON_FRAMES.map(|f| model_per_frame[f]),
             zero_velocity: MPJPE_HORIZON_FRAMES.map(|f| zero_velocity_per_frame[f]),
             model_per_frame,
@@ -619,7 +628,10 @@ mod tests {
         assert!(check_mpjpe_request(&o).is_err());
         o.input_frames = 50;
         o.sampler_input = Some(10);
-        assert!(check_mpjpe_request(&o).is_ok(), "LTD's placement with 50 observed frames");
+        assert!(
+            check_mpjpe_request(&o).is_ok(),
+            "LTD's placement with 50 observed frames"
+        );
         o.sampler_input = Some(67);
         assert!(check_mpjpe_request(&o).is_err());
         assert!(check_mpjpe_request(&options(MpjpeWindows::All { stride: 0 })).is_err());

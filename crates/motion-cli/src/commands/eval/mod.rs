@@ -262,7 +262,10 @@ pub fn run(args: Args) -> Result<()> {
 /// `eval --protocol mpjpe`.
 fn run_mpjpe(args: Args) -> Result<()> {
     let refuse = |what: &str| -> Result<()> {
-        Err(UsageError(format!("{what} belongs to --protocol h36m; mpjpe predicts 25 frames per window, one sample")).into())
+        Err(UsageError(format!(
+            "{what} belongs to --protocol h36m; mpjpe predicts 25 frames per window, one sample"
+        ))
+        .into())
     };
     if args.samples != 1 {
         return refuse("--samples");

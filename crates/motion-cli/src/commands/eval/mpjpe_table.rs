@@ -74,7 +74,12 @@ pub fn table(report: &MpjpeReport) -> String {
         });
     }
     for row in &report.published {
-        out.push_str(&format!("  {}\n  {:<24}{}\n", row.method, "", optional(&row.values)));
+        out.push_str(&format!(
+            "  {}\n  {:<24}{}\n",
+            row.method,
+            "",
+            optional(&row.values)
+        ));
     }
     for s in &report.skipped {
         out.push_str(&format!("skipped {}: {}\n", s.action, s.reason));

@@ -60,7 +60,13 @@ pub fn compute(
         }
         if metrics.contains(&Metric::Multimodal) {
             let seed = seed.as_ref().expect("checked by the caller");
-            report.multimodal = Some(multimodal_of(gt, pred, seed, *space, args.multimodal_threshold)?);
+            report.multimodal = Some(multimodal_of(
+                gt,
+                pred,
+                seed,
+                *space,
+                args.multimodal_threshold,
+            )?);
         }
         if metrics
             .iter()
@@ -185,7 +191,10 @@ fn multimodal_of(
     })
     .map_err(|e| {
         metric_error(
-            &format!("multimodal metrics of --pred {} against --gt {}", pred.what, gt.what),
+            &format!(
+                "multimodal metrics of --pred {} against --gt {}",
+                pred.what, gt.what
+            ),
             e,
         )
     })?;

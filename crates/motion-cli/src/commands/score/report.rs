@@ -334,6 +334,8 @@ mod tests {
             ),
             foot_contact: None,
             frames: 2,
+            mpjpe: None,
+            multimodal: None,
             posture: None,
             input_space: InputSpace::Expmap,
             ndms: None,
