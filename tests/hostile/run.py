@@ -279,6 +279,13 @@ def cases(shared: dict[str, Path]) -> list[Case]:
     add(Case("eval-mpjpe-input-frames-1e6", mp + ["--input-frames", "1000000"], contains=["--input-frames"]))
     add(Case("eval-mpjpe-test-windows", mp + ["--windows", "test"], contains=["8", "256"]))
     add(Case("eval-mpjpe-samples-5", mp + ["--samples", "5"], contains=["--samples"]))
+    st = ["eval", "--protocol", "stochastic", "--model", m]
+    add(Case("eval-stochastic-windows-8", st + ["--windows", "8"], contains=["--windows"]))
+    add(Case("eval-stochastic-samples-0", st + ["--samples", "0"], contains=["--samples"]))
+    add(Case("eval-stochastic-samples-1e9", st + ["--samples", "1000000000"], contains=["--samples"]))
+    add(Case("eval-stochastic-s9-98-columns", st + ["--data", "d", "--actions", "walking"], contains=["walking_1"],
+             setup=lambda d: (files.data_dir(d / "d", 99), (d / "d/h3.6m/dataset/S9").mkdir(parents=True),
+                              (d / "d/h3.6m/dataset/S9/walking_1.txt").write_text(files.expmap_text(400, 98)))))
     add(Case("eval-h36m-windows-256", ["eval", "--model", m, "--windows", "256", "--no-classifier"], contains=["mpjpe"]))
     add(Case("score-mpjpe-pred-1e300-names-the-file", ["score", "--gt", s["e_npy"], "--pred", "p.npy", "--metric", "mpjpe"],
              contains=["p.npy"], setup=lambda d: files.npy(d / "p.npy", (2, 30, 99), values=[1e300] * (2 * 30 * 99))))

@@ -241,7 +241,7 @@ pub fn score_mpjpe(
                     truth.index_axis(Axis(0), i),
                 )?);
         }
-        pred = full;
+        pred = full.into();
     }
     let errors = mpjpe_batch(pred.view(), truth.view(), joints)?;
     let per_frame = errors.mean_axis(Axis(0)).expect("not empty").to_vec();
@@ -253,12 +253,12 @@ pub fn score_mpjpe(
     })
 }
 
-/// `N x T x J x 3` positions of an input read as `input`.
-fn positions_of(
-    values: ndarray::ArrayViewD<'_, f64>,
+/// `N x T x J x 3` positions of an input read as `input` (a view of 4-D positions, else a copy).
+fn positions_of<'a>(
+    values: ndarray::ArrayViewD<'a, f64>,
     input: MpjpeInput,
     what: &str,
-) -> Result<Array4<f64>, MetricError> {
+) -> Result<ndarray::CowArray<'a, f64, ndarray::Ix4>, MetricError> {
     let shape = values.shape().to_vec();
     let wrong = |expected: &str| {
         MetricError::InvalidConfig(format!(
@@ -285,19 +285,26 @@ fn positions_of(
                 })?;
                 out.index_axis_mut(Axis(0), i).assign(&positions);
             }
-            Ok(out)
+            Ok(out.into())
         }
         MpjpeInput::Positions => match shape.len() {
             4 => Ok(values
                 .into_dimensionality::<ndarray::Ix4>()
                 .expect("4-D input")
-                .to_owned()),
-            3 if shape[2].is_multiple_of(3) => Ok(values
-                .to_owned()
-                .into_shape_with_order((shape[0], shape[1], shape[2] / 3, 3))
-                .expect("same element count")
-                .into_dimensionality::<ndarray::Ix4>()
-                .expect("4-D")),
+                .into()),
+            3 if shape[2].is_multiple_of(3) => {
+                let dims = (shape[0], shape[1], shape[2] / 3, 3);
+                Ok(match values.clone().into_shape_with_order(dims) {
+                    Ok(view) => view.into(),
+                    Err(_) => values
+                        .to_owned()
+                        .into_shape_with_order(dims)
+                        .expect("same element count")
+                        .into_dimensionality::<ndarray::Ix4>()
+                        .expect("4-D")
+                        .into(),
+                })
+            }
             _ => Err(wrong("positions N x T x J x 3 or N x T x 3J")),
         },
     }
@@ -344,6 +351,30 @@ fn per_frame(
     truth: ArrayView3<'_, f64>,
     joints: Option<&[usize]>,
 ) -> Array1<f64> {
+    let count = truth.dim().1;
+    // Contiguous inputs (the usual case): one pass over slices, joints summed in order.
+    if let (Some(p), Some(g)) = (pred.as_slice(), truth.as_slice()) {
+        let row = 3 * count;
+        return p
+            .chunks_exact(row)
+            .zip(g.chunks_exact(row))
+            .map(|(a, b)| match joints {
+                Some(list) => {
+                    list.iter()
+                        .map(|&j| distance3(&a[3 * j..3 * j + 3], &b[3 * j..3 * j + 3]))
+                        .sum::<f64>()
+                        / list.len() as f64
+                }
+                None => {
+                    a.chunks_exact(3)
+                        .zip(b.chunks_exact(3))
+                        .map(|(x, y)| distance3(x, y))
+                        .sum::<f64>()
+                        / count as f64
+                }
+            })
+            .collect();
+    }
     let distance = |t: usize, j: usize| {
         (0..3)
             .map(|c| {
@@ -355,11 +386,13 @@ fn per_frame(
     };
     Array1::from_shape_fn(truth.dim().0, |t| match joints {
         Some(list) => list.iter().map(|&j| distance(t, j)).sum::<f64>() / list.len() as f64,
-        None => {
-            let count = truth.dim().1;
-            (0..count).map(|j| distance(t, j)).sum::<f64>() / count as f64
-        }
+        None => (0..count).map(|j| distance(t, j)).sum::<f64>() / count as f64,
     })
+}
+
+fn distance3(a: &[f64], b: &[f64]) -> f64 {
+    let (x, y, z) = (a[0] - b[0], a[1] - b[1], a[2] - b[2]);
+    (x * x + y * y + z * z).sqrt()
 }
 
 #[cfg(test)]

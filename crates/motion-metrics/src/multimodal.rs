@@ -128,10 +128,32 @@ pub fn score_sample_sets(sets: SampleSets<'_>) -> Result<SampleSetReport, Metric
     check_finite("ground truth", &truth)?;
     check_finite("last observed poses", &last_observed)?;
     let sets = multimodal_sets(last_observed, threshold);
-    let windows: Vec<SampleSetScores> = (0..n)
+    let windows = score_windows(samples, 0, truth, &sets);
+    Ok(SampleSetReport {
+        mean: mean_scores(&windows),
+        windows,
+        multimodal_set_sizes: sets.iter().map(Vec::len).collect(),
+    })
+}
+
+/// The scores of the windows `first .. first + n` whose samples are `samples` (`n x K x T x D`),
+/// against `truth` of **all** windows (`N x T x D`) and their multimodal `sets`
+/// ([`multimodal_sets`]): what [`score_sample_sets`] computes, a chunk of windows at a time, for
+/// evaluations whose samples do not fit in memory at once. Inputs are not checked here.
+///
+/// # Panics
+/// If the chunk reaches past `truth` or `sets`, or the shapes disagree.
+pub fn score_windows(
+    samples: ArrayView4<'_, f64>,
+    first: usize,
+    truth: ArrayView3<'_, f64>,
+    sets: &[Vec<usize>],
+) -> Vec<SampleSetScores> {
+    (0..samples.dim().0)
         .into_par_iter()
-        .map(|i| {
-            let own = samples.index_axis(Axis(0), i);
+        .map(|c| {
+            let i = first + c;
+            let own = samples.index_axis(Axis(0), c);
             let (ade, fde) = best_errors(own, truth.index_axis(Axis(0), i));
             let (mut mmade, mut mmfde) = (0.0, 0.0);
             for &m in &sets[i] {
@@ -148,20 +170,20 @@ pub fn score_sample_sets(sets: SampleSets<'_>) -> Result<SampleSetReport, Metric
                 mmfde: mmfde / size,
             }
         })
-        .collect();
-    let mean_of = |f: fn(&SampleSetScores) -> f64| windows.iter().map(f).sum::<f64>() / n as f64;
-    let mean = SampleSetScores {
+        .collect()
+}
+
+/// The plain mean of per-window scores (all zero for none).
+pub fn mean_scores(windows: &[SampleSetScores]) -> SampleSetScores {
+    let n = windows.len().max(1) as f64;
+    let mean_of = |f: fn(&SampleSetScores) -> f64| windows.iter().map(f).sum::<f64>() / n;
+    SampleSetScores {
         apd: mean_of(|s| s.apd),
         ade: mean_of(|s| s.ade),
         fde: mean_of(|s| s.fde),
         mmade: mean_of(|s| s.mmade),
         mmfde: mean_of(|s| s.mmfde),
-    };
-    Ok(SampleSetReport {
-        windows,
-        mean,
-        multimodal_set_sizes: sets.iter().map(Vec::len).collect(),
-    })
+    }
 }
 
 /// `(min_k mean_t ‖Ŷ_kt − Y_t‖, min_k ‖Ŷ_kT − Y_T‖)` of `K x T x D` samples against `T x D`.
@@ -385,6 +407,37 @@ mod tests {
             .unwrap()
             .to_owned();
         assert!((report.windows[2].apd - crate::apd(flat.view()).unwrap()).abs() < 1e-12);
+    }
+
+    #[test]
+    fn chunks_of_windows_give_the_whole_runs_scores() {
+        let samples = Array4::from_shape_fn((7, 3, 4, 6), |(n, k, t, d)| {
+            (0.4 * n as f64 + 0.9 * k as f64 + 0.3 * t as f64 + d as f64).sin()
+        });
+        let truth = Array3::from_shape_fn((7, 4, 6), |(n, t, d)| (0.2 * (n + t + d) as f64).cos());
+        let last = Array2::from_shape_fn((7, 6), |(n, d)| 0.1 * ((n + d) % 3) as f64);
+        let whole = score_sample_sets(SampleSets {
+            samples: samples.view(),
+            truth: truth.view(),
+            last_observed: last.view(),
+            threshold: 0.3,
+        })
+        .unwrap();
+        let sets = multimodal_sets(last.view(), 0.3);
+        let mut chunked = score_windows(
+            samples.slice(ndarray::s![0..3, .., .., ..]),
+            0,
+            truth.view(),
+            &sets,
+        );
+        chunked.extend(score_windows(
+            samples.slice(ndarray::s![3..7, .., .., ..]),
+            3,
+            truth.view(),
+            &sets,
+        ));
+        assert_eq!(chunked, whole.windows);
+        assert_eq!(mean_scores(&chunked), whole.mean);
     }
 
     #[test]

@@ -10,6 +10,9 @@ use motion_core::model::ActionClassifier;
 use motion_core::protocol::sampler::LTD_SAMPLER_INPUT;
 use motion_core::protocol::WindowSet;
 use motion_metrics::evaluation::mpjpe::{evaluate_mpjpe as run_mpjpe, MpjpeOptions, MpjpeWindows};
+use motion_metrics::evaluation::stochastic::{
+    evaluate_stochastic as run_stochastic, StochasticOptions,
+};
 use motion_metrics::evaluation::{
     check_request, evaluate as run, resolve_dataset, EvalError, EvalOptions,
 };
@@ -43,9 +46,11 @@ fn eval_error(e: EvalError) -> PyErr {
 /// `protocol="mpjpe"` runs the 3-D joint-position protocol of LTD, HRI and siMLPe instead
 /// (`motion-cli eval --protocol mpjpe --json`): `windows` 256 (default), 8 or `"all"` (with
 /// `stride`, default 5), `input_frames` observed frames (50), `ltd_sampler=True` for LTD's window
-/// placement, `joints` `"all-32"` (the reference's) or `"predicted-22"`.
+/// placement, `joints` `"all-32"` (the reference's) or `"predicted-22"`. `protocol="stochastic"`
+/// runs the multi-sample metrics in the project's variant of DLow's protocol
+/// (`motion-cli eval --protocol stochastic --json`; `samples` default 50).
 #[pyfunction]
-#[pyo3(signature = (model = None, data = None, actions = None, horizon = 100, samples = 1, rng_seed = 0, classifier = None, windows = None, any_action = false, protocol = "h36m", stride = None, input_frames = None, ltd_sampler = false, joints = "all-32"))]
+#[pyo3(signature = (model = None, data = None, actions = None, horizon = 100, samples = None, rng_seed = 0, classifier = None, windows = None, any_action = false, protocol = "h36m", stride = None, input_frames = None, ltd_sampler = false, joints = "all-32"))]
 #[allow(clippy::too_many_arguments)]
 fn evaluate<'py>(
     py: Python<'py>,
@@ -53,7 +58,7 @@ fn evaluate<'py>(
     data: Option<PathBuf>,
     actions: Option<&Bound<'py, PyAny>>,
     horizon: usize,
-    samples: usize,
+    samples: Option<usize>,
     rng_seed: u64,
     classifier: Option<&Bound<'py, PyAny>>,
     windows: Option<&Bound<'py, PyAny>>,
@@ -81,8 +86,27 @@ fn evaluate<'py>(
     };
     match protocol {
         "h36m" => {}
+        "stochastic" => {
+            if horizon != 100 || windows.is_some() || stride.is_some() || input_frames.is_some() || ltd_sampler || joints != "all-32" {
+                return Err(value(
+                    "protocol=\"stochastic\" has its own windows (S9 and S11, every 25 frames at 50 Hz, 2 s futures): give only model, data, actions, samples, rng_seed, any_action",
+                ));
+            }
+            let (model, name) = resolve_model(model)?;
+            let dataset = resolve_dataset(data.as_deref()).map_err(eval_error)?;
+            let mut options = StochasticOptions::new(dataset, name);
+            options.actions = actions;
+            options.samples = samples.unwrap_or(options.samples);
+            options.rng_seed = rng_seed;
+            options.any_action = any_action;
+            let report = py
+                .detach(|| run_stochastic(&model, &options, &mut |_| {}))
+                .map_err(eval_error)?;
+            let json = serde_json::to_string(&report).map_err(value)?;
+            return py.import("json")?.call_method1("loads", (json,));
+        }
         "mpjpe" => {
-            if samples != 1 || horizon != 100 {
+            if samples.is_some_and(|k| k != 1) || horizon != 100 {
                 return Err(value(
                     "protocol=\"mpjpe\" predicts 25 frames per window, one sample: leave horizon and samples at their defaults",
                 ));
@@ -102,7 +126,7 @@ fn evaluate<'py>(
         }
         other => {
             return Err(value(format!(
-                "protocol {other:?}: expected \"h36m\" (angles, NDMS, plausibility, posture, classifier) or \"mpjpe\" (3-D joint-position error of LTD, HRI, siMLPe)"
+                "protocol {other:?}: expected \"h36m\" (angles, NDMS, plausibility, posture, classifier), \"mpjpe\" (3-D joint-position error of LTD, HRI, siMLPe) or \"stochastic\" (APD, ADE, FDE, MMADE, MMFDE: a project variant)"
             )))
         }
     }
@@ -111,19 +135,14 @@ fn evaluate<'py>(
             "stride, input_frames, ltd_sampler and joints belong to protocol=\"mpjpe\"",
         ));
     }
+    let samples = samples.unwrap_or(1);
     let windows = windows.as_deref().unwrap_or("test");
     let windows = WindowSet::from_name(windows).ok_or_else(|| {
         pyo3::exceptions::PyValueError::new_err(format!(
             "windows={windows:?}: expected \"test\" (the protocol's test windows) or \"validation\" (S5 windows disjoint from them)"
         ))
     })?;
-    let (model, name) = match model {
-        Some(m) => (Arc::clone(&m.model), m.model.path().display().to_string()),
-        None => (
-            Model::builtin(BuiltIn::Forecast)?.model,
-            format!("built-in {}", BuiltIn::Forecast.file_name()),
-        ),
-    };
+    let (model, name) = resolve_model(model)?;
     let classifier: Option<Arc<ActionClassifier>> = match classifier {
         None => builtin_classifier()?,
         Some(c) => match c.extract::<bool>() {
@@ -174,13 +193,7 @@ fn evaluate_mpjpe<'py>(
             "joints {joints:?}: expected \"all-32\" (the reference's mean over 32 joints) or \"predicted-22\""
         ))
     })?;
-    let (model, name) = match model {
-        Some(m) => (Arc::clone(&m.model), m.model.path().display().to_string()),
-        None => (
-            Model::builtin(BuiltIn::Forecast)?.model,
-            format!("built-in {}", BuiltIn::Forecast.file_name()),
-        ),
-    };
+    let (model, name) = resolve_model(model)?;
     let dataset = resolve_dataset(data.as_deref()).map_err(eval_error)?;
     let mut options = MpjpeOptions::new(dataset, name);
     options.actions = actions;
@@ -195,6 +208,19 @@ fn evaluate_mpjpe<'py>(
         .map_err(eval_error)?;
     let json = serde_json::to_string(&report).map_err(value)?;
     py.import("json")?.call_method1("loads", (json,))
+}
+
+/// The model to evaluate and its name in the report (default: the built-in forecasting model).
+fn resolve_model(
+    model: Option<&Model>,
+) -> PyResult<(Arc<motion_core::model::MotionModel>, String)> {
+    Ok(match model {
+        Some(m) => (Arc::clone(&m.model), m.model.path().display().to_string()),
+        None => (
+            Model::builtin(BuiltIn::Forecast)?.model,
+            format!("built-in {}", BuiltIn::Forecast.file_name()),
+        ),
+    })
 }
 
 fn builtin_classifier() -> PyResult<Option<Arc<ActionClassifier>>> {

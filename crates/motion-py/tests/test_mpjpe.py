@@ -144,3 +144,16 @@ def test_sample_set_metrics_match_numpy():
     pairs = [np.linalg.norm(f[i] - f[j]) for f in flat for i in range(3) for j in range(i + 1, 3)]
     np.testing.assert_allclose(got["apd"], np.mean(pairs), rtol=0, atol=1e-12)
     assert got["multimodal_set_sizes"] == [4, 4, 4, 4]
+
+
+def test_the_stochastic_variant_is_the_cli_report(cli):
+    needs_data()
+    ours = motion.evaluate(data=DATA, actions="walking", protocol="stochastic", samples=3)
+    theirs = cli("eval", "--data", DATA, "--actions", "walking", "--protocol", "stochastic", "--samples", 3, "--json")
+    assert ours == theirs
+    assert "not comparable" in ours["not_comparable"]
+    z = ours["zero_velocity"]
+    assert z["apd"] == 0.0 and 0 < z["ade"] < z["mmade"] + 1.0
+    assert ours["windows"] == ours["actions"][0]["windows"] > 100
+    with pytest.raises(ValueError, match="stochastic"):
+        motion.evaluate(protocol="stochastic", windows=8)

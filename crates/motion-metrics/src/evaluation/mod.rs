@@ -28,6 +28,7 @@ pub mod posture;
 pub mod published;
 pub mod report;
 pub mod selection;
+pub mod stochastic;
 
 use std::path::PathBuf;
 use std::sync::Arc;

@@ -367,6 +367,7 @@ pub fn evaluate_mpjpe(
                     })
                     .collect(),
                 action,
+                MPJPE_OUTPUT_FRAMES,
             )?;
             let metric = |what: &str, source| EvalError::Metric {
                 what: format!("{action}: {what}"),
@@ -513,13 +514,15 @@ fn windows_info(options: &MpjpeOptions) -> WindowsInfo {
     }
 }
 
-/// Runs the model on a chunk of windows: `n x 25 x 32 x 3` positions of its prediction.
-fn predict_chunk(
+/// Runs the model on a chunk of seeds for `frames` steps: `n x frames x 32 x 3` pelvis-frame
+/// positions of its prediction ([`h36m_pelvis_positions`]).
+pub(super) fn predict_chunk(
     generator: &mut BatchGenerator,
     seeds: Array3<f64>,
     label: Option<&str>,
     noise_seeds: Vec<u64>,
     action: &'static str,
+    frames_out: usize,
 ) -> Result<Array4<f64>, EvalError> {
     let n = seeds.dim().0;
     if generator.batch() != n {
@@ -531,8 +534,8 @@ fn predict_chunk(
     generator
         .start(seeds.view(), &labels, &noise)
         .map_err(generate)?;
-    let mut frames = Array3::zeros((n, MPJPE_OUTPUT_FRAMES, H36M_FRAME_DIMS));
-    for t in 0..MPJPE_OUTPUT_FRAMES {
+    let mut frames = Array3::zeros((n, frames_out, H36M_FRAME_DIMS));
+    for t in 0..frames_out {
         let step = generator.step().map_err(generate)?;
         for (w, frame) in step.outer_iter().enumerate() {
             frames
@@ -542,7 +545,7 @@ fn predict_chunk(
                 .for_each(|(o, v)| *o = f64::from(*v));
         }
     }
-    let mut out = Array4::zeros((n, MPJPE_OUTPUT_FRAMES, 32, 3));
+    let mut out = Array4::zeros((n, frames_out, 32, 3));
     for w in 0..n {
         let positions = h36m_pelvis_positions(frames.index_axis(Axis(0), w)).map_err(|source| {
             EvalError::Metric {

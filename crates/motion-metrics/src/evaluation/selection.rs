@@ -87,6 +87,8 @@ pub enum WindowSource {
     /// Sampled from both S5 takes of the action ([`protocol::sampler`]): any action whose two
     /// files are present.
     BothTakes,
+    /// Every take of these subjects: any action with at least one of their files present.
+    Subjects(&'static [&'static str]),
 }
 
 /// Resolves `--actions` (a comma list or `all`) against the model and the dataset.
@@ -165,11 +167,31 @@ pub fn select_actions_from(
             ));
             continue;
         }
+        if let WindowSource::Subjects(subjects) = source {
+            let files: Vec<PathBuf> = subjects
+                .iter()
+                .flat_map(|subject| {
+                    [1u8, 2].map(|sub| protocol::sequence_file(dataset, subject, action, sub))
+                })
+                .collect();
+            if !files.iter().any(|f| f.is_file()) {
+                selection.skipped.push((
+                    action,
+                    format!(
+                        "no take of {} in {}",
+                        subjects.join(", "),
+                        dataset.display()
+                    ),
+                ));
+                continue;
+            }
+        }
         let mut subactions: Vec<u8> = match source {
             WindowSource::Table => protocol::test_windows(action)
                 .map(|w| w.subaction)
                 .collect(),
             WindowSource::BothTakes => vec![1, 2],
+            WindowSource::Subjects(_) => Vec::new(),
         };
         subactions.sort_unstable();
         subactions.dedup();

@@ -76,7 +76,7 @@ def evaluate(
     data: Optional[Path] = None,
     actions: Union[str, list[str], None] = None,
     horizon: int = 100,
-    samples: int = 1,
+    samples: Optional[int] = None,
     rng_seed: int = 0,
     classifier: Union[bool, Path, None] = None,
     windows: Union[str, int, None] = None,
@@ -92,7 +92,8 @@ def evaluate(
     ``windows="validation"`` runs the S5 windows disjoint from the test windows
     (``motion-cli eval --windows validation``). ``protocol="mpjpe"`` runs the 3-D
     joint-position protocol (``motion-cli eval --protocol mpjpe``): ``windows`` 256
-    (default), 8 or ``"all"`` with ``stride``."""
+    (default), 8 or ``"all"`` with ``stride``. ``protocol="stochastic"``: APD, ADE, FDE,
+    MMADE, MMFDE in the project's variant of DLow's protocol (``samples`` default 50)."""
 
 def mpjpe(gt: ArrayLike, pred: ArrayLike, input_space: str = "expmap", joints: str = "all-32") -> F64:
     """MPJPE (mm) per predicted frame, the mean over sequences (LTD, HRI, siMLPe)."""

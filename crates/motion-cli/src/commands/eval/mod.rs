@@ -14,6 +14,7 @@ use motion_core::protocol::{WindowSet, LONG_TERM_HORIZON};
 use motion_metrics::evaluation::mpjpe::{
     check_mpjpe_request, evaluate_mpjpe, MpjpeOptions, MpjpeWindows,
 };
+use motion_metrics::evaluation::stochastic::{evaluate_stochastic, StochasticOptions};
 use motion_metrics::evaluation::{
     check_request, evaluate, resolve_dataset, EvalError, EvalOptions, Progress,
 };
@@ -60,6 +61,8 @@ index as a set of 8 windows and averages over the K sets; NDMS is f_sim over all
 
 --protocol mpjpe: the 3-D joint-position error (mm) of LTD, HRI and siMLPe, as their code computes it (motion_metrics::mpjpe, protocols_modern.md): positions by forward kinematics of the exp-map frames with dims 0..5 zeroed (the pelvis frame, one skeleton), the mean over all 32 joints, the error at single frames 80-1000 ms after the last observed one. Windows on S5 from numpy's RandomState(1234567890) drawn as the reference draws them: --windows 256 (HRI and siMLPe, the default), 8 (the Martinez set of LTD's table, the angle protocol's test windows) or all (every window of both takes, --stride frames apart). --input-frames (default 50) frames are observed, 25 predicted. --ltd-sampler places the windows as LTD's loader does (for 10 observed frames whatever --input-frames is). Beside the model: zero-velocity (the last observed pose repeated), HRI's published row per action, and the published 15-action averages of the same set. Four S5 takes are missing from the release here: the average then covers fewer actions and says which.
 
+--protocol stochastic: APD, ADE, FDE, MMADE and MMFDE (motion_metrics::multimodal) in a project variant of DLow's and BeLFusion's protocol on the exp-map release, never comparable with their published numbers: S9 and S11, windows every 25 frames at 50 Hz with 25 observed and 100 future frames, DLow's 16 joints from forward kinematics in the pelvis frame (metres), the multimodal ground truth within 0.5 m of the last observed pose, pooled over all windows. The models run at 25 Hz: each observes its own seed ending at the last observed frame and its 50 predicted frames are scored at the same instants of the future. --samples K per window for stochastic models (default 50), one for deterministic ones and zero-velocity. docs/evaluation.md explains it.
+
 Examples:
   motion-cli eval --data ../shared/data --actions walking,eating,smoking --samples 5
   motion-cli eval --model weights/vgru_d_multi.safetensors --actions all --json > eval.json
@@ -67,6 +70,7 @@ Examples:
   motion-cli eval --actions walking,greeting --horizon 300 --samples 5   # 12 s
   motion-cli eval --protocol mpjpe --windows 256 --json > mpjpe.json
   motion-cli eval --protocol mpjpe --windows all --stride 5 --actions walking
+  motion-cli eval --protocol stochastic --model weights/intention.safetensors --samples 50
 
 Exit status 2 for bad input (unknown action, missing data directory, unreadable model).";
 
@@ -91,9 +95,9 @@ pub struct Args {
     #[arg(long, default_value_t = LONG_TERM_HORIZON)]
     pub horizon: usize,
     /// Samples per window (stochastic models draw new noise for each: VGRU-d its plan noise,
-    /// the intention model its z).
-    #[arg(long, value_name = "K", default_value_t = 1)]
-    pub samples: usize,
+    /// the intention model its z). Default 1; 50 with --protocol stochastic.
+    #[arg(long, value_name = "K")]
+    pub samples: Option<usize>,
     /// Seed of the noise; sample k of window w of an action gets its own stream.
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub rng_seed: u64,
@@ -111,7 +115,8 @@ pub struct Args {
     #[arg(long)]
     pub any_action: bool,
     /// Which protocol: h36m (Euler error, NPSS, NDMS, APD, plausibility, posture, the
-    /// classifier) or mpjpe (3-D joint-position error of LTD, HRI and siMLPe).
+    /// classifier), mpjpe (3-D joint-position error of LTD, HRI and siMLPe) or stochastic (APD,
+    /// ADE, FDE, MMADE, MMFDE: a project variant of DLow's protocol on the exp-map release).
     #[arg(long, value_enum, default_value = "h36m")]
     pub protocol: ProtocolChoice,
     /// Which S5 windows. h36m: test (the protocol's 8 per action, = 8; the default) or
@@ -148,6 +153,8 @@ pub enum ProtocolChoice {
     H36m,
     /// The 3-D joint-position error of LTD, HRI and siMLPe.
     Mpjpe,
+    /// The multi-sample metrics of DLow and BeLFusion, a project variant on the exp-map release.
+    Stochastic,
 }
 
 /// `--windows`.
@@ -169,8 +176,10 @@ pub enum Windows {
 
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
-    if args.protocol == ProtocolChoice::Mpjpe {
-        return run_mpjpe(args);
+    match args.protocol {
+        ProtocolChoice::Mpjpe => return run_mpjpe(args),
+        ProtocolChoice::Stochastic => return run_stochastic(args),
+        ProtocolChoice::H36m => {}
     }
     for (given, name) in [
         (args.stride.is_some(), "--stride"),
@@ -193,7 +202,8 @@ pub fn run(args: Args) -> Result<()> {
             .into())
         }
     };
-    check_request(args.horizon, args.samples, args.save_predictions.as_deref()).map_err(usage)?;
+    let samples = args.samples.unwrap_or(1);
+    check_request(args.horizon, samples, args.save_predictions.as_deref()).map_err(usage)?;
     if let Some(plot) = &args.plot {
         crate::plot::check_extension(plot)?;
     }
@@ -218,7 +228,7 @@ pub fn run(args: Args) -> Result<()> {
         model_name: model_source::describe(args.model.as_deref(), BuiltIn::Forecast),
         actions: args.actions.clone(),
         horizon: args.horizon,
-        samples: args.samples,
+        samples,
         rng_seed: args.rng_seed,
         classifier,
         any_action: args.any_action,
@@ -267,7 +277,7 @@ fn run_mpjpe(args: Args) -> Result<()> {
         ))
         .into())
     };
-    if args.samples != 1 {
+    if args.samples.is_some_and(|k| k != 1) {
         return refuse("--samples");
     }
     if args.horizon != LONG_TERM_HORIZON {
@@ -337,6 +347,65 @@ fn run_mpjpe(args: Args) -> Result<()> {
         args.reporting.print_json(&report)?;
     } else {
         print!("{}", mpjpe_table::table(&report));
+    }
+    Ok(())
+}
+
+/// `eval --protocol stochastic`.
+fn run_stochastic(args: Args) -> Result<()> {
+    for (given, name) in [
+        (args.horizon != LONG_TERM_HORIZON, "--horizon"),
+        (args.save_predictions.is_some(), "--save-predictions"),
+        (args.plot.is_some(), "--plot"),
+        (args.windows.is_some(), "--windows"),
+        (args.stride.is_some(), "--stride"),
+        (args.input_frames.is_some(), "--input-frames"),
+        (args.ltd_sampler, "--ltd-sampler"),
+        (args.joints.is_some(), "--joints"),
+    ] {
+        if given {
+            return Err(UsageError(format!(
+                "{name} does not apply to --protocol stochastic (S9 and S11, windows every 25 frames at 50 Hz, 2 s futures)"
+            ))
+            .into());
+        }
+    }
+    let dataset = resolve_dataset(args.data.as_deref()).map_err(usage)?;
+    let mut options = StochasticOptions::new(
+        dataset,
+        model_source::describe(args.model.as_deref(), BuiltIn::Forecast),
+    );
+    options.actions = args.actions.clone();
+    options.samples = args.samples.unwrap_or(options.samples);
+    options.rng_seed = args.rng_seed;
+    options.any_action = args.any_action;
+    let model = model_source::load_model(args.model.as_deref(), BuiltIn::Forecast)?;
+    let mut bar = None;
+    let report = evaluate_stochastic(&model, &options, &mut |p| match p {
+        Progress::Start { actions } => {
+            bar = Some(args.reporting.progress_bar(
+                actions as u64,
+                "{bar:30} {pos}/{len} actions {elapsed} {msg}",
+            ));
+        }
+        Progress::Stage { action, stage } => {
+            if let Some(b) = &bar {
+                if stage == "predicting" {
+                    b.inc(1);
+                }
+                b.set_message(format!("{action}: {stage}"));
+            }
+        }
+        Progress::Window => {}
+    })
+    .map_err(usage)?;
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    if args.reporting.json {
+        args.reporting.print_json(&report)?;
+    } else {
+        print!("{}", mpjpe_table::stochastic_table(&report));
     }
     Ok(())
 }
