@@ -157,6 +157,23 @@ fn bad_joints_are_refused_by_name() {
 #[test]
 fn the_mannequin_reads_maps_and_walks_on_the_floor() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/mannequin.glb");
+    mannequin_reads_maps_and_walks_on_the_floor(&path);
+}
+
+#[test]
+fn the_female_mannequin_reads_maps_and_walks_on_the_floor() {
+    // Other proportions, the same joint names: the second CC0 mannequin of the shared assets.
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/assets/characters/quaternius_mannequin_female.glb");
+    if !path.is_file() {
+        eprintln!("SKIPPED: no {}", path.display());
+        return;
+    }
+    mannequin_reads_maps_and_walks_on_the_floor(&path);
+}
+
+fn mannequin_reads_maps_and_walks_on_the_floor(path: &std::path::Path) {
+    let path = path.to_path_buf();
     let joints = read_gltf_joints(&path).unwrap();
     assert_eq!(joints.len(), 66);
     assert_eq!(joints[0].name, "root");
