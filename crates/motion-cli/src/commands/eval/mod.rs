@@ -319,30 +319,10 @@ fn run_mpjpe(args: Args) -> Result<()> {
     options.any_action = args.any_action;
     check_mpjpe_request(&options).map_err(usage)?;
     let model = model_source::load_model(args.model.as_deref(), BuiltIn::Forecast)?;
-    let mut bar = None;
-    let mut started = 0u64;
-    let report = evaluate_mpjpe(&model, &options, &mut |p| match p {
-        Progress::Start { actions } => {
-            bar = Some(args.reporting.progress_bar(
-                actions as u64,
-                "{bar:30} {pos}/{len} actions {elapsed} {msg}",
-            ));
-        }
-        Progress::Stage { action, stage } => {
-            if let Some(b) = &bar {
-                if stage == "loading" {
-                    started += 1;
-                    b.set_position(started - 1);
-                }
-                b.set_message(format!("{action}: {stage}"));
-            }
-        }
-        Progress::Window => {}
-    })
-    .map_err(usage)?;
-    if let Some(b) = bar {
-        b.finish_and_clear();
-    }
+    let mut bar = ActionBar::default();
+    let report =
+        evaluate_mpjpe(&model, &options, &mut |p| bar.hear(&args.reporting, p)).map_err(usage)?;
+    bar.finish();
     if args.reporting.json {
         args.reporting.print_json(&report)?;
     } else {
@@ -380,34 +360,53 @@ fn run_stochastic(args: Args) -> Result<()> {
     options.rng_seed = args.rng_seed;
     options.any_action = args.any_action;
     let model = model_source::load_model(args.model.as_deref(), BuiltIn::Forecast)?;
-    let mut bar = None;
-    let report = evaluate_stochastic(&model, &options, &mut |p| match p {
-        Progress::Start { actions } => {
-            bar = Some(args.reporting.progress_bar(
-                actions as u64,
-                "{bar:30} {pos}/{len} actions {elapsed} {msg}",
-            ));
-        }
-        Progress::Stage { action, stage } => {
-            if let Some(b) = &bar {
-                if stage == "predicting" {
-                    b.inc(1);
-                }
-                b.set_message(format!("{action}: {stage}"));
-            }
-        }
-        Progress::Window => {}
-    })
-    .map_err(usage)?;
-    if let Some(b) = bar {
-        b.finish_and_clear();
-    }
+    let mut bar = ActionBar::default();
+    let report = evaluate_stochastic(&model, &options, &mut |p| bar.hear(&args.reporting, p))
+        .map_err(usage)?;
+    bar.finish();
     if args.reporting.json {
         args.reporting.print_json(&report)?;
     } else {
         print!("{}", mpjpe_table::stochastic_table(&report));
     }
     Ok(())
+}
+
+/// A progress bar over actions (the MPJPE and stochastic protocols): it moves on when an action
+/// starts loading and shows the action's stage.
+#[derive(Default)]
+struct ActionBar {
+    bar: Option<indicatif::ProgressBar>,
+    started: u64,
+}
+
+impl ActionBar {
+    fn hear(&mut self, reporting: &crate::commands::output::Output, progress: Progress) {
+        match progress {
+            Progress::Start { actions } => {
+                self.bar = Some(reporting.progress_bar(
+                    actions as u64,
+                    "{bar:30} {pos}/{len} actions {elapsed} {msg}",
+                ));
+            }
+            Progress::Stage { action, stage } => {
+                if let Some(b) = &self.bar {
+                    if stage == "loading" {
+                        self.started += 1;
+                        b.set_position(self.started - 1);
+                    }
+                    b.set_message(format!("{action}: {stage}"));
+                }
+            }
+            Progress::Window => {}
+        }
+    }
+
+    fn finish(self) {
+        if let Some(b) = self.bar {
+            b.finish_and_clear();
+        }
+    }
 }
 
 /// An evaluation error as the CLI reports it: options, data and weights are the user's to fix

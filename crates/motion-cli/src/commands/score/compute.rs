@@ -157,6 +157,21 @@ fn check_one_seed_each(seed: &Batch, n: usize) -> Result<()> {
 
 // ---------- NPSS and Euler error ----------
 
+/// `(N·S x T x D predictions, N·S x T x D' ground truth)`: every sample beside its sequence's
+/// ground truth (repeated for each sample).
+fn every_sample_with_its_truth(pred: &Batch, gt: &Batch) -> (Array3<f64>, Array3<f64>) {
+    let (n, s, t, w) = pred.data.dim();
+    let pred_flat = pred
+        .data
+        .to_shape((n * s, t, w))
+        .expect("contiguous")
+        .into_owned();
+    let gt_seq = gt.data.index_axis(Axis(1), 0);
+    let gw = gt_seq.dim().2;
+    let gt_flat = Array3::from_shape_fn((n * s, t, gw), |(i, f, d)| gt_seq[[i / s, f, d]]);
+    (pred_flat, gt_flat)
+}
+
 /// The multi-sample metrics of `N x K x T x D` samples against `N x T x D` futures, each window's
 /// last observed pose the last frame of its seed.
 fn multimodal_of(
@@ -209,21 +224,15 @@ fn mpjpe_of(
     space: InputSpace,
 ) -> Result<motion_metrics::mpjpe::MpjpeScores> {
     use motion_metrics::mpjpe::{score_mpjpe, MpjpeInput};
-    let (n, s, t, w) = pred.data.dim();
-    let (gn, _, gt_frames, gw) = gt.data.dim();
+    let (n, _, t, _) = pred.data.dim();
+    let (gn, _, gt_frames, _) = gt.data.dim();
     if (n, t) != (gn, gt_frames) {
         return Err(usage(format!(
             "shape mismatch: --pred {} has {n} sequences x {t} frames but --gt {} has {gn} x {gt_frames}",
             pred.what, gt.what
         )));
     }
-    let pred_flat = pred
-        .data
-        .to_shape((n * s, t, w))
-        .expect("contiguous")
-        .into_owned();
-    let gt_seq = gt.data.index_axis(Axis(1), 0);
-    let gt_flat = Array3::from_shape_fn((n * s, t, gw), |(i, f, d)| gt_seq[[i / s, f, d]]);
+    let (pred_flat, gt_flat) = every_sample_with_its_truth(pred, gt);
     let input = match space {
         InputSpace::Expmap => MpjpeInput::Expmap,
         InputSpace::Raw => MpjpeInput::Positions,
@@ -251,7 +260,7 @@ fn score_against_ground_truth(
     space: InputSpace,
     report: &mut ScoreReport,
 ) -> Result<()> {
-    let (n, s, t, w) = pred.data.dim();
+    let (n, _, t, w) = pred.data.dim();
     let (gn, _, gt_frames, gw) = gt.data.dim();
     if (n, t, w) != (gn, gt_frames, gw) {
         return Err(usage(format!(
@@ -259,22 +268,7 @@ fn score_against_ground_truth(
             pred.what, gt.what
         )));
     }
-    // Every sample is scored against its sequence's ground truth.
-    let pred_flat = pred
-        .data
-        .to_shape((n * s, t, w))
-        .expect("contiguous")
-        .into_owned();
-    let gt_seq = gt.data.index_axis(Axis(1), 0);
-    let gt_flat: Array3<f64> = if s == 1 {
-        gt_seq.to_owned()
-    } else {
-        let repeated: Vec<_> = gt_seq
-            .outer_iter()
-            .flat_map(|g| std::iter::repeat_n(g, s))
-            .collect();
-        ndarray::stack(Axis(0), &repeated).expect("same shapes")
-    };
+    let (pred_flat, gt_flat) = every_sample_with_its_truth(pred, gt);
     let (gt_e, pred_e) = if space == InputSpace::Expmap {
         (
             expmap_batch_to_euler_protocol(gt_flat.view()),
