@@ -34,18 +34,8 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[2]
 SKELETON = ROOT.parent / "shared" / "reference" / "h36m_skeleton.json"
-EPS = float(np.finfo(np.float32).eps)
-
-
-def rotmats(r: np.ndarray) -> np.ndarray:
-    theta = np.linalg.norm(r, axis=-1)
-    k = r / (theta[..., None] + EPS)
-    z = np.zeros_like(k[..., 0])
-    K = np.stack(
-        [np.stack([z, -k[..., 2], k[..., 1]], -1), np.stack([k[..., 2], z, -k[..., 0]], -1),
-         np.stack([-k[..., 1], k[..., 0], z], -1)], -2)  # fmt: skip
-    s, c = np.sin(theta)[..., None, None], np.cos(theta)[..., None, None]
-    return np.eye(3) + s * K + (1.0 - c) * (K @ K)
+sys.path.insert(0, str(ROOT))
+from training.metrics_np import expmap2rotmat as rotmats  # noqa: E402  (numpy only)
 
 
 def positions(frames: np.ndarray, joints: list[dict]) -> np.ndarray:

@@ -6,6 +6,11 @@
 //!
 //! Ghosh et al. 2017's action-classifier protocol on one action of a 12 s `eval` (40 x 300 frames).
 //!
+//! MPJPE of one action of the 256-window protocol (256 windows x 25 frames): from exp-map frames
+//! (forward kinematics in the pelvis frame, then the error) and from positions; the multi-sample
+//! metrics of 64 windows x 50 samples x 50 frames x 48 numbers. `benches/compare/compare_mpjpe.py`
+//! times the same MPJPE against numpy.
+//!
 //! Run: `cargo bench --bench motion -- metrics`
 use std::hint::black_box;
 use std::path::PathBuf;
@@ -98,6 +103,60 @@ fn bench_apd(c: &mut Criterion) {
     group.throughput(Throughput::Elements(8));
     group.bench_function("8x50_samples_100x32x3", |b| {
         b.iter(|| apd_batch(black_box(samples.view())).unwrap())
+    });
+    group.finish();
+}
+
+fn bench_mpjpe_and_sample_sets(c: &mut Criterion) {
+    use motion::metrics::mpjpe::{score_mpjpe, MpjpeInput};
+    use motion::metrics::multimodal::{score_sample_sets, SampleSets};
+    use motion::metrics::JointMean;
+    let gt = smooth(256, 25, 99, 5);
+    let pred = smooth(256, 25, 99, 6);
+    let mut group = c.benchmark_group("metrics/mpjpe_256x25");
+    group.throughput(Throughput::Elements(256));
+    group.bench_function("expmap", |b| {
+        b.iter(|| {
+            score_mpjpe(
+                black_box(pred.view().into_dyn()),
+                black_box(gt.view().into_dyn()),
+                MpjpeInput::Expmap,
+                JointMean::All32,
+            )
+            .unwrap()
+        })
+    });
+    let positions = smooth(256, 25, 96, 7);
+    let other = smooth(256, 25, 96, 8);
+    group.bench_function("positions", |b| {
+        b.iter(|| {
+            score_mpjpe(
+                black_box(other.view().into_dyn()),
+                black_box(positions.view().into_dyn()),
+                MpjpeInput::Positions,
+                JointMean::All32,
+            )
+            .unwrap()
+        })
+    });
+    group.finish();
+    let samples = smooth(64 * 50, 50, 48, 9)
+        .into_shape_with_order((64, 50, 50, 48))
+        .unwrap();
+    let truth = smooth(64, 50, 48, 10);
+    let last = truth.index_axis(Axis(1), 0).to_owned();
+    let mut group = c.benchmark_group("metrics/sample_sets");
+    group.throughput(Throughput::Elements(64));
+    group.bench_function("64x50_samples_50x48", |b| {
+        b.iter(|| {
+            score_sample_sets(SampleSets {
+                samples: black_box(samples.view()),
+                truth: truth.view(),
+                last_observed: last.view(),
+                threshold: 0.5,
+            })
+            .unwrap()
+        })
     });
     group.finish();
 }
@@ -240,6 +299,7 @@ pub fn benches(c: &mut Criterion) {
     bench_classifier_protocol(c);
     bench_npss_and_euler(c);
     bench_apd(c);
+    bench_mpjpe_and_sample_sets(c);
     bench_ndms_synthetic(c);
     bench_ndms_h36m(c);
 }
