@@ -352,42 +352,31 @@ fn per_frame(
     joints: Option<&[usize]>,
 ) -> Array1<f64> {
     let count = truth.dim().1;
-    // Contiguous inputs (the usual case): one pass over slices, joints summed in order.
-    if let (Some(p), Some(g)) = (pred.as_slice(), truth.as_slice()) {
-        let row = 3 * count;
-        return p
-            .chunks_exact(row)
-            .zip(g.chunks_exact(row))
-            .map(|(a, b)| match joints {
-                Some(list) => {
-                    list.iter()
-                        .map(|&j| distance3(&a[3 * j..3 * j + 3], &b[3 * j..3 * j + 3]))
-                        .sum::<f64>()
-                        / list.len() as f64
-                }
-                None => {
-                    a.chunks_exact(3)
-                        .zip(b.chunks_exact(3))
-                        .map(|(x, y)| distance3(x, y))
-                        .sum::<f64>()
-                        / count as f64
-                }
-            })
-            .collect();
-    }
-    let distance = |t: usize, j: usize| {
-        (0..3)
-            .map(|c| {
-                let d = pred[[t, j, c]] - truth[[t, j, c]];
-                d * d
-            })
-            .sum::<f64>()
-            .sqrt()
-    };
-    Array1::from_shape_fn(truth.dim().0, |t| match joints {
-        Some(list) => list.iter().map(|&j| distance(t, j)).sum::<f64>() / list.len() as f64,
-        None => (0..count).map(|j| distance(t, j)).sum::<f64>() / count as f64,
-    })
+    // One pass over row-major slices (a copy only for inputs that are not), joints summed in order.
+    let (pred, truth) = (pred.as_standard_layout(), truth.as_standard_layout());
+    let (p, g) = (
+        pred.as_slice().expect("standard layout"),
+        truth.as_slice().expect("standard layout"),
+    );
+    let row = 3 * count;
+    p.chunks_exact(row)
+        .zip(g.chunks_exact(row))
+        .map(|(a, b)| match joints {
+            Some(list) => {
+                list.iter()
+                    .map(|&j| distance3(&a[3 * j..3 * j + 3], &b[3 * j..3 * j + 3]))
+                    .sum::<f64>()
+                    / list.len() as f64
+            }
+            None => {
+                a.chunks_exact(3)
+                    .zip(b.chunks_exact(3))
+                    .map(|(x, y)| distance3(x, y))
+                    .sum::<f64>()
+                    / count as f64
+            }
+        })
+        .collect()
 }
 
 fn distance3(a: &[f64], b: &[f64]) -> f64 {

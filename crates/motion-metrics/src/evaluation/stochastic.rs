@@ -48,6 +48,8 @@ pub const FUTURE_50HZ: usize = 100;
 pub const WINDOW_STRIDE_50HZ: usize = 25;
 /// DLow's 16 scored joints (its 17 kept joints without the root), H3.6M indices.
 pub const DLOW_JOINTS: [usize; 16] = [1, 2, 3, 6, 7, 8, 12, 13, 14, 15, 17, 18, 19, 25, 26, 27];
+/// Samples per window of a stochastic model unless asked otherwise (the published tables' 50).
+pub const DEFAULT_SAMPLES: usize = 50;
 /// Rows (windows x samples) the model runs side by side.
 const BATCH_ROWS: usize = 256;
 
@@ -77,7 +79,7 @@ impl StochasticOptions {
             dataset,
             model_name: model_name.into(),
             actions: vec!["all".into()],
-            samples: 50,
+            samples: DEFAULT_SAMPLES,
             rng_seed: 0,
             threshold: H36M_MULTIMODAL_THRESHOLD,
             any_action: false,
@@ -137,16 +139,30 @@ struct Window {
     seed: Array2<f64>,
 }
 
+/// Checks what is asked before anything is read: at least one sample, one window's predictions
+/// within the sample limit, a finite threshold.
+pub fn check_stochastic_request(samples: usize, threshold: f64) -> Result<(), EvalError> {
+    if samples == 0 {
+        return Err(EvalError::Invalid("--samples must be at least 1".into()));
+    }
+    motion_core::model::samples::check_sample_size(samples, FUTURE_50HZ, H36M_FRAME_DIMS)
+        .map_err(|e| EvalError::Invalid(format!("--samples {samples}: {e}")))?;
+    if !(threshold.is_finite() && threshold >= 0.0) {
+        return Err(EvalError::Invalid(format!(
+            "the multimodal threshold must be a finite distance >= 0 (m), got {threshold:e}"
+        )));
+    }
+    Ok(())
+}
+
 /// Runs the variant.
 pub fn evaluate_stochastic(
     model: &Arc<MotionModel>,
     options: &StochasticOptions,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<StochasticReport, EvalError> {
-    if options.samples == 0 {
-        return Err(EvalError::Invalid("--samples must be at least 1".into()));
-    }
-    // One window's samples (the seed and the prediction) run side by side at least.
+    check_stochastic_request(options.samples, options.threshold)?;
+    // One window's samples run side by side at least, seed frames included.
     motion_core::model::samples::check_sample_size(
         options.samples,
         model.config().seed_frames.max(FUTURE_50HZ),
@@ -154,12 +170,6 @@ pub fn evaluate_stochastic(
     )
     .map_err(|e| EvalError::Invalid(format!("--samples {}: {e}", options.samples)))?;
     check_model(model)?;
-    if !(options.threshold.is_finite() && options.threshold >= 0.0) {
-        return Err(EvalError::Invalid(format!(
-            "the multimodal threshold must be a finite distance >= 0 (m), got {:e}",
-            options.threshold
-        )));
-    }
     let config = model.config();
     let samples = if config.architecture().is_stochastic() {
         options.samples
@@ -179,8 +189,9 @@ pub fn evaluate_stochastic(
     });
     // Every window's seed, ground truth (50 instants) and last observed pose, all actions pooled.
     let mut windows: Vec<Window> = Vec::new();
-    let mut truth_rows: Vec<Array2<f64>> = Vec::new();
-    let mut last_rows: Vec<Vec<f64>> = Vec::new();
+    // Row-major `windows x 50 x 48` and `windows x 48`, one window appended at a time.
+    let mut truth_values: Vec<f64> = Vec::new();
+    let mut last_values: Vec<f64> = Vec::new();
     let mut missing = Vec::new();
     let predicted = FUTURE_50HZ / 2;
     for (a, planned) in selection.planned.iter().enumerate() {
@@ -222,14 +233,12 @@ pub fn evaluate_stochastic(
                             label: planned.label.clone(),
                             seed,
                         });
-                        truth_rows.push(Array2::from_shape_fn((predicted, 48), |(k, d)| {
-                            positions[[last + 2 * (k + 1), DLOW_JOINTS[d / 3], d % 3]] / 1000.0
-                        }));
-                        last_rows.push(
-                            (0..48)
-                                .map(|d| positions[[last, DLOW_JOINTS[d / 3], d % 3]] / 1000.0)
-                                .collect(),
-                        );
+                        let metres =
+                            |f: usize, d: usize| positions[[f, DLOW_JOINTS[d / 3], d % 3]] / 1000.0;
+                        for k in 0..predicted {
+                            truth_values.extend((0..48).map(|d| metres(last + 2 * (k + 1), d)));
+                        }
+                        last_values.extend((0..48).map(|d| metres(last, d)));
                     }
                     i += WINDOW_STRIDE_50HZ;
                 }
@@ -243,10 +252,8 @@ pub fn evaluate_stochastic(
             options.dataset.display()
         )));
     }
-    let truth = Array3::from_shape_fn((n, predicted, 48), |(w, t, d)| truth_rows[w][[t, d]]);
-    drop(truth_rows);
-    let last = Array2::from_shape_fn((n, 48), |(w, d)| last_rows[w][d]);
-    drop(last_rows);
+    let truth = Array3::from_shape_vec((n, predicted, 48), truth_values).expect("48 per instant");
+    let last = Array2::from_shape_vec((n, 48), last_values).expect("48 per window");
     let sets = multimodal_sets(last.view(), options.threshold);
     let zero = Array4::from_shape_fn((n, 1, predicted, 48), |(w, _, _, d)| last[[w, d]]);
     let zero_scores = score_windows(zero.view(), 0, truth.view(), &sets);

@@ -4,6 +4,7 @@
 //! measured here.
 mod mpjpe_table;
 mod plots;
+mod stochastic_table;
 mod table;
 
 use std::path::PathBuf;
@@ -14,10 +15,13 @@ use motion_core::protocol::{WindowSet, LONG_TERM_HORIZON};
 use motion_metrics::evaluation::mpjpe::{
     check_mpjpe_request, evaluate_mpjpe, MpjpeOptions, MpjpeWindows,
 };
-use motion_metrics::evaluation::stochastic::{evaluate_stochastic, StochasticOptions};
+use motion_metrics::evaluation::stochastic::{
+    check_stochastic_request, evaluate_stochastic, StochasticOptions, DEFAULT_SAMPLES,
+};
 use motion_metrics::evaluation::{
     check_request, evaluate, resolve_dataset, EvalError, EvalOptions, Progress,
 };
+use motion_metrics::multimodal::H36M_MULTIMODAL_THRESHOLD;
 use motion_metrics::JointMean;
 
 use super::UsageError;
@@ -181,16 +185,15 @@ pub fn run(args: Args) -> Result<()> {
         ProtocolChoice::Stochastic => return run_stochastic(args),
         ProtocolChoice::H36m => {}
     }
-    for (given, name) in [
-        (args.stride.is_some(), "--stride"),
-        (args.input_frames.is_some(), "--input-frames"),
-        (args.ltd_sampler, "--ltd-sampler"),
-        (args.joints.is_some(), "--joints"),
-    ] {
-        if given {
-            return Err(UsageError(format!("{name} belongs to --protocol mpjpe")).into());
-        }
-    }
+    refuse_given(
+        &[
+            (args.stride.is_some(), "--stride"),
+            (args.input_frames.is_some(), "--input-frames"),
+            (args.ltd_sampler, "--ltd-sampler"),
+            (args.joints.is_some(), "--joints"),
+        ],
+        "belongs to --protocol mpjpe",
+    )?;
     let windows = match args.windows {
         None | Some(Windows::Test) | Some(Windows::Eight) => WindowSet::Test,
         Some(Windows::Validation) => WindowSet::Validation,
@@ -271,24 +274,15 @@ pub fn run(args: Args) -> Result<()> {
 
 /// `eval --protocol mpjpe`.
 fn run_mpjpe(args: Args) -> Result<()> {
-    let refuse = |what: &str| -> Result<()> {
-        Err(UsageError(format!(
-            "{what} belongs to --protocol h36m; mpjpe predicts 25 frames per window, one sample"
-        ))
-        .into())
-    };
-    if args.samples.is_some_and(|k| k != 1) {
-        return refuse("--samples");
-    }
-    if args.horizon != LONG_TERM_HORIZON {
-        return refuse("--horizon");
-    }
-    if args.save_predictions.is_some() {
-        return refuse("--save-predictions");
-    }
-    if args.plot.is_some() {
-        return refuse("--plot");
-    }
+    refuse_given(
+        &[
+            (args.samples.is_some_and(|k| k != 1), "--samples"),
+            (args.horizon != LONG_TERM_HORIZON, "--horizon"),
+            (args.save_predictions.is_some(), "--save-predictions"),
+            (args.plot.is_some(), "--plot"),
+        ],
+        "belongs to --protocol h36m; mpjpe predicts 25 frames per window, one sample",
+    )?;
     let name = args.windows.map(|w| match w {
         Windows::Test => "test",
         Windows::Validation => "validation",
@@ -303,9 +297,9 @@ fn run_mpjpe(args: Args) -> Result<()> {
             UsageError(format!("--joints {name}: use 32 (all joints, the reference's) or 22 (the predicted joints)"))
         })?,
     };
-    let dataset = resolve_dataset(args.data.as_deref()).map_err(usage)?;
+    // The options first, then the data directory (cheap checks before anything is looked up).
     let mut options = MpjpeOptions::new(
-        dataset,
+        PathBuf::new(),
         model_source::describe(args.model.as_deref(), BuiltIn::Forecast),
     );
     options.actions = args.actions.clone();
@@ -318,6 +312,7 @@ fn run_mpjpe(args: Args) -> Result<()> {
     options.rng_seed = args.rng_seed;
     options.any_action = args.any_action;
     check_mpjpe_request(&options).map_err(usage)?;
+    options.dataset = resolve_dataset(args.data.as_deref()).map_err(usage)?;
     let model = model_source::load_model(args.model.as_deref(), BuiltIn::Forecast)?;
     let mut bar = ActionBar::default();
     let report =
@@ -333,30 +328,28 @@ fn run_mpjpe(args: Args) -> Result<()> {
 
 /// `eval --protocol stochastic`.
 fn run_stochastic(args: Args) -> Result<()> {
-    for (given, name) in [
-        (args.horizon != LONG_TERM_HORIZON, "--horizon"),
-        (args.save_predictions.is_some(), "--save-predictions"),
-        (args.plot.is_some(), "--plot"),
-        (args.windows.is_some(), "--windows"),
-        (args.stride.is_some(), "--stride"),
-        (args.input_frames.is_some(), "--input-frames"),
-        (args.ltd_sampler, "--ltd-sampler"),
-        (args.joints.is_some(), "--joints"),
-    ] {
-        if given {
-            return Err(UsageError(format!(
-                "{name} does not apply to --protocol stochastic (S9 and S11, windows every 25 frames at 50 Hz, 2 s futures)"
-            ))
-            .into());
-        }
-    }
+    refuse_given(
+        &[
+            (args.horizon != LONG_TERM_HORIZON, "--horizon"),
+            (args.save_predictions.is_some(), "--save-predictions"),
+            (args.plot.is_some(), "--plot"),
+            (args.windows.is_some(), "--windows"),
+            (args.stride.is_some(), "--stride"),
+            (args.input_frames.is_some(), "--input-frames"),
+            (args.ltd_sampler, "--ltd-sampler"),
+            (args.joints.is_some(), "--joints"),
+        ],
+        "does not apply to --protocol stochastic (S9 and S11, windows every 25 frames at 50 Hz, 2 s futures)",
+    )?;
+    let samples = args.samples.unwrap_or(DEFAULT_SAMPLES);
+    check_stochastic_request(samples, H36M_MULTIMODAL_THRESHOLD).map_err(usage)?;
     let dataset = resolve_dataset(args.data.as_deref()).map_err(usage)?;
     let mut options = StochasticOptions::new(
         dataset,
         model_source::describe(args.model.as_deref(), BuiltIn::Forecast),
     );
     options.actions = args.actions.clone();
-    options.samples = args.samples.unwrap_or(options.samples);
+    options.samples = samples;
     options.rng_seed = args.rng_seed;
     options.any_action = args.any_action;
     let model = model_source::load_model(args.model.as_deref(), BuiltIn::Forecast)?;
@@ -367,9 +360,17 @@ fn run_stochastic(args: Args) -> Result<()> {
     if args.reporting.json {
         args.reporting.print_json(&report)?;
     } else {
-        print!("{}", mpjpe_table::stochastic_table(&report));
+        print!("{}", stochastic_table::table(&report));
     }
     Ok(())
+}
+
+/// Refuses the first option given (`true`) that the chosen protocol does not take: `{option} {why}`.
+fn refuse_given(options: &[(bool, &str)], why: &str) -> Result<()> {
+    match options.iter().find(|(given, _)| *given) {
+        Some((_, name)) => Err(UsageError(format!("{name} {why}")).into()),
+        None => Ok(()),
+    }
 }
 
 /// A progress bar over actions (the MPJPE and stochastic protocols): it moves on when an action
