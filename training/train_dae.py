@@ -83,6 +83,14 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--dae-layers", type=int, default=3, help="DAE hidden layers (paper: 3)")
     g.add_argument("--no-action-input", action="store_true", help="do not feed the action one-hot to the LSTM")
     g.add_argument("--residual", action="store_true", help="predict the change of the pose (paper: the pose)")
+    g.add_argument("--scaling", choices=["min-max", "standard"], default="min-max",
+                   help="feature scaling: min-max to [0, 1] (paper 4.1) or z-score; the noise and dropout schedules "
+                        "act in the scaled space either way")
+    g.add_argument("--drop-scale", type=float, default=1.0,
+                   help="dae stage and --input-drop: multiply the joint-dropout schedule (paper: 1, up to 0.1)")
+    g.add_argument("--input-drop", action="store_true",
+                   help="lstm stage: corrupt the LSTM's inputs with the autoencoder's whole-joint dropout as well as "
+                        "the Gaussian noise (the LSTM trained on the corruption its filter removes)")
     g = p.add_argument_group("optimisation")
     g.add_argument("--iterations", type=int, default=3000)
     g.add_argument("--batch", type=int, default=None, help="default: 256 poses (dae), 32 sequences (lstm, finetune)")
@@ -112,6 +120,9 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--init-lstm", type=Path, metavar="CKPT", help="finetune: the lstm stage's checkpoint")
     g.add_argument("--seed", type=int, default=1)
     add_run_arguments(p, log_every=50)
+    p.add_argument("--raw", action="store_true",
+                   help="with --export: replace the autoencoder by an exact identity (the bare LSTM-3LR's predictions; "
+                        "a finetune or lstm checkpoint)")
     return p
 
 
@@ -141,12 +152,14 @@ def scheduled(values, fraction: float) -> float:
     return float(values[k])
 
 
-def stage_schedules(stage: str, fraction: float) -> tuple[float, float]:
+def stage_schedules(stage: str, fraction: float, drop_scale: float = 1.0) -> tuple[float, float]:
     """(joint-drop rate, Gaussian noise std) at this point of the stage: rising curricula for the pre-training
-    stages, the reverse annealed to 0 for the fine-tuning."""
+    stages, the reverse annealed to 0 for the fine-tuning; the drop rates times ``drop_scale``."""
     if stage == "finetune":
-        return scheduled(DROP_SCHEDULE[::-1] + (0.0,), fraction), scheduled(NOISE_SCHEDULE[::-1] + (0.0,), fraction)
-    return scheduled(DROP_SCHEDULE, fraction), scheduled(NOISE_SCHEDULE, fraction)
+        drop, noise = scheduled(DROP_SCHEDULE[::-1] + (0.0,), fraction), scheduled(NOISE_SCHEDULE[::-1] + (0.0,), fraction)
+    else:
+        drop, noise = scheduled(DROP_SCHEDULE, fraction), scheduled(NOISE_SCHEDULE, fraction)
+    return min(1.0, drop * drop_scale), noise
 
 
 def dae_loss(model: DAELSTM, poses: torch.Tensor, drop: float, noise: float) -> torch.Tensor:
@@ -156,10 +169,14 @@ def dae_loss(model: DAELSTM, poses: torch.Tensor, drop: float, noise: float) -> 
 
 
 def sequence_losses(model: DAELSTM, frames: torch.Tensor, actions: torch.Tensor, stage: str, drop: float,
-                    noise: float) -> tuple[torch.Tensor, torch.Tensor | None]:
+                    noise: float, input_drop: bool = False) -> tuple[torch.Tensor, torch.Tensor | None]:
     """Teacher-forced losses of frames [B, T+1, O]: eq. 2 on the LSTM output and (finetune) eq. 1 on the DAE's
-    filtering of the output with whole joints dropped at ``drop``."""
-    inputs = frames[:, :-1] + noise * torch.randn_like(frames[:, :-1])
+    filtering of the output with whole joints dropped at ``drop``. ``input_drop``: the inputs lose whole joints
+    at ``drop`` too (before the noise)."""
+    inputs = frames[:, :-1]
+    if input_drop:
+        inputs = model.drop_joints(inputs, drop)
+    inputs = inputs + noise * torch.randn_like(inputs)
     target = frames[:, 1:]
     raw = model.open_loop_raw(inputs, actions)
     lstm = ((raw - target) ** 2).mean()
@@ -204,6 +221,7 @@ def build_config(args, dims_used) -> dict:
         dae_hidden=args.dae_hidden,
         dae_layers=args.dae_layers,
         residual=bool(args.residual),
+        normalization=args.scaling,
         actions=[] if args.no_action_input else list(H36M_ACTIONS),
         seed_frames=h36m.SEED_FRAMES,
         horizon=h36m.HORIZON,
@@ -233,16 +251,24 @@ def train(args, argv: list[str]) -> None:
     command = resume["command"] if resume else "python -m training.train_dae " + shlex.join(argv)
     log(("resuming: " if resume else "starting: ") + command)
 
-    dataset = h36m.load_training_set(args.data_dir, h36m.ACTIONS, log=log, scaling="min-max")
+    dae_state = lstm_state = None
+    if resume is None and stage == "finetune":
+        if not (args.init_dae and args.init_lstm):
+            raise SystemExit("error: --stage finetune needs --init-dae and --init-lstm")
+        dae_state, lstm_state = load_checkpoint(args.init_dae), load_checkpoint(args.init_lstm)
+        scalings = {s["config"].get("normalization", "standard") for s in (dae_state, lstm_state)}
+        if len(scalings) > 1:
+            raise SystemExit(f"error: {args.init_dae} and {args.init_lstm} were trained with different scalings "
+                             f"({' and '.join(sorted(scalings))})")
+    source = resume or lstm_state
+    scaling = source["config"].get("normalization", "standard") if source else args.scaling
+    dataset = h36m.load_training_set(args.data_dir, h36m.ACTIONS, log=log, scaling=scaling)
     stats = dataset.stats
     torch.manual_seed(args.seed)  # every stage: initialization (dae, lstm) and the noise and joint drops
     if resume is not None:
         config = resume["config"]
         model = model_from_checkpoint(resume)
     elif stage == "finetune":
-        if not (args.init_dae and args.init_lstm):
-            raise SystemExit("error: --stage finetune needs --init-dae and --init-lstm")
-        dae_state, lstm_state = load_checkpoint(args.init_dae), load_checkpoint(args.init_lstm)
         config = dict(lstm_state["config"], dae_hidden=dae_state["config"]["dae_hidden"],
                       dae_layers=dae_state["config"]["dae_layers"])
         model = DAELSTM(config)
@@ -300,7 +326,7 @@ def train(args, argv: list[str]) -> None:
     t_last, acc, n_acc = time.time(), {}, 0
     while iteration < args.iterations:
         fraction = iteration / args.iterations
-        drop, noise = stage_schedules(stage, fraction)
+        drop, noise = stage_schedules(stage, fraction, args.drop_scale)
         if stage == "dae":
             frames_np, _ = dataset.sample_batch(rng, batch, 1)
             poses = torch.from_numpy(frames_np[:, 0]).to(device)
@@ -310,7 +336,7 @@ def train(args, argv: list[str]) -> None:
             frames_np, acts_np = dataset.sample_batch(rng, batch, args.window + 1)
             frames = torch.from_numpy(frames_np).to(device)
             acts = torch.from_numpy(label_map[acts_np]).to(device) if config["actions"] else None
-            lstm, dae = sequence_losses(model, frames, acts, stage, drop, noise)
+            lstm, dae = sequence_losses(model, frames, acts, stage, drop, noise, args.input_drop and stage == "lstm")
             loss = lstm if dae is None else lstm + dae
             terms = {"lstm": lstm.item()} | ({} if dae is None else {"dae": dae.item()})
             if stage == "finetune" and args.closed_loop_weight > 0:
@@ -362,15 +388,38 @@ def train(args, argv: list[str]) -> None:
     log.close()
 
 
-def export(out: Path, ckpt: Path, dtype: str, argv: list[str]) -> None:
+def identity_filter(model: DAELSTM) -> DAELSTM:
+    """The same LSTM and decoder with an autoencoder that computes the identity exactly: one hidden layer of
+    ``2 O`` ReLU units ``[I; -I]`` and the output ``[I, -I]`` (relu(x) - relu(-x) = x). Its file is a valid
+    ``dae-lstm`` whose predictions are the bare LSTM-3LR's (the unfiltered rows of the paper's Table 1)."""
+    o = model.output_size
+    config = dict(model.config, dae_hidden=2 * o, dae_layers=1)
+    dtype = next(model.parameters()).dtype
+    bare = DAELSTM(config).to(dtype)
+    state = {k: v for k, v in model.state_dict().items() if not k.startswith("dae.")}
+    eye = torch.eye(o, dtype=dtype)
+    state["dae.layers.0.weight"] = torch.cat([eye, -eye], dim=0)
+    state["dae.layers.0.bias"] = torch.zeros(2 * o, dtype=dtype)
+    state["dae.layers.1.weight"] = torch.cat([eye, -eye], dim=1)
+    state["dae.layers.1.bias"] = torch.zeros(o, dtype=dtype)
+    bare.load_state_dict(state)
+    return bare
+
+
+def export(out: Path, ckpt: Path, dtype: str, argv: list[str], raw: bool = False) -> None:
     state = load_checkpoint(ckpt)
-    if state["stage"] != "finetune":
-        raise SystemExit(f"error: {ckpt} is a {state['stage']} checkpoint; export the finetune stage's")
+    if state["stage"] == "dae" or (state["stage"] == "lstm" and not raw):
+        raise SystemExit(f"error: {ckpt} is a {state['stage']} checkpoint; export the finetune stage's"
+                         + ("" if state["stage"] == "dae" else " (or give --raw for the bare LSTM-3LR)"))
     model = model_from_checkpoint(state).eval()
+    if raw:
+        model = identity_filter(model)
+    scaling = state["config"].get("normalization", "standard")
     provenance = {
-        "data": "Human3.6M S1, S6, S7, S8, S9, S11; min-max scaling over their frames",
+        "data": f"Human3.6M S1, S6, S7, S8, S9, S11; {scaling} scaling over their frames",
         "iterations": state["iteration"],
         "stage": state["stage"],
+        "filter": "identity (the bare LSTM-3LR)" if raw else "the trained dropout autoencoder",
         "best_validation": state.get("best"),
         "command": state["command"],
         "export_command": "python -m training.train_dae " + shlex.join(argv),
@@ -387,7 +436,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.export:
         if not args.from_:
             raise SystemExit("error: --export needs --from CKPT")
-        export(args.export, args.from_, args.dtype, argv)
+        export(args.export, args.from_, args.dtype, argv, raw=args.raw)
         return 0
     train(args, argv)
     return 0

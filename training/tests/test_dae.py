@@ -228,3 +228,49 @@ def test_hinge_motion_loss_is_zero_in_band_and_bounded_at_a_frozen_prediction():
     # The log form's gradient at a frozen prediction is ~1/floor; the hinge's ~1/truth.
     assert hinge_grad < 0.1 * frozen_log.grad.abs().max().item()
     assert train_dae.ratio_loss(truth * 0.5, truth, "hinge").item() == pytest.approx(0.3**2, rel=1e-5)
+
+
+def test_identity_filter_gives_the_bare_lstm_exactly():
+    model = small_model()
+    model.eval()
+    bare = train_dae.identity_filter(model).double().eval()
+    assert bare.config["dae_layers"] == 1 and bare.config["dae_hidden"] == 2 * model.output_size
+    gen = torch.Generator().manual_seed(5)
+    seed = torch.rand(2, 5, model.output_size, generator=gen, dtype=torch.float64) * 4 - 2  # negatives too
+    act = torch.tensor([1, 3])
+    model.filter_enabled = False
+    torch.testing.assert_close(bare.closed_loop(seed, 6, act), model.closed_loop(seed, 6, act), rtol=0, atol=1e-12)
+
+
+def test_input_drop_corrupts_the_lstm_inputs_by_whole_joints(monkeypatch):
+    model = small_model()
+    seen = []
+    monkeypatch.setattr(model, "open_loop_raw", lambda x, a: seen.append(x) or x)
+    frames = torch.rand(3, 6, model.output_size, dtype=torch.float64) + 1.0
+    train_dae.sequence_losses(model, frames, None, "lstm", 0.5, 0.0, input_drop=False)
+    train_dae.sequence_losses(model, frames, None, "lstm", 0.5, 0.0, input_drop=True)
+    assert torch.equal(seen[0], frames[:, :-1])
+    zeroed = seen[1] == 0
+    assert zeroed.any() and not zeroed.all()
+    for group in model.groups:  # a joint is dropped with all its dims or not at all
+        g = zeroed[..., group]
+        assert torch.equal(g.all(-1), g.any(-1))
+
+
+def test_drop_scale_multiplies_the_joint_dropout_schedule():
+    assert train_dae.stage_schedules("dae", 0.99, 3.0)[0] == pytest.approx(0.3)
+    assert train_dae.stage_schedules("dae", 0.99)[0] == pytest.approx(0.1)
+
+
+def test_standard_scaling_trains_and_the_finetune_refuses_mixed_scalings(tmp_path, synthetic):
+    run(["--stage", "dae", "--run-dir", str(tmp_path / "dae"), "--iterations", "1"] + TINY)
+    run(["--stage", "lstm", "--run-dir", str(tmp_path / "lstm"), "--iterations", "1", "--scaling", "standard",
+         "--input-drop"] + TINY)
+    lstm = torch.load(tmp_path / "lstm" / "last.pt", weights_only=False)
+    assert lstm["config"]["normalization"] == "standard"
+    out = tmp_path / "raw.safetensors"
+    run(["--export", str(out), "--from", str(tmp_path / "lstm" / "last.pt"), "--raw"])
+    assert load_weights(out).config["dae_layers"] == 1
+    init = ["--init-dae", str(tmp_path / "dae" / "last.pt"), "--init-lstm", str(tmp_path / "lstm" / "last.pt")]
+    with pytest.raises(SystemExit, match="different scalings"):
+        train_dae.main(["--stage", "finetune", "--run-dir", str(tmp_path / "ft"), "--iterations", "1"] + TINY + init)
