@@ -52,14 +52,18 @@ let lift = 0; // the model's root starts at the origin: raise the figure so its 
 // itself, the character's world), handed to the wasm character as a rig; each frame the local
 // rotations (and the hips' translation) it returns go straight into the nodes ----------------------
 let mannequin = null; // { root, nodes, hips }
-async function loadMannequin() {
-  const gltf = await new GLTFLoader().loadAsync("./pkg/mannequin.glb");
+// The character drawn: ?character=URL in the address (any glTF humanoid the built-in name maps
+// know), a .glb chosen on the page, or the committed CC0 mannequin.
+const CHARACTER = new URLSearchParams(location.search).get("character") ?? "./pkg/mannequin.glb";
+function useCharacter(gltf) {
+  if (mannequin) scene.remove(mannequin.root);
   // The rig: the bones of the largest skin and every node above them (meshes are not joints).
   let bones = [];
   gltf.scene.traverse((o) => {
     if (o.isSkinnedMesh && o.skeleton.bones.length > bones.length) bones = o.skeleton.bones;
     o.frustumCulled = false; // the hips walk away from the bind-pose bounds
   });
+  if (bones.length === 0) throw new Error("the glTF file has no skinned mesh: nothing to drive");
   const keep = new Set([gltf.scene]);
   for (let b of bones) {
     for (; b && !keep.has(b); b = b.parent) keep.add(b);
@@ -68,6 +72,10 @@ async function loadMannequin() {
   gltf.scene.traverse((o) => keep.has(o) && nodes.push(o));
   mannequin = { root: gltf.scene, nodes, hips: -1 };
   scene.add(gltf.scene);
+  status.character = nodes.length - 1;
+}
+async function loadMannequin(url = CHARACTER) {
+  useCharacter(await new GLTFLoader().loadAsync(url));
 }
 
 function attachRig() {
@@ -298,6 +306,19 @@ try {
   $("restart").addEventListener("click", start);
   $("sticks").addEventListener("change", () => showSticks($("sticks").checked));
   $("source").addEventListener("change", start);
+  $("glb").addEventListener("change", async (event) => {
+    const file = event.target.files[0];
+    if (!file) return;
+    try {
+      useCharacter(await new GLTFLoader().parseAsync(await file.arrayBuffer(), ""));
+      status.skinned = false;
+      attachRig();
+      showSticks($("sticks").checked);
+      $("error").textContent = "";
+    } catch (e) {
+      fail(new Error(`${file.name}: ${e.message ?? e}`));
+    }
+  });
   $("bvh").addEventListener("change", async (event) => {
     const file = event.target.files[0];
     if (!file) return;

@@ -1,10 +1,12 @@
 // The page in a real headless Chromium (Debian's /usr/bin/chromium, or $CHROMIUM): it must load
 // the wasm module and three.js, generate 200 finite poses live, draw the skinned mannequin with
 // its bones moving, switch action, play the shipped motion-matching database steered by the
-// keyboard (on the same mannequin), and draw the stick figure when asked.
+// keyboard (on the same mannequin), and draw the stick figure when asked. With the shared assets
+// beside the repository (../shared/assets/characters) it also loads the female mannequin through
+// ?character= and checks it the same way (another body, unchanged code); without them it says so.
 // Prints the per-step cost of the model in the browser. Usage: node test/browser.mjs [screenshot.png]
 import { createServer } from "node:http";
-import { readFile, writeFile } from "node:fs/promises";
+import { access, readFile, writeFile } from "node:fs/promises";
 import { extname, join, normalize, resolve } from "node:path";
 import { fileURLToPath } from "node:url";
 import { chromium } from "playwright-core";
@@ -23,9 +25,14 @@ function check(ok, what) {
   console.log(`ok: ${what}`);
 }
 
+const characters = join(root, "..", "..", "shared", "assets", "characters");
+const female = "quaternius_mannequin_female.glb";
+const haveFemale = await access(join(characters, female)).then(() => true, () => false);
 const server = createServer(async (req, res) => {
   const path = normalize(decodeURIComponent(new URL(req.url, "http://x").pathname)).replace(/^(\.\.[/\\])+/, "");
-  const file = join(root, path.endsWith("/") ? `${path}index.html` : path);
+  const file = path.startsWith("/characters/")
+    ? join(characters, path.slice("/characters/".length))
+    : join(root, path.endsWith("/") ? `${path}index.html` : path);
   try {
     const body = await readFile(file);
     res.writeHead(200, { "content-type": types[extname(file)] ?? "application/octet-stream" });
@@ -112,6 +119,29 @@ try {
   check(differing > pixels * 0.01, `screenshot ${shot} not blank: ${(100 * differing / pixels).toFixed(1)}% of pixels differ from the background`);
   check(bone > 200, `the skeleton is drawn: ${bone} bone-coloured pixels`);
   check(errors.length === 0, `no console errors${errors.length ? `: ${errors.join(" | ")}` : ""}`);
+
+  // Another body through ?character=: the female mannequin (its own proportions and rest pose).
+  if (haveFemale) {
+    const other = await browser.newPage({ viewport: { width: 960, height: 600 } });
+    other.on("pageerror", (e) => errors.push(String(e)));
+    await other.goto(`${url}&character=/characters/${female}`);
+    await other.waitForFunction(() => window.motionStatus?.error || window.motionStatus?.poses >= 100, null, { timeout: 90_000 });
+    const st = await other.evaluate(() => window.motionStatus);
+    check(!st.error && st.skinned, `the female mannequin (${st.character} nodes) is driven (${st.error ?? "no error"})`);
+    const a = (await other.evaluate(() => window.motionDebug())).bones;
+    await other.waitForTimeout(500);
+    const b = (await other.evaluate(() => window.motionDebug())).bones;
+    const hand = Math.hypot(...b.hand_l.map((v, i) => v - a.hand_l[i]));
+    const low = Math.min(b.ball_l[1], b.ball_r[1]);
+    check(hand > 0.05 && low > -0.05 && low < 0.12 && b.head[1] > 1.3,
+      `female: hand moved ${hand.toFixed(2)} m in 0.5 s, lower ball of the foot at ${low.toFixed(2)} m, head at ${b.head[1].toFixed(2)} m`);
+    const px = await other.evaluate(() => window.motionMeshPixels());
+    check(px > 2000, `the female mesh covers ${px} pixels`);
+    await other.screenshot({ path: shot.replace(/\.png$/, "-female.png") });
+    check(errors.length === 0, `no console errors${errors.length ? `: ${errors.join(" | ")}` : ""}`);
+  } else {
+    console.log(`skipped: the female mannequin (no ${join(characters, female)})`);
+  }
 } finally {
   await browser.close();
   server.close();

@@ -4,7 +4,9 @@
 //! their transforms every frame. Steer with the arrow keys or WASD; 1-5 switch the action; G
 //! toggles a gizmo skeleton of the driven joints. The camera follows.
 //!
-//! `cargo run --release -p motion-bevy --example skinned --features render`
+//! `cargo run --release -p motion-bevy --example skinned --features render [-- CHARACTER.glb]`:
+//! any other glTF humanoid whose joint names a built-in map knows (the female mannequin of
+//! `../shared/assets/characters`, for example) is driven unchanged.
 mod common;
 
 use bevy::prelude::*;
@@ -19,15 +21,44 @@ const ACTIONS: [&str; 5] = ["walking", "eating", "smoking", "discussion", "greet
 #[derive(Resource, Default)]
 struct ShowSkeleton(bool);
 
+/// The glTF file the character is drawn with (its name inside the asset folder).
+#[derive(Resource)]
+struct CharacterFile(String);
+
+/// The asset folder and file of the character: the first argument, or the committed mannequin.
+fn character() -> (String, String) {
+    let Some(arg) = std::env::args().nth(1) else {
+        let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../../assets");
+        return (dir.into(), "mannequin.glb".into());
+    };
+    let path = std::path::Path::new(&arg);
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => std::path::PathBuf::from("."),
+    };
+    let dir = std::path::absolute(&dir).unwrap_or(dir);
+    let file = path
+        .file_name()
+        .map(|f| f.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    if !path.is_file() {
+        eprintln!("error: {arg}: no such glTF file");
+        std::process::exit(2);
+    }
+    (dir.to_string_lossy().into_owned(), file)
+}
+
 fn main() {
+    let (dir, file) = character();
     App::new()
         .add_plugins((
             DefaultPlugins.set(AssetPlugin {
-                file_path: concat!(env!("CARGO_MANIFEST_DIR"), "/../../assets").into(),
+                file_path: dir,
                 ..default()
             }),
             MotionPlugin,
         ))
+        .insert_resource(CharacterFile(file))
         .init_resource::<ShowSkeleton>()
         .add_systems(Startup, setup)
         .add_systems(Update, (steer, switch_action, common::report_failures))
@@ -41,6 +72,7 @@ fn main() {
 fn setup(
     mut commands: Commands,
     assets: Res<AssetServer>,
+    file: Res<CharacterFile>,
     mut meshes: ResMut<Assets<Mesh>>,
     mut materials: ResMut<Assets<StandardMaterial>>,
 ) {
@@ -58,7 +90,7 @@ fn setup(
     ));
     commands.spawn((Camera3d::default(), Transform::from_xyz(3.0, 1.7, 3.0)));
     commands.spawn((
-        WorldAssetRoot(assets.load(GltfAssetLabel::Scene(0).from_asset("mannequin.glb"))),
+        WorldAssetRoot(assets.load(GltfAssetLabel::Scene(0).from_asset(file.0.clone()))),
         MotionCharacter::new("walking", 1),
         MotionSkinned::default(),
     ));

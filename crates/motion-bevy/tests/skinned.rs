@@ -3,7 +3,9 @@
 //! `MotionSkinned` on its scene root, 240 ticks at 60 Hz. The mapped joints' `GlobalTransform`s
 //! are checked against motion-core's `RigTarget` of the same file and the same poses, and for
 //! what a game sees: feet on the floor, the hips at the rig's height, the joints moving, the
-//! fingers at their rest rotation.
+//! fingers at their rest rotation. The female mannequin of `../shared/assets/characters` (another
+//! body: its own proportions and rest pose) must pass the same walking checks unchanged; without
+//! the shared assets that test says it skipped.
 use std::path::Path;
 use std::time::Duration;
 
@@ -21,12 +23,27 @@ fn assets_dir() -> String {
         .into_owned()
 }
 
+/// The shared characters (`../shared/assets/characters` beside the repository), if present.
+fn shared_characters_dir() -> Option<String> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/assets/characters");
+    dir.join(FEMALE)
+        .is_file()
+        .then(|| dir.to_string_lossy().into_owned())
+}
+
+const MALE: &str = "mannequin.glb";
+const FEMALE: &str = "quaternius_mannequin_female.glb";
+
 fn app() -> App {
+    app_with_assets(assets_dir())
+}
+
+fn app_with_assets(dir: String) -> App {
     let mut app = App::new();
     app.add_plugins((
         MinimalPlugins,
         AssetPlugin {
-            file_path: assets_dir(),
+            file_path: dir,
             ..default()
         },
         TransformPlugin,
@@ -68,10 +85,16 @@ fn app() -> App {
 
 /// Spawns the mannequin with a walking character and runs until it has started.
 fn spawn_walker(app: &mut App, map: Option<String>) -> Entity {
+    spawn_character(app, MALE, map)
+}
+
+/// Spawns the glTF `file` (in the app's asset folder) with a walking character and runs until it
+/// has started.
+fn spawn_character(app: &mut App, file: &'static str, map: Option<String>) -> Entity {
     let scene: Handle<bevy::world_serialization::WorldAsset> = app
         .world()
         .resource::<AssetServer>()
-        .load(GltfAssetLabel::Scene(0).from_asset("mannequin.glb"));
+        .load(GltfAssetLabel::Scene(0).from_asset(file));
     let entity = app
         .world_mut()
         .spawn((
@@ -108,8 +131,22 @@ fn world_position(app: &App, e: Entity) -> Vec3 {
 
 #[test]
 fn the_mannequin_walks_on_the_floor_driven_by_its_own_joints() {
-    let mut app = app();
-    let walker = spawn_walker(&mut app, None);
+    walks_on_the_floor(app(), MALE);
+}
+
+#[test]
+fn the_female_mannequin_walks_on_the_floor_unchanged() {
+    let Some(dir) = shared_characters_dir() else {
+        eprintln!("skipped: no ../shared/assets/characters/{FEMALE} beside the repository");
+        return;
+    };
+    walks_on_the_floor(app_with_assets(dir), FEMALE);
+}
+
+/// A walking character on `file`: the scene's own joints driven, the feet on the floor, the hips
+/// at the rig's own height, the hand swinging, the body travelling, the fingers at rest.
+fn walks_on_the_floor(mut app: App, file: &'static str) {
+    let walker = spawn_character(&mut app, file, None);
     if let Some(f) = app.world().get::<MotionFailed>(walker) {
         panic!("the character failed: {}", f.0);
     }
@@ -152,13 +189,13 @@ fn the_mannequin_walks_on_the_floor_driven_by_its_own_joints() {
     let median = lowest[lowest.len() / 2];
     assert!(
         (-0.03..0.12).contains(&median),
-        "lowest foot joint median {median} m"
+        "{file}: lowest foot joint median {median} m"
     );
     // The hips at the rig's own height (its rest pelvis height, less a walking knee bend).
     let mean_hips = hips.iter().sum::<f32>() / hips.len() as f32;
     assert!(
         mean_hips > 0.85 * rest_pelvis_height && mean_hips < 1.05 * rest_pelvis_height,
-        "hips {mean_hips} m against rest {rest_pelvis_height} m"
+        "{file}: hips {mean_hips} m against rest {rest_pelvis_height} m"
     );
     // Moving: the hand swings and the body walks.
     let swing = hands
@@ -168,7 +205,7 @@ fn the_mannequin_walks_on_the_floor_driven_by_its_own_joints() {
     let walked = (travelled[239] - travelled[0]).with_y(0.0).length();
     assert!(
         swing > 0.1 && walked > 0.5,
-        "hand swing {swing} m, walked {walked} m in 4 s"
+        "{file}: hand swing {swing} m, walked {walked} m in 4 s"
     );
 }
 
