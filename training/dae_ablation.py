@@ -10,7 +10,9 @@ one thread. ``score`` exports each row (``train_dae --export``, the bare LSTM ro
 ``motion-cli eval --windows validation --horizon 300 --json`` on it and prints the table: per row, the speed ratio
 in each time window (0-2, 2-4, 4-8, 8-12 s; the mean over the 15 actions and the smallest) and the classifier's
 probability of the seed's action at 8-12 s (walking, eating, and the mean over actions) beside real motion and
-zero-velocity, plus the Euler error at 80 ms.
+zero-velocity, plus the Euler error at 80 ms. Below it, each autoencoder's reconstruction error of clean S5
+validation poses (what its filter moves a pose that needs no filtering), RMS over the used dims in the scaled
+space and in radians.
 
 The recipe common to every variant (fixed before any variant was scored): autoencoder 3,000 iterations, LSTM
 1,500 iterations (batch 32, 100-frame windows), the paper's fine-tune (eq. 1 + eq. 2 with the reversed schedules
@@ -22,7 +24,8 @@ annealed to 0, no closed-loop term) 300 iterations at batch 16; seed 1. Each var
 - ``no_onehot``: no action input;
 - ``drop_x3``: the autoencoder's joint dropout schedule tripled (0.03 .. 0.3);
 - ``dae_long``: the autoencoder trained 5x longer (15,000 iterations);
-- ``ft_long``: the base fine-tune continued to 1,200 iterations.
+- ``ft_long``: the base fine-tune continued to 1,200 iterations;
+- ``low_noise``: the Gaussian noise schedule of every stage a tenth (std 0.001 .. 0.01 of the scaled range).
 
 Rows: ``lstm`` (the pre-trained LSTM-3LR alone), ``raw`` (the fine-tuned LSTM without its filter: the paper's
 "Ours without filtering") and ``filtered`` (the DAE-LSTM as it runs).
@@ -40,6 +43,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from . import data as h36m
 from . import train_dae
 from .checkpoint_io import CHECKPOINT
 from .long_horizon_targets import classifier_mean
@@ -67,6 +71,9 @@ STAGES: dict[str, tuple[list[str], tuple[str, ...]]] = {
     "ft_drop_x3": (FINETUNE, ("dae_drop_x3", "lstm_base")),
     "ft_dae_long": (FINETUNE, ("dae_long", "lstm_base")),
     "ft_long": (FINETUNE[:3] + ["1200"] + FINETUNE[4:], ("dae_base", "lstm_base")),
+    "dae_low_noise": (DAE + ["--noise-scale", "0.1"], ()),
+    "lstm_low_noise": (LSTM + ["--noise-scale", "0.1"], ()),
+    "ft_low_noise": (FINETUNE + ["--noise-scale", "0.1"], ("dae_low_noise", "lstm_low_noise")),
 }
 # variant -> (its lstm stage, its finetune stage)
 VARIANTS = {
@@ -77,13 +84,22 @@ VARIANTS = {
     "drop_x3": ("lstm_base", "ft_drop_x3"),
     "dae_long": ("lstm_base", "ft_dae_long"),
     "ft_long": ("lstm_base", "ft_long"),
+    "low_noise": ("lstm_low_noise", "ft_low_noise"),
 }
 WINDOWS = ("0-2 s", "2-4 s", "4-8 s", "8-12 s")
 
 
+# The order stages are trained in: the base pair and the cheap autoencoder variants first, then each LSTM
+# followed by the fine-tunes it enables (every stage after those it starts from).
+ORDER = ("dae_base", "dae_drop_x3", "dae_long", "dae_low_noise", "dae_zscore", "lstm_base", "ft_base", "ft_dae_long",
+         "ft_drop_x3", "lstm_low_noise", "ft_low_noise", "lstm_input_drop", "ft_input_drop", "lstm_zscore",
+         "ft_zscore", "lstm_no_onehot", "ft_no_onehot", "ft_long")
+
+
 def stage_order() -> list[str]:
-    """Stages in an order that trains every stage after those it starts from (dae and lstm first)."""
-    return sorted(STAGES, key=lambda s: (bool(STAGES[s][1]), s != "ft_base", s))
+    """Every stage, in the training order (``ORDER``)."""
+    assert sorted(ORDER) == sorted(STAGES), "ORDER must list every stage once"
+    return list(ORDER)
 
 
 def target_iterations(args: list[str]) -> int:
@@ -177,6 +193,22 @@ def rows(root: Path) -> list[tuple[str, dict]]:
     return out
 
 
+@torch.no_grad()
+def reconstruction_errors(root: Path) -> list[str]:
+    """Per autoencoder stage: the RMS change its filter makes to clean S5 validation poses (scaled, radians)."""
+    lines = ["| autoencoder | clean-pose reconstruction RMS, scaled | radians |", "|---|---|---|"]
+    frames = torch.from_numpy(np.concatenate([w.frames for w in h36m.validation_windows(None, h36m.ACTIONS)]))
+    for name in stage_order():
+        if not name.startswith("dae") or done_iterations(root / name) < target_iterations(STAGES[name][0]):
+            continue
+        model = train_dae.model_from_checkpoint(train_dae.load_checkpoint(root / name / CHECKPOINT)).eval()
+        poses = model.norm.normalize(frames.to(model.norm.mean.dtype))
+        change = model.filter(poses) - poses
+        radians = change * model.norm.std[model.norm.dims_used]
+        lines.append(f"| {name} | {change.pow(2).mean().sqrt():.4f} | {radians.pow(2).mean().sqrt():.3f} |")
+    return lines
+
+
 def fmt_row(label: str, s: dict) -> str:
     speed = " / ".join(f"{s['speed_mean'][w]:.2f}" for w in WINDOWS)
     smallest = " / ".join(f"{s['speed_min'][w]:.2f}" for w in WINDOWS)
@@ -216,6 +248,8 @@ def main(argv: list[str] | None = None) -> int:
         run_stages(args.root, args.only)
     else:
         print(table(rows(args.root)))
+        print()
+        print("\n".join(reconstruction_errors(args.root)))
     return 0
 
 

@@ -88,6 +88,9 @@ def build_parser() -> argparse.ArgumentParser:
                         "act in the scaled space either way")
     g.add_argument("--drop-scale", type=float, default=1.0,
                    help="dae stage and --input-drop: multiply the joint-dropout schedule (paper: 1, up to 0.1)")
+    g.add_argument("--noise-scale", type=float, default=1.0,
+                   help="multiply the Gaussian noise schedule, every stage (paper: 1, std up to 0.1 of the scaled "
+                        "range)")
     g.add_argument("--input-drop", action="store_true",
                    help="lstm stage: corrupt the LSTM's inputs with the autoencoder's whole-joint dropout as well as "
                         "the Gaussian noise (the LSTM trained on the corruption its filter removes)")
@@ -152,14 +155,16 @@ def scheduled(values, fraction: float) -> float:
     return float(values[k])
 
 
-def stage_schedules(stage: str, fraction: float, drop_scale: float = 1.0) -> tuple[float, float]:
+def stage_schedules(stage: str, fraction: float, drop_scale: float = 1.0, noise_scale: float = 1.0
+                    ) -> tuple[float, float]:
     """(joint-drop rate, Gaussian noise std) at this point of the stage: rising curricula for the pre-training
-    stages, the reverse annealed to 0 for the fine-tuning; the drop rates times ``drop_scale``."""
+    stages, the reverse annealed to 0 for the fine-tuning; the drop rates times ``drop_scale``, the noise times
+    ``noise_scale``."""
     if stage == "finetune":
         drop, noise = scheduled(DROP_SCHEDULE[::-1] + (0.0,), fraction), scheduled(NOISE_SCHEDULE[::-1] + (0.0,), fraction)
     else:
         drop, noise = scheduled(DROP_SCHEDULE, fraction), scheduled(NOISE_SCHEDULE, fraction)
-    return min(1.0, drop * drop_scale), noise
+    return min(1.0, drop * drop_scale), noise * noise_scale
 
 
 def dae_loss(model: DAELSTM, poses: torch.Tensor, drop: float, noise: float) -> torch.Tensor:
@@ -326,7 +331,7 @@ def train(args, argv: list[str]) -> None:
     t_last, acc, n_acc = time.time(), {}, 0
     while iteration < args.iterations:
         fraction = iteration / args.iterations
-        drop, noise = stage_schedules(stage, fraction, args.drop_scale)
+        drop, noise = stage_schedules(stage, fraction, args.drop_scale, args.noise_scale)
         if stage == "dae":
             frames_np, _ = dataset.sample_batch(rng, batch, 1)
             poses = torch.from_numpy(frames_np[:, 0]).to(device)

@@ -257,9 +257,21 @@ def test_input_drop_corrupts_the_lstm_inputs_by_whole_joints(monkeypatch):
         assert torch.equal(g.all(-1), g.any(-1))
 
 
-def test_drop_scale_multiplies_the_joint_dropout_schedule():
+def test_drop_and_noise_scales_multiply_their_schedules():
     assert train_dae.stage_schedules("dae", 0.99, 3.0)[0] == pytest.approx(0.3)
-    assert train_dae.stage_schedules("dae", 0.99)[0] == pytest.approx(0.1)
+    assert train_dae.stage_schedules("dae", 0.99) == pytest.approx((0.1, 0.1))
+    assert train_dae.stage_schedules("lstm", 0.99, 1.0, 0.1)[1] == pytest.approx(0.01)
+    assert train_dae.stage_schedules("finetune", 0.0, 1.0, 0.1)[1] == pytest.approx(0.01)
+
+
+def test_the_ablation_trains_every_stage_after_the_stages_it_starts_from():
+    from training import dae_ablation
+    order = dae_ablation.stage_order()
+    for i, name in enumerate(order):
+        for parent in dae_ablation.STAGES[name][1]:
+            assert order.index(parent) < i, (name, parent)
+    for lstm, ft in dae_ablation.VARIANTS.values():
+        assert lstm in order and ft in order
 
 
 def test_standard_scaling_trains_and_the_finetune_refuses_mixed_scalings(tmp_path, synthetic):
