@@ -90,10 +90,10 @@ fn threaded_steps_allocate_nothing_and_shards_agree() {
         }
         set_simd_path(SimdPath::best()).unwrap();
         // Rows are independent: 3 shards of a batch of 100 give the frames of one piece, stepped
-        // from this thread (shards this long go to the crate's shard helpers, one thread here,
-        // so two shards queue on it) and from a thread of a rayon pool (its shards go to that
-        // pool); 2 shards of 8 rows (4 rows x about 2.7 M parameters, below the helpers'
-        // 2^24 multiply-adds: the global pool) likewise.
+        // from this thread (more shards than the crew's two threads: they go to the crate's
+        // shard helpers, one thread here, so two shards queue on it) and from a thread of a
+        // rayon pool (its shards go to that pool); 2 shards of 8 rows (the crew: this thread
+        // and one spinning helper) likewise.
         let inner = rayon::ThreadPoolBuilder::new()
             .num_threads(2)
             .build()
@@ -115,5 +115,20 @@ fn threaded_steps_allocate_nothing_and_shards_agree() {
                 }
             }
         }
+        // Two shards handed to the crew allocate nothing per step (rayon's spawn allocates a job
+        // record per handed shard).
+        let mut crew = started(&model, 16, 2);
+        for _ in 0..50 {
+            crew.step().unwrap();
+        }
+        let before = ALLOCATIONS.load(Ordering::Relaxed);
+        for _ in 0..200 {
+            crew.step().unwrap();
+        }
+        let count = ALLOCATIONS.load(Ordering::Relaxed) - before;
+        assert_eq!(
+            count, 0,
+            "{arch:?} batch 16 in 2 shards: {count} allocations in 200 steps"
+        );
     }
 }

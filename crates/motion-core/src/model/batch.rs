@@ -7,11 +7,13 @@
 //! is matrix-matrix products over the batch (see [`crate::nn::gemm`]); all buffers are sized in
 //! [`BatchGenerator::new`], so a step allocates nothing of its own. At batch 1 the products are
 //! GEMVs and a step touches no heap at all (tested). Below twice [`SHARD_MIN_ROWS`] rows a step
-//! stays on the calling thread; from there on every shard but the first is handed to the rayon
-//! pool each step (long shards to the crate's shard helpers, a pool of one thread fewer, so that
-//! no thread is left over to compete with the shards), and rayon allocates one small job record
-//! per handed shard (and `matrixmultiply`, which the portable path uses above batch 16, its
-//! packing buffers).
+//! stays on the calling thread; from there on the calling thread advances the first shard and
+//! every other shard is handed over each step: called from outside a rayon pool, with no more
+//! shards than threads, to the **crew** (`nn::parallel::crew`: helper threads that spin between
+//! steps, so a hand-off wakes no one; no allocation, tested); otherwise to the rayon pool (long
+//! shards to the crate's shard helpers, a pool of one thread fewer, so that no thread is left over
+//! to compete with the shards), where rayon allocates one small job record per handed shard (and
+//! `matrixmultiply`, which the portable path uses above batch 16, its packing buffers).
 //!
 //! Large batches are cut into **shards** of consecutive rows, one per rayon thread, each with its
 //! own recurrent state and buffers: a step is then one fork-join for the whole step instead of
@@ -19,7 +21,7 @@
 //! ([`crate::nn::parallel::serial`]). Rows never interact, so results do not depend on the split.
 //! Small batches (below twice [`SHARD_MIN_ROWS`] rows) stay in one shard: they are bound by
 //! reading the weights, which every shard would read again. A sharded step waits for the slowest
-//! shard, so its worst case includes waking a pool thread (see the README's stall figures);
+//! shard, so its worst case includes waking a parked thread (see the README's stall figures);
 //! [`BatchGenerator::with_shards`] with 1 keeps a batch on the calling thread.
 //!
 //! The fed-back frame is the model's normalized output itself (as in `training/models.py`), not
@@ -541,6 +543,10 @@ impl BatchGenerator {
             // `par_iter` from outside the pool, which parks the caller and wakes a worker per
             // shard, measured median 430 µs and p99 3.7 ms at batch 16 (GRU-d 2x512, AVX-512)
             // against 222 µs and p99 3.5 ms this way; the shipped VGRU-d p99 2,947 -> 209 µs).
+            if self.advance_on_crew(model, step, chunk) {
+                self.body_steps += 1;
+                return;
+            }
             let helpers = self.shard_helpers;
             let mut outs = self.out_full.chunks_mut(chunk);
             let mut shards = self.shards.iter_mut();
@@ -556,6 +562,54 @@ impl BatchGenerator {
             }
         }
         self.body_steps += 1;
+    }
+
+    /// The shards of one step on the crew (`nn::parallel::crew`: helper threads that spin
+    /// between steps, so a hand-off costs no wake-up), from a thread outside any rayon pool;
+    /// `false` (nothing run) when the crew cannot take the step.
+    #[cfg(feature = "parallel")]
+    fn advance_on_crew(&mut self, model: &MotionModel, step: usize, chunk: usize) -> bool {
+        use crate::nn::parallel::crew;
+        if crate::nn::parallel::pool::current_thread_index().is_some()
+            || self.shards.len() > crew::Crew::threads()
+        {
+            return false;
+        }
+        /// The shards and their output rows, shared with the crew: part `k` touches only shard
+        /// `k` and its chunk of the output.
+        struct Parts {
+            shards: *mut Shard,
+            out: *mut f32,
+            out_len: usize,
+        }
+        // SAFETY: each part dereferences only its own shard and output chunk (disjoint), and
+        // `crew::run` returns after every part is done.
+        unsafe impl Sync for Parts {}
+        let parts = Parts {
+            shards: self.shards.as_mut_ptr(),
+            out: self.out_full.as_mut_ptr(),
+            out_len: self.out_full.len(),
+        };
+        let count = self.shards.len();
+        crew::run(count, &|k| {
+            let parts = &parts;
+            let start = (k * chunk).min(parts.out_len);
+            let end = ((k + 1) * chunk).min(parts.out_len);
+            // SAFETY: `k < count` (the crew runs parts 0..count once each); shard `k` and output
+            // rows `start..end` are touched by part `k` alone (see `Parts`).
+            let (shard, out) = unsafe {
+                (
+                    &mut *parts.shards.add(k),
+                    std::slice::from_raw_parts_mut(parts.out.add(start), end - start),
+                )
+            };
+            crate::nn::parallel::serial(|| shard.advance(model, step, out));
+        })
+    }
+
+    #[cfg(not(feature = "parallel"))]
+    fn advance_on_crew(&mut self, _: &MotionModel, _: usize, _: usize) -> bool {
+        false
     }
 
     fn validate_seeds<T: FrameScalar>(

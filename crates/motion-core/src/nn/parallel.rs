@@ -11,6 +11,9 @@
 
 use std::cell::Cell;
 
+#[cfg(feature = "parallel")]
+pub(crate) mod crew;
+
 thread_local! {
     static SERIAL: Cell<bool> = const { Cell::new(false) };
 }
