@@ -116,7 +116,10 @@ fn threaded_steps_allocate_nothing_and_shards_agree() {
             }
         }
         // Two shards handed to the crew allocate nothing per step (rayon's spawn allocates a job
-        // record per handed shard).
+        // record per handed shard; `MOTION_CREW=off` sends them there).
+        if std::env::var("MOTION_CREW").is_ok_and(|v| v.eq_ignore_ascii_case("off")) {
+            continue;
+        }
         let mut crew = started(&model, 16, 2);
         for _ in 0..50 {
             crew.step().unwrap();

@@ -7,7 +7,9 @@
 //! is matrix-matrix products over the batch (see [`crate::nn::gemm`]); all buffers are sized in
 //! [`BatchGenerator::new`], so a step allocates nothing of its own. At batch 1 the products are
 //! GEMVs and a step touches no heap at all (tested). Below twice [`SHARD_MIN_ROWS`] rows a step
-//! stays on the calling thread; from there on the calling thread advances the first shard and
+//! is one shard on the calling thread, whose large products it splits by output columns with the
+//! crew's helper (`nn::parallel::crew`, [`BatchGenerator::set_crew_products`]); from there on the
+//! calling thread advances the first shard and
 //! every other shard is handed over each step: called from outside a rayon pool, with no more
 //! shards than threads, to the **crew** (`nn::parallel::crew`: helper threads that spin between
 //! steps, so a hand-off wakes no one; no allocation, tested); otherwise to the rayon pool (long
@@ -36,14 +38,16 @@ use crate::derivatives::DerivativeBuffer;
 use ndarray::{ArrayView2, ArrayView3};
 use std::sync::Arc;
 
-/// Fewest rows per shard: batches smaller than twice this run as one shard. Measured on a 2-core
-/// AMD EPYC (`motion-cli bench --shards 1|2`, alternating runs, every SIMD path, the shipped
-/// VGRU-d and random GRU-d 2x512 / VGRU-d 512 with f16 weights): at batch 16 a step is
-/// compute-bound (the AVX2 row kernel does 98 GFLOP/s on one core, near its FMA peak) and two shards
-/// of 8 rows take 0.53-0.64x the time of one (GRU-d, AVX2: 885 → 512 µs); at batch 8 two shards
-/// win on the portable path and tie or lose on AVX2 and AVX-512, where the second shard's
-/// reading of the weights again costs as much as it saves.
-pub const SHARD_MIN_ROWS: usize = 8;
+/// Fewest rows per shard: batches smaller than twice this run as one shard, whose large products
+/// split by output columns over the crew instead ([`BatchGenerator::set_crew_products`]). On a
+/// 2-core Intel Xeon (Firecracker VM, `motion-cli bench --shards 1|2` against `--shards 1` with
+/// the crew's product split, three alternating runs, AVX-512): at batch 16 the shipped VGRU-d
+/// took 171-210 µs in two shards of 8 rows and 138-205 µs in one split by columns, GRU-d 2x512
+/// (f32) 714-791 against 489-639 µs: two shards each read every weight (the VGRU-d's 3.1 MB of
+/// f32 panels, more than a core's 2 MB L2) from the shared L3, the column split half of them.
+/// (Before the crew, on a 2-core AMD EPYC, two shards of 8 rows took 0.53-0.64x the time of one
+/// unsplit shard.)
+pub const SHARD_MIN_ROWS: usize = 16;
 /// Fewest multiply-adds per shard and step (the shard's rows times the model's parameters) for
 /// which a sharded step hands its other shards to the crate's shard helpers, one thread fewer
 /// than the pool, instead of the pool itself (see `nn::parallel::pool::shard_scope`). On a
@@ -96,6 +100,9 @@ pub struct BatchGenerator {
     /// Run each (single-shard) step on a rayon pool thread, where the row kernels split their
     /// products over threads ([`set_row_split`](Self::set_row_split)).
     pool_step: bool,
+    /// Split a single-shard step's large products by output columns between the calling thread
+    /// and the crew ([`crate::nn::parallel::crew_products`]).
+    crew_products: bool,
     /// Hand the shards after the first to the crate's shard helpers rather than the current
     /// pool (long shards, see [`SHARD_HELPERS_MIN_MACS`]).
     shard_helpers: bool,
@@ -203,6 +210,7 @@ impl BatchGenerator {
             .map(|k| Shard::new(&model, shard_rows.min(batch - k * shard_rows)))
             .collect();
         let cfg = model.config();
+        let shards_len = shards.len();
         let row_split_possible = shards.len() == 1
             && batch <= crate::nn::gemm::row_kernel_max_batch(model.decoder().weight())
             && crate::nn::parallel::pool::current_num_threads() > 1
@@ -214,6 +222,9 @@ impl BatchGenerator {
             shards,
             row_split_possible,
             pool_step: false,
+            crew_products: shards_len == 1
+                && crate::nn::parallel::pool::current_num_threads() > 1
+                && model.parameter_count() >= POOL_STEP_MIN_PARAMETERS,
             shard_helpers: shard_rows * model.parameter_count() >= SHARD_HELPERS_MIN_MACS,
             frame: vec![0.0; cfg.frame_dims],
             out_full: vec![0.0; batch * cfg.frame_dims],
@@ -234,6 +245,19 @@ impl BatchGenerator {
     pub fn set_row_split(&mut self, enabled: bool) -> bool {
         self.pool_step = enabled && self.row_split_possible;
         self.pool_step
+    }
+
+    /// Splits a single-shard step's large products by output columns between the calling
+    /// thread and the crew's spinning helper threads (`nn::parallel::crew`): on by default for
+    /// one-shard batches of models of at least 2^19 parameters when rayon has several threads
+    /// and the crew runs (`MOTION_CREW=off` stops it for the whole process: one thread per
+    /// step, nothing spinning). Applies when stepped from a thread outside any rayon pool; no
+    /// allocation. Returns whether it is on for this generator.
+    pub fn set_crew_products(&mut self, enabled: bool) -> bool {
+        self.crew_products = enabled
+            && self.shards.len() == 1
+            && crate::nn::parallel::pool::current_num_threads() > 1;
+        self.crew_products
     }
 
     /// Number of shards the batch is cut into (see the module doc).
@@ -532,6 +556,9 @@ impl BatchGenerator {
                 // On a pool thread the row kernels' splits are cheap joins (see `pool_step`).
                 let out = &mut self.out_full;
                 crate::nn::parallel::pool::scope(|_| shard.advance(model, step, out));
+            } else if self.crew_products {
+                let out = &mut self.out_full;
+                crate::nn::parallel::crew_products(|| shard.advance(model, step, out));
             } else {
                 shard.advance(model, step, &mut self.out_full);
             }

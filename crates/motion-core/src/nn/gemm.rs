@@ -12,7 +12,11 @@
 //!   thread splits its output rows over the pool (`rayon::join`, no allocation): one core
 //!   streams weights from L3 at about 25 GB/s on the 2-core Intel Xeon we measure on, two cores
 //!   together at about 32-43 GB/s. Called from elsewhere it stays on the calling thread (see
-//!   [`crate::model::BatchGenerator::set_row_split`]).
+//!   [`crate::model::BatchGenerator::set_row_split`]), unless the caller asked for the crew
+//!   ([`super::parallel::crew_products`]): then a product of at least 256 KiB of weights is
+//!   split in two output ranges, one on the calling thread and one on the crew's spinning helper,
+//!   the same halves every call (each core keeps its half of the weights in its own cache). The
+//!   panel GEMM splits the same way, by whole panels.
 //! - **GEMM** (larger batches): with AVX-512 or AVX2, [`sgemm_panels::gemm_panels`] over the weights
 //!   packed into column panels at load; otherwise `matrixmultiply::sgemm` over the f32 rows (its
 //!   packing buffers are its own business), split over rayon threads by rows of `X` when the
@@ -58,6 +62,37 @@ fn split_point(outputs: &std::ops::Range<usize>, parts: usize) -> (usize, usize)
     (left, at.min(outputs.end))
 }
 
+/// `Y`'s base pointer, shared by threads that write disjoint column ranges of it.
+#[derive(Clone, Copy)]
+struct Columns(*mut f32);
+// SAFETY: each thread writes only its own column range (the splits of `rows_split`,
+// `panels_on_crew` and the crew split of `rows_on`).
+unsafe impl Send for Columns {}
+unsafe impl Sync for Columns {}
+
+impl Columns {
+    fn get(self) -> *mut f32 {
+        self.0
+    }
+}
+
+/// `X`'s base pointer, read by both parts of a crew split.
+#[cfg(feature = "parallel")]
+#[derive(Clone, Copy)]
+struct Inputs(*const f32);
+// SAFETY: `X` is only read while the split runs (the caller holds it borrowed).
+#[cfg(feature = "parallel")]
+unsafe impl Send for Inputs {}
+#[cfg(feature = "parallel")]
+unsafe impl Sync for Inputs {}
+
+#[cfg(feature = "parallel")]
+impl Inputs {
+    fn get(self) -> *const f32 {
+        self.0
+    }
+}
+
 /// Below this many multiply-adds a product is not split across threads.
 const PARALLEL_MIN_WORK: usize = 1 << 21;
 /// Minimum rows per thread when splitting.
@@ -73,8 +108,58 @@ impl MatMul {
         if self.batch <= row_kernel_max_batch(w) {
             self.run_rows(x, w, y, accumulate);
         } else {
+            if let Wide::Panels(panels) = w.wide() {
+                let init = sgemm_panels::Init::from_accumulate(accumulate);
+                if self.check(x, w, y) && self.panels_on_crew(x, panels, y, init) {
+                    return;
+                }
+            }
             self.run_gemm(x, w, y, accumulate);
         }
+    }
+
+    /// The panel GEMM split by output panels between the calling thread and the crew
+    /// ([`super::parallel::crew_products`]); `false` (nothing done) when the split does not
+    /// apply. The caller checked the operands.
+    fn panels_on_crew(
+        &self,
+        x: &[f32],
+        panels: &sgemm_panels::PanelMatrix,
+        y: &mut [f32],
+        init: sgemm_panels::Init,
+    ) -> bool {
+        #[cfg(feature = "parallel")]
+        {
+            let count = self.outputs.div_ceil(sgemm_panels::PANEL_WIDTH);
+            if !self.crew_split_applies(panels.size_bytes()) || count < 2 {
+                return false;
+            }
+            let at = count / 2;
+            let y = Columns(y.as_mut_ptr());
+            let (b, xs, ys) = (self.batch, self.x_stride, self.y_stride);
+            super::parallel::crew::run(2, &|k| {
+                let range = if k == 0 { 0..at } else { at..count };
+                // SAFETY: the caller checked that `x` and `y` hold every addressed row; the two
+                // parts write disjoint panels' columns.
+                unsafe {
+                    sgemm_panels::gemm_panels_range(b, x, xs, panels, y.get(), ys, init, range)
+                };
+            })
+        }
+        #[cfg(not(feature = "parallel"))]
+        {
+            let _ = (x, panels, y, init);
+            false
+        }
+    }
+
+    /// Whether a product over `bytes` of weights splits over the crew (see
+    /// [`super::parallel::crew_products`]): large enough to pay for the hand-off.
+    #[cfg(feature = "parallel")]
+    fn crew_split_applies(&self, bytes: usize) -> bool {
+        super::parallel::crew_products_enabled()
+            && bytes >= ROW_SPLIT_MIN_BYTES
+            && self.outputs >= 2 * ROW_SPLIT_MIN_OUTPUTS
     }
 
     /// `Y = X Wᵀ + bias` (the same `bias [outputs]` added to every row), by the path the batch
@@ -86,6 +171,9 @@ impl MatMul {
         if self.batch > row_kernel_max_batch(w) && self.check(x, w, y) {
             if let Wide::Panels(panels) = w.wide() {
                 let init = sgemm_panels::Init::Bias(bias);
+                if self.panels_on_crew(x, panels, y, init) {
+                    return;
+                }
                 let (b, xs, ys) = (self.batch, self.x_stride, self.y_stride);
                 sgemm_panels::gemm_panels(b, x, xs, panels, y, ys, init);
                 return;
@@ -133,6 +221,31 @@ impl MatMul {
         if parts > 1 {
             self.rows_split(path, x, w, y, accumulate, parts);
             return;
+        }
+        #[cfg(feature = "parallel")]
+        if self.crew_split_applies(self.outputs * self.inputs * w.dtype().size()) {
+            let (_, at) = split_point(&(0..self.outputs), 2);
+            let out = Columns(y.as_mut_ptr());
+            let x_ptr = Inputs(x.as_ptr());
+            let outputs = self.outputs;
+            let done = super::parallel::crew::run(2, &|k| {
+                let range = if k == 0 { 0..at } else { at..outputs };
+                // SAFETY: as below; the two parts write disjoint output columns.
+                unsafe {
+                    kernels::product_outputs(
+                        path,
+                        self,
+                        x_ptr.get(),
+                        w,
+                        out.get(),
+                        accumulate,
+                        range,
+                    )
+                };
+            });
+            if done {
+                return;
+            }
         }
         // SAFETY: the CPU runs `path`, `inputs > 0` and `check` asserted the slice lengths; `y`
         // is exclusively borrowed.
@@ -204,13 +317,6 @@ impl MatMul {
         accumulate: bool,
         parts: usize,
     ) {
-        /// `Y`'s base pointer, shared by threads that write disjoint column ranges of it.
-        #[derive(Clone, Copy)]
-        struct Columns(*mut f32);
-        // SAFETY: each thread writes only its own column range (see `split`).
-        unsafe impl Send for Columns {}
-        unsafe impl Sync for Columns {}
-
         #[allow(clippy::too_many_arguments)]
         fn split(
             path: SimdPath,
@@ -227,7 +333,7 @@ impl MatMul {
                 // ranges of different calls are disjoint, so no two threads write the same
                 // element.
                 unsafe {
-                    kernels::product_outputs(path, mm, x.as_ptr(), w, y.0, accumulate, outputs)
+                    kernels::product_outputs(path, mm, x.as_ptr(), w, y.get(), accumulate, outputs)
                 };
                 return;
             }

@@ -16,6 +16,28 @@ pub(crate) mod crew;
 
 thread_local! {
     static SERIAL: Cell<bool> = const { Cell::new(false) };
+    static CREW_PRODUCTS: Cell<bool> = const { Cell::new(false) };
+}
+
+/// Runs `f` with the large products this thread calls split by output columns between it and
+/// the crew's helpers ([`crew`]; the same halves on the same threads every call, so each core
+/// keeps reading its own half of every weight). Only from a thread outside any rayon pool and
+/// outside [`serial`]; elsewhere, or when the crew is busy, products run as without it.
+pub fn crew_products<R>(f: impl FnOnce() -> R) -> R {
+    struct Restore(bool);
+    impl Drop for Restore {
+        fn drop(&mut self) {
+            CREW_PRODUCTS.with(|s| s.set(self.0));
+        }
+    }
+    let _restore = Restore(CREW_PRODUCTS.with(|s| s.replace(cfg!(feature = "parallel"))));
+    f()
+}
+
+/// Whether this thread's products may split over the crew now (see [`crew_products`]).
+#[cfg(feature = "parallel")]
+pub(crate) fn crew_products_enabled() -> bool {
+    CREW_PRODUCTS.with(Cell::get) && threads() > 1 && pool::current_thread_index().is_none()
 }
 
 /// The thread pool the crate splits work over: rayon with the `parallel` feature.

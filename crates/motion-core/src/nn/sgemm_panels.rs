@@ -199,6 +199,66 @@ pub fn gemm_panels(
     gemm_panels_with(path, batch, x, x_stride, w, y, y_stride, init);
 }
 
+/// [`gemm_panels`] on one thread over the output columns of `panels` only (panel `p` holds
+/// columns `p * PANEL_WIDTH ..`); the other columns of `y` are not touched, so threads may run
+/// disjoint panel ranges of one product at once (`y` shared through a raw pointer by the caller).
+///
+/// # Safety
+/// `y` must hold every addressed row (`(batch - 1) * y_stride + outputs` floats), `x` likewise,
+/// `y_stride >= outputs` unless `batch == 1`, and no other thread may touch the columns of
+/// `panels` in the rows of `y` while this runs.
+#[cfg(feature = "parallel")]
+#[allow(clippy::too_many_arguments)]
+pub(crate) unsafe fn gemm_panels_range(
+    batch: usize,
+    x: &[f32],
+    x_stride: usize,
+    w: &PanelMatrix,
+    y: *mut f32,
+    y_stride: usize,
+    init: Init,
+    panels: std::ops::Range<usize>,
+) {
+    // SAFETY: the caller's guarantees are `gemm_panels_range_on`'s.
+    unsafe {
+        gemm_panels_range_on(
+            super::simd::active(),
+            batch,
+            x,
+            x_stride,
+            w,
+            y,
+            y_stride,
+            init,
+            panels,
+        )
+    };
+}
+
+/// [`gemm_panels_range`] on the kernels of `path` (which the CPU must run).
+///
+/// # Safety
+/// As [`gemm_panels_range`].
+#[cfg(feature = "parallel")]
+#[allow(clippy::too_many_arguments)]
+unsafe fn gemm_panels_range_on(
+    path: SimdPath,
+    batch: usize,
+    x: &[f32],
+    x_stride: usize,
+    w: &PanelMatrix,
+    y: *mut f32,
+    y_stride: usize,
+    init: Init,
+    panels: std::ops::Range<usize>,
+) {
+    if batch == 0 || w.outputs == 0 || panels.is_empty() {
+        return;
+    }
+    // SAFETY: the caller's guarantees are `serial_panels`'s.
+    unsafe { serial_panels(path, batch, x, x_stride, w, y, y_stride, init, panels) };
+}
+
 /// [`gemm_panels`] on the kernel of `path` whatever the selected one (tests and benchmarks);
 /// refuses a path the CPU lacks.
 #[allow(clippy::too_many_arguments)]
@@ -295,16 +355,54 @@ fn serial(
     y_stride: usize,
     init: Init,
 ) {
+    // SAFETY: `y` is exclusively borrowed and the caller checked that it holds every row.
+    unsafe {
+        serial_panels(
+            path,
+            batch,
+            x,
+            x_stride,
+            w,
+            y.as_mut_ptr(),
+            y_stride,
+            init,
+            0..w.panels(),
+        )
+    };
+}
+
+/// [`serial`] over the output columns of `panels` only (the others are not touched).
+///
+/// # Safety
+/// `y` must address every row the layout reaches (`(batch - 1) * y_stride + outputs` floats),
+/// and no other thread may touch the columns of `panels` while this runs.
+#[allow(clippy::too_many_arguments)]
+unsafe fn serial_panels(
+    path: SimdPath,
+    batch: usize,
+    x: &[f32],
+    x_stride: usize,
+    w: &PanelMatrix,
+    y: *mut f32,
+    y_stride: usize,
+    init: Init,
+    panels: std::ops::Range<usize>,
+) {
     #[cfg(not(target_arch = "x86_64"))]
     let _ = path; // panels are an x86-64 kernel; other targets run the portable product
     let (inputs, outputs) = (w.inputs, w.outputs);
     if inputs == 0 {
+        let columns =
+            (panels.start * PANEL_WIDTH).min(outputs)..(panels.end * PANEL_WIDTH).min(outputs);
         for b in 0..batch {
-            let row = &mut y[b * y_stride..b * y_stride + outputs];
+            // SAFETY: these columns of row `b` lie inside `y` and are this call's alone.
+            let row = unsafe {
+                std::slice::from_raw_parts_mut(y.add(b * y_stride + columns.start), columns.len())
+            };
             match init {
                 Init::Zero => row.fill(0.0),
                 Init::Accumulate => {}
-                Init::Bias(bias) => row.copy_from_slice(&bias[..outputs]),
+                Init::Bias(bias) => row.copy_from_slice(&bias[columns.clone()]),
             }
         }
         return;
@@ -318,36 +416,44 @@ fn serial(
                 // SAFETY: the path is selected only on a CPU with AVX-512F, and the caller
                 // checked that every row of `x` and `y` the layout addresses lies inside the
                 // slices (`y` exclusively borrowed).
-                unsafe { avx512::blocked(batch, x, x_stride, w, y, y_stride, init, kc, mc) };
+                unsafe {
+                    avx512::blocked(batch, x, x_stride, w, y, y_stride, init, kc, mc, panels)
+                };
                 return;
             }
             SimdPath::Avx2 => {
                 let mc = block_len(batch, avx2::mc_max(kc), avx2::TILE_ROWS);
                 // SAFETY: as above, with AVX2 and FMA.
-                unsafe { avx2::blocked(batch, x, x_stride, w, y, y_stride, init, kc, mc) };
+                unsafe { avx2::blocked(batch, x, x_stride, w, y, y_stride, init, kc, mc, panels) };
                 return;
             }
             _ => {}
         }
     }
-    portable(batch, x, x_stride, w, y, y_stride, init);
+    // SAFETY: as for this function.
+    unsafe { portable(batch, x, x_stride, w, y, y_stride, init, panels) };
 }
 
 /// Plain loops over the packed layout (machines without AVX-512F; also a layout check in tests).
-fn portable(
+///
+/// # Safety
+/// As [`serial_panels`].
+#[allow(clippy::too_many_arguments)]
+unsafe fn portable(
     batch: usize,
     x: &[f32],
     x_stride: usize,
     w: &PanelMatrix,
-    y: &mut [f32],
+    y: *mut f32,
     y_stride: usize,
     init: Init,
+    panels: std::ops::Range<usize>,
 ) {
     let (inputs, outputs) = (w.inputs, w.outputs);
     let data = w.data();
     for b in 0..batch {
         let xr = &x[b * x_stride..b * x_stride + inputs];
-        for p in 0..w.panels() {
+        for p in panels.clone() {
             let panel = &data[p * inputs * PANEL_WIDTH..(p + 1) * inputs * PANEL_WIDTH];
             let mut acc = [0.0f32; PANEL_WIDTH];
             for (k, &xv) in xr.iter().enumerate() {
@@ -360,7 +466,8 @@ fn portable(
             }
             let first = p * PANEL_WIDTH;
             let width = PANEL_WIDTH.min(outputs - first);
-            let yr = &mut y[b * y_stride + first..b * y_stride + first + width];
+            // SAFETY: columns `first ..+ width` of row `b` lie inside `y` and are this call's alone.
+            let yr = unsafe { std::slice::from_raw_parts_mut(y.add(b * y_stride + first), width) };
             for (j, (o, a)) in yr.iter_mut().zip(acc).enumerate() {
                 *o = match init {
                     Init::Zero => a,
@@ -392,16 +499,15 @@ mod avx512 {
         x: &[f32],
         x_stride: usize,
         w: &PanelMatrix,
-        y: &mut [f32],
+        y_ptr: *mut f32,
         y_stride: usize,
         init: Init,
         kc_max: usize,
         mc_max: usize,
+        panels: std::ops::Range<usize>,
     ) {
         let (inputs, outputs) = (w.inputs, w.outputs);
-        let panels = w.panels();
         let data = w.data().as_ptr();
-        let y_ptr = y.as_mut_ptr();
         let mut pc = 0;
         while pc < inputs {
             let kc = kc_max.min(inputs - pc);
@@ -409,7 +515,7 @@ mod avx512 {
             while ic < batch {
                 let mc = mc_max.min(batch - ic);
                 let x_block = &x[ic * x_stride..];
-                for p in 0..panels {
+                for p in panels.clone() {
                     let first = p * PANEL_WIDTH;
                     let width = PANEL_WIDTH.min(outputs - first);
                     let masks = column_masks(width);
@@ -573,16 +679,15 @@ mod avx2 {
         x: &[f32],
         x_stride: usize,
         w: &PanelMatrix,
-        y: &mut [f32],
+        y_ptr: *mut f32,
         y_stride: usize,
         init: Init,
         kc_max: usize,
         mc_max: usize,
+        panels: std::ops::Range<usize>,
     ) {
         let (inputs, outputs) = (w.inputs, w.outputs);
-        let panels = w.panels();
         let data = w.data().as_ptr();
-        let y_ptr = y.as_mut_ptr();
         let mut pc = 0;
         while pc < inputs {
             let kc = kc_max.min(inputs - pc);
@@ -591,7 +696,7 @@ mod avx2 {
                 let mc = mc_max.min(batch - ic);
                 let x_block = &x[ic * x_stride..];
                 let tiles = mc.div_ceil(TILE_ROWS);
-                for p in 0..panels {
+                for p in panels.clone() {
                     // Each row tile runs both halves of the panel back to back: its rows of `x`
                     // are still in L1 for the second half, and the panel's two halves stream
                     // from memory together (measured 3-9 % faster than all tiles on one half,
@@ -754,6 +859,60 @@ mod avx2 {
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
+
+    #[cfg(feature = "parallel")]
+    #[test]
+    fn panel_ranges_write_their_columns_only_and_together_give_the_whole_product() {
+        for path in SimdPath::available() {
+            let (batch, inputs, outputs) = (5, 37, 100); // 4 panels, the last one ragged
+            let (x, wv, bias) = (
+                data(batch * inputs, 1),
+                data(outputs * inputs, 2),
+                data(outputs, 3),
+            );
+            let w = PanelMatrix::pack(&wv, outputs, inputs);
+            let y_stride = outputs + 3;
+            for init in [Init::Zero, Init::Accumulate, Init::Bias(&bias)] {
+                let start = data(batch * y_stride, 4);
+                let mut whole = start.clone();
+                gemm_panels_on(path, batch, &x, inputs, &w, &mut whole, y_stride, init).unwrap();
+                let mut parts = start.clone();
+                for range in [0..1, 1..3, 3..4] {
+                    let mut one = start.clone();
+                    // SAFETY: `one` holds every row; nothing else touches it.
+                    unsafe {
+                        gemm_panels_range_on(
+                            path,
+                            batch,
+                            &x,
+                            inputs,
+                            &w,
+                            one.as_mut_ptr(),
+                            y_stride,
+                            init,
+                            range.clone(),
+                        )
+                    };
+                    let cols = range.start * PANEL_WIDTH..(range.end * PANEL_WIDTH).min(outputs);
+                    for b in 0..batch {
+                        for j in 0..y_stride {
+                            let i = b * y_stride + j;
+                            if cols.contains(&j) {
+                                parts[i] = one[i];
+                            } else {
+                                assert_eq!(
+                                    one[i].to_bits(),
+                                    start[i].to_bits(),
+                                    "{path}: column {j} touched"
+                                );
+                            }
+                        }
+                    }
+                }
+                assert_eq!(parts, whole, "{path}");
+            }
+        }
+    }
 
     /// Deterministic values in [-1, 1) from a 64-bit LCG (fixed seed per call site).
     fn data(n: usize, seed: u64) -> Vec<f32> {

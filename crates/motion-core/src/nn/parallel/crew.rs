@@ -15,7 +15,9 @@
 //! caller and helpers are as many threads as the pool. One step uses it at a time; a step that
 //! finds it busy (another thread's generator stepping at the same moment), or with more shards
 //! than threads, goes through rayon as before ([`run`] returns `false`). Posting a job and
-//! waiting allocate nothing.
+//! waiting allocate nothing. `MOTION_CREW=off` in the environment keeps the crew from starting
+//! (several processes sharing few cores may prefer no spinning threads): every step then runs
+//! as it would without it.
 use std::cell::UnsafeCell;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -67,6 +69,9 @@ impl Crew {
     fn get() -> Option<&'static Crew> {
         static CREW: OnceLock<Option<Crew>> = OnceLock::new();
         CREW.get_or_init(|| {
+            if std::env::var("MOTION_CREW").is_ok_and(|v| v.eq_ignore_ascii_case("off")) {
+                return None;
+            }
             let helpers = rayon::current_num_threads().saturating_sub(1);
             if helpers == 0 {
                 return None;
