@@ -61,6 +61,8 @@ unsafe impl Send for Slot {}
 pub(crate) struct Crew {
     slots: Vec<Arc<Slot>>,
     busy: AtomicBool,
+    /// The process the helpers run in: a child made by `fork` has none of them.
+    pid: u32,
 }
 
 impl Crew {
@@ -97,6 +99,7 @@ impl Crew {
             Some(Crew {
                 slots,
                 busy: AtomicBool::new(false),
+                pid: std::process::id(),
             })
         })
         .as_ref()
@@ -110,13 +113,14 @@ impl Crew {
 
 /// Runs `job(0)` on the calling thread and `job(1..parts)` on the crew's helpers, and returns
 /// when all are done: `true`. Returns `false` without running anything when the crew cannot
-/// take it (no helpers, fewer helpers than `parts - 1`, or busy with another thread's step);
+/// take it (no helpers, fewer helpers than `parts - 1`, busy with another thread's step, or
+/// called in a child process made by `fork`, where the helpers do not exist);
 /// the caller then runs the parts its own way. A panic in a helper's part panics here.
 pub(crate) fn run<'a>(parts: usize, job: &'a (dyn Fn(usize) + Sync + 'a)) -> bool {
     let Some(crew) = Crew::get() else {
         return false;
     };
-    if parts < 2 || parts - 1 > crew.slots.len() {
+    if parts < 2 || parts - 1 > crew.slots.len() || crew.pid != std::process::id() {
         return false;
     }
     if crew
