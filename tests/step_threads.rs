@@ -39,6 +39,18 @@ fn seeds(rows: usize, frames: usize) -> Array3<f32> {
     })
 }
 
+/// Allocations made by `steps` steps of `g` after `warm_up` steps.
+fn allocations_per(g: &mut BatchGenerator, warm_up: usize, steps: usize) -> usize {
+    for _ in 0..warm_up {
+        g.step().unwrap();
+    }
+    let before = ALLOCATIONS.load(Ordering::Relaxed);
+    for _ in 0..steps {
+        g.step().unwrap();
+    }
+    ALLOCATIONS.load(Ordering::Relaxed) - before
+}
+
 fn started(model: &Arc<MotionModel>, batch: usize, shards: usize) -> BatchGenerator {
     let mut g = BatchGenerator::with_shards(Arc::clone(model), batch, shards);
     let noise: Vec<Noise> = (0..batch).map(|b| Noise::Seed(b as u64)).collect();
@@ -61,14 +73,7 @@ fn threaded_steps_allocate_nothing_and_shards_agree() {
         let mut g = started(&model, 1, 1);
         assert_eq!(g.shards(), 1);
         // Warm up: first steps may size lazily created state.
-        for _ in 0..300 {
-            g.step().unwrap();
-        }
-        let before = ALLOCATIONS.load(Ordering::Relaxed);
-        for _ in 0..200 {
-            g.step().unwrap();
-        }
-        let count = ALLOCATIONS.load(Ordering::Relaxed) - before;
+        let count = allocations_per(&mut g, 300, 200);
         assert_eq!(
             count, 0,
             "{arch:?} batch 1: {count} allocations in 200 steps"
@@ -120,15 +125,7 @@ fn threaded_steps_allocate_nothing_and_shards_agree() {
         if std::env::var("MOTION_CREW").is_ok_and(|v| v.eq_ignore_ascii_case("off")) {
             continue;
         }
-        let mut crew = started(&model, 16, 2);
-        for _ in 0..50 {
-            crew.step().unwrap();
-        }
-        let before = ALLOCATIONS.load(Ordering::Relaxed);
-        for _ in 0..200 {
-            crew.step().unwrap();
-        }
-        let count = ALLOCATIONS.load(Ordering::Relaxed) - before;
+        let count = allocations_per(&mut started(&model, 16, 2), 50, 200);
         assert_eq!(
             count, 0,
             "{arch:?} batch 16 in 2 shards: {count} allocations in 200 steps"

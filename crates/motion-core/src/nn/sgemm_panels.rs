@@ -219,9 +219,9 @@ pub(crate) unsafe fn gemm_panels_range(
     init: Init,
     panels: std::ops::Range<usize>,
 ) {
-    // SAFETY: the caller's guarantees are `gemm_panels_range_on`'s.
+    // SAFETY: the caller's guarantees are `serial_panels`'s.
     unsafe {
-        gemm_panels_range_on(
+        serial_panels(
             super::simd::active(),
             batch,
             x,
@@ -233,30 +233,6 @@ pub(crate) unsafe fn gemm_panels_range(
             panels,
         )
     };
-}
-
-/// [`gemm_panels_range`] on the kernels of `path` (which the CPU must run).
-///
-/// # Safety
-/// As [`gemm_panels_range`].
-#[cfg(feature = "parallel")]
-#[allow(clippy::too_many_arguments)]
-unsafe fn gemm_panels_range_on(
-    path: SimdPath,
-    batch: usize,
-    x: &[f32],
-    x_stride: usize,
-    w: &PanelMatrix,
-    y: *mut f32,
-    y_stride: usize,
-    init: Init,
-    panels: std::ops::Range<usize>,
-) {
-    if batch == 0 || w.outputs == 0 || panels.is_empty() {
-        return;
-    }
-    // SAFETY: the caller's guarantees are `serial_panels`'s.
-    unsafe { serial_panels(path, batch, x, x_stride, w, y, y_stride, init, panels) };
 }
 
 /// [`gemm_panels`] on the kernel of `path` whatever the selected one (tests and benchmarks);
@@ -881,7 +857,7 @@ pub(crate) mod tests {
                     let mut one = start.clone();
                     // SAFETY: `one` holds every row; nothing else touches it.
                     unsafe {
-                        gemm_panels_range_on(
+                        serial_panels(
                             path,
                             batch,
                             &x,
