@@ -92,8 +92,8 @@ WINDOWS = ("0-2 s", "2-4 s", "4-8 s", "8-12 s")
 # The order stages are trained in: the base pair and the cheap autoencoder variants first, then each LSTM
 # followed by the fine-tunes it enables (every stage after those it starts from).
 ORDER = ("dae_base", "dae_drop_x3", "dae_low_noise", "dae_zscore", "lstm_base", "ft_base", "ft_drop_x3",
-         "lstm_low_noise", "ft_low_noise", "dae_long", "ft_dae_long", "lstm_input_drop", "ft_input_drop",
-         "lstm_zscore", "ft_zscore", "lstm_no_onehot", "ft_no_onehot", "ft_long")
+         "lstm_low_noise", "ft_low_noise", "lstm_zscore", "ft_zscore", "lstm_input_drop", "ft_input_drop",
+         "lstm_no_onehot", "ft_no_onehot", "ft_long", "dae_long", "ft_dae_long")
 
 
 def stage_order() -> list[str]:
