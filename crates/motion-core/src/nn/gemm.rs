@@ -137,12 +137,13 @@ impl MatMul {
             let at = count / 2;
             let y = Columns(y.as_mut_ptr());
             let (b, xs, ys) = (self.batch, self.x_stride, self.y_stride);
+            let path = super::simd::active();
             super::parallel::crew::run(2, &|k| {
                 let range = if k == 0 { 0..at } else { at..count };
                 // SAFETY: the caller checked that `x` and `y` hold every addressed row; the two
                 // parts write disjoint panels' columns.
                 unsafe {
-                    sgemm_panels::gemm_panels_range(b, x, xs, panels, y.get(), ys, init, range)
+                    sgemm_panels::serial_panels(path, b, x, xs, panels, y.get(), ys, init, range)
                 };
             })
         }

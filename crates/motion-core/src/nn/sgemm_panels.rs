@@ -199,42 +199,6 @@ pub fn gemm_panels(
     gemm_panels_with(path, batch, x, x_stride, w, y, y_stride, init);
 }
 
-/// [`gemm_panels`] on one thread over the output columns of `panels` only (panel `p` holds
-/// columns `p * PANEL_WIDTH ..`); the other columns of `y` are not touched, so threads may run
-/// disjoint panel ranges of one product at once (`y` shared through a raw pointer by the caller).
-///
-/// # Safety
-/// `y` must hold every addressed row (`(batch - 1) * y_stride + outputs` floats), `x` likewise,
-/// `y_stride >= outputs` unless `batch == 1`, and no other thread may touch the columns of
-/// `panels` in the rows of `y` while this runs.
-#[cfg(feature = "parallel")]
-#[allow(clippy::too_many_arguments)]
-pub(crate) unsafe fn gemm_panels_range(
-    batch: usize,
-    x: &[f32],
-    x_stride: usize,
-    w: &PanelMatrix,
-    y: *mut f32,
-    y_stride: usize,
-    init: Init,
-    panels: std::ops::Range<usize>,
-) {
-    // SAFETY: the caller's guarantees are `serial_panels`'s.
-    unsafe {
-        serial_panels(
-            super::simd::active(),
-            batch,
-            x,
-            x_stride,
-            w,
-            y,
-            y_stride,
-            init,
-            panels,
-        )
-    };
-}
-
 /// [`gemm_panels`] on the kernel of `path` whatever the selected one (tests and benchmarks);
 /// refuses a path the CPU lacks.
 #[allow(clippy::too_many_arguments)]
@@ -347,13 +311,16 @@ fn serial(
     };
 }
 
-/// [`serial`] over the output columns of `panels` only (the others are not touched).
+/// The product on one thread over the output columns of `panels` only (panel `p` holds columns
+/// `p * PANEL_WIDTH ..`; the other columns of `y` are not touched), on the kernels of `path`
+/// (which the CPU must run): threads may run disjoint panel ranges of one product at once.
 ///
 /// # Safety
 /// `y` must address every row the layout reaches (`(batch - 1) * y_stride + outputs` floats),
-/// and no other thread may touch the columns of `panels` while this runs.
+/// `x` likewise, `y_stride >= outputs` unless `batch == 1`, and no other thread may touch the
+/// columns of `panels` while this runs.
 #[allow(clippy::too_many_arguments)]
-unsafe fn serial_panels(
+pub(crate) unsafe fn serial_panels(
     path: SimdPath,
     batch: usize,
     x: &[f32],
